@@ -1,0 +1,224 @@
+// duolod core: small math, the Mesh (indexed triangles + attribute streams + submeshes), materials,
+// images, errors as values, and logging/progress. Every later stage builds on these types.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
+#include <vector>
+
+namespace duolod::core {
+
+// ---------------------------------------------------------------------------------------------
+// Errors. Bad *input* (files, shaders, flags) is reported as an Error value with a message a user
+// can act on (file, field or line, reason). Programmer errors are asserts.
+
+struct Error {
+  std::string message;
+};
+
+template <class T>
+class [[nodiscard]] Result {
+ public:
+  Result(T value) : state_(std::move(value)) {}
+  Result(Error error) : state_(std::move(error)) {}
+
+  bool ok() const { return std::holds_alternative<T>(state_); }
+  explicit operator bool() const { return ok(); }
+  T& value() & { return std::get<T>(state_); }
+  const T& value() const& { return std::get<T>(state_); }
+  T&& value() && { return std::get<T>(std::move(state_)); }
+  T* operator->() { return &value(); }
+  const T* operator->() const { return &value(); }
+  T& operator*() & { return value(); }
+  const Error& error() const { return std::get<Error>(state_); }
+
+ private:
+  std::variant<T, Error> state_;
+};
+
+// Result for functions that return nothing on success.
+struct Ok {};
+using Status = Result<Ok>;
+inline Status okStatus() { return Ok{}; }
+
+// ---------------------------------------------------------------------------------------------
+// Math. Plain structs; matrices are column-major like OpenGL's.
+
+struct Vec2 {
+  float x = 0, y = 0;
+};
+struct Vec3 {
+  float x = 0, y = 0, z = 0;
+  float& operator[](int i) { return (&x)[i]; }
+  float operator[](int i) const { return (&x)[i]; }
+};
+struct Vec4 {
+  float x = 0, y = 0, z = 0, w = 0;
+};
+
+inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3 operator-(Vec3 a) { return {-a.x, -a.y, -a.z}; }
+inline Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
+inline Vec3 operator*(float s, Vec3 a) { return a * s; }
+inline Vec3 operator/(Vec3 a, float s) { return {a.x / s, a.y / s, a.z / s}; }
+inline Vec3& operator+=(Vec3& a, Vec3 b) { return a = a + b; }
+inline bool operator==(Vec3 a, Vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3 cross(Vec3 a, Vec3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
+inline Vec3 normalize(Vec3 a) {
+  float len = length(a);
+  return len > 0 ? a / len : Vec3{0, 0, 0};
+}
+inline bool isFinite(Vec3 a) {
+  return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+
+struct Mat4 {
+  std::array<float, 16> m{};  // column-major: m[column * 4 + row]
+  float& at(int row, int column) { return m[column * 4 + row]; }
+  float at(int row, int column) const { return m[column * 4 + row]; }
+  static Mat4 identity();
+};
+Mat4 operator*(const Mat4& a, const Mat4& b);
+Vec3 transformPoint(const Mat4& m, Vec3 p);   // w = 1, no perspective divide
+Vec3 transformVector(const Mat4& m, Vec3 v);  // w = 0
+Vec4 transform(const Mat4& m, Vec4 v);
+Mat4 inverse(const Mat4& m);  // general 4x4 inverse; returns identity for a singular matrix
+Mat4 transpose(const Mat4& m);
+Mat4 lookAt(Vec3 eye, Vec3 target, Vec3 up);
+Mat4 perspective(float fov_y_radians, float aspect, float z_near, float z_far);
+
+struct Bounds {
+  Vec3 min{INFINITY, INFINITY, INFINITY};
+  Vec3 max{-INFINITY, -INFINITY, -INFINITY};
+  void extend(Vec3 p);
+  bool empty() const { return min.x > max.x; }
+  Vec3 center() const { return (min + max) * 0.5f; }
+  Vec3 size() const { return max - min; }
+};
+
+struct Sphere {
+  Vec3 center;
+  float radius = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Mesh: indexed triangles over flat attribute streams. A stream is either empty (absent) or has
+// exactly vertexCount() entries. Submeshes are contiguous index ranges with one material each.
+
+struct Submesh {
+  uint32_t first_index = 0;
+  uint32_t index_count = 0;
+  uint32_t material = 0;
+};
+
+struct Mesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;
+  std::vector<Vec4> tangents;  // xyz tangent, w = bitangent sign (+1 or -1), glTF convention
+  std::vector<Vec2> uv0;
+  std::vector<Vec2> uv1;
+  std::vector<Vec4> colors;
+  std::vector<uint32_t> indices;  // 3 per triangle
+  std::vector<Submesh> submeshes;
+
+  size_t vertexCount() const { return positions.size(); }
+  size_t triangleCount() const { return indices.size() / 3; }
+};
+
+// Checks the Mesh invariants (stream sizes, indices in range, finite attributes, submeshes cover
+// the index buffer). Returns an Error naming the first problem.
+Status validateMesh(const Mesh& mesh);
+
+Bounds computeBounds(const Mesh& mesh);
+// Smallest-ish enclosing sphere (Ritter's bounding sphere, refined by one pass).
+Sphere computeBoundingSphere(const Mesh& mesh);
+
+// Vertex normals as the angle-weighted average of face normals (Thürmer & Wüthrich 1998), which
+// does not depend on how a polygon was triangulated.
+void computeNormals(Mesh& mesh);
+// Per-vertex tangents from UV derivatives in the MikkTSpace convention (tangent along +u, w the
+// handedness so that bitangent = w * cross(normal, tangent)), angle-weighted, Gram-Schmidt
+// orthogonalized against the normal. Requires normals and uv0.
+void computeTangents(Mesh& mesh);
+// Merges vertices whose every attribute is bitwise equal; returns the number removed.
+size_t weldVertices(Mesh& mesh);
+// Removes triangles with repeated indices or zero area; returns the number removed.
+size_t removeDegenerateTriangles(Mesh& mesh);
+
+// ---------------------------------------------------------------------------------------------
+// Images.
+
+struct ImageRGBA8 {
+  int width = 0, height = 0;
+  std::vector<uint8_t> pixels;  // row-major, top row first, 4 bytes per pixel
+};
+
+struct ImageRGBA32F {
+  int width = 0, height = 0;
+  std::vector<float> pixels;  // row-major, top row first, 4 floats per pixel
+};
+
+// ---------------------------------------------------------------------------------------------
+// Materials: glTF 2.0 metallic-roughness. Texture indices refer to Asset::textures; -1 = none.
+
+enum class AlphaMode { kOpaque, kMask, kBlend };
+
+struct Material {
+  std::string name;
+  Vec4 base_color_factor{1, 1, 1, 1};
+  float metallic_factor = 1.0f;
+  float roughness_factor = 1.0f;
+  Vec3 emissive_factor{0, 0, 0};
+  float normal_scale = 1.0f;
+  float occlusion_strength = 1.0f;
+  float alpha_cutoff = 0.5f;
+  AlphaMode alpha_mode = AlphaMode::kOpaque;
+  bool double_sided = false;
+  int base_color_texture = -1;          // sRGB
+  int metallic_roughness_texture = -1;  // linear: G roughness, B metallic
+  int normal_texture = -1;              // linear, tangent space
+  int occlusion_texture = -1;           // linear: R
+  int emissive_texture = -1;            // sRGB
+};
+
+struct Texture {
+  std::string name;  // source file name or glTF image name, for messages
+  ImageRGBA8 image;
+  bool srgb = false;  // whether the texels are sRGB-encoded colour (set from material usage)
+};
+
+// An asset: one mesh (all primitives flattened into submeshes), its materials and textures.
+struct Asset {
+  std::string source_path;
+  Mesh mesh;
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::vector<std::string> warnings;  // non-fatal problems found while loading
+};
+
+// ---------------------------------------------------------------------------------------------
+// Logging and progress. The CLI installs sinks; the library never writes to stdout itself.
+
+enum class LogLevel { kDebug, kInfo, kWarning, kError };
+using LogSink = std::function<void(LogLevel, std::string_view)>;
+void setLogSink(LogSink sink);
+void setLogLevel(LogLevel minimum);
+void log(LogLevel level, std::string_view message);
+
+// 64-bit FNV-1a; used to key caches by content.
+uint64_t hashBytes(const void* data, size_t size, uint64_t seed = 0xcbf29ce484222325ull);
+
+}  // namespace duolod::core

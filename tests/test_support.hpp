@@ -1,0 +1,29 @@
+// Shared helpers for duolod tests: where the real assets are, scratch folders, loud skips.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace duolod::test {
+
+// Path of an asset under ../shared/assets, or "" when it is missing.
+std::string sharedAsset(const std::string& relative_path);
+// Path of a file in the source tree (e.g. "shaders/pbr.frag").
+std::string sourcePath(const std::string& relative_path);
+// A fresh, empty folder for this test (under the build tree), removed at the start of each run.
+std::filesystem::path scratchDir(const std::string& name);
+// Writes text/bytes into a scratch file and returns its path.
+std::string writeScratchFile(const std::string& name, const std::string& contents);
+
+}  // namespace duolod::test
+
+// Skips the current test loudly when a shared asset is absent. CI installs/keeps them, so a skip is
+// visible in the ctest output rather than a silent pass.
+#define DUOLOD_REQUIRE_ASSET(var, relative)                                                    \
+  std::string var = ::duolod::test::sharedAsset(relative);                                    \
+  if (var.empty()) {                                                                          \
+    GTEST_SKIP() << "SKIPPED: shared asset '" << (relative) << "' not found under "           \
+                 << DUOLOD_ASSET_DIR << " (the test needs the ../shared/assets checkout)";    \
+  }
