@@ -1,0 +1,256 @@
+// Mesh invariants and attribute generation: validation, bounds, angle-weighted normals
+// (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998), tangents in the
+// MikkTSpace convention (Mikkelsen, "Simulation of wrinkled surfaces revisited", 2008), welding.
+#include <algorithm>
+#include <cstring>
+#include <numeric>
+#include <unordered_map>
+
+#include "duolod/core.hpp"
+
+namespace duolod::core {
+namespace {
+
+float cornerAngle(Vec3 a, Vec3 b, Vec3 c) {  // angle at a in triangle (a, b, c)
+  Vec3 u = normalize(b - a), v = normalize(c - a);
+  float cosine = std::clamp(dot(u, v), -1.0f, 1.0f);
+  return std::acos(cosine);
+}
+
+template <class T>
+bool streamSizeOk(const std::vector<T>& stream, size_t vertex_count) {
+  return stream.empty() || stream.size() == vertex_count;
+}
+
+bool finite4(Vec4 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+}  // namespace
+
+Status validateMesh(const Mesh& mesh) {
+  const size_t n = mesh.vertexCount();
+  if (!streamSizeOk(mesh.normals, n)) return Error{"normal count differs from position count"};
+  if (!streamSizeOk(mesh.tangents, n)) return Error{"tangent count differs from position count"};
+  if (!streamSizeOk(mesh.uv0, n)) return Error{"uv0 count differs from position count"};
+  if (!streamSizeOk(mesh.uv1, n)) return Error{"uv1 count differs from position count"};
+  if (!streamSizeOk(mesh.colors, n)) return Error{"colour count differs from position count"};
+  if (mesh.indices.size() % 3 != 0) return Error{"index count is not a multiple of 3"};
+  for (size_t i = 0; i < n; ++i)
+    if (!isFinite(mesh.positions[i]))
+      return Error{"vertex " + std::to_string(i) + " has a non-finite position"};
+  for (size_t i = 0; i < mesh.normals.size(); ++i)
+    if (!isFinite(mesh.normals[i]))
+      return Error{"vertex " + std::to_string(i) + " has a non-finite normal"};
+  for (size_t i = 0; i < mesh.tangents.size(); ++i)
+    if (!finite4(mesh.tangents[i]))
+      return Error{"vertex " + std::to_string(i) + " has a non-finite tangent"};
+  for (const auto* uv : {&mesh.uv0, &mesh.uv1})
+    for (size_t i = 0; i < uv->size(); ++i)
+      if (!std::isfinite((*uv)[i].x) || !std::isfinite((*uv)[i].y))
+        return Error{"vertex " + std::to_string(i) + " has a non-finite texture coordinate"};
+  for (size_t i = 0; i < mesh.colors.size(); ++i)
+    if (!finite4(mesh.colors[i]))
+      return Error{"vertex " + std::to_string(i) + " has a non-finite colour"};
+  for (size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= n)
+      return Error{"index " + std::to_string(i) + " = " + std::to_string(mesh.indices[i]) +
+                   " is out of range (" + std::to_string(n) + " vertices)"};
+  size_t covered = 0;
+  for (size_t s = 0; s < mesh.submeshes.size(); ++s) {
+    const Submesh& sub = mesh.submeshes[s];
+    if (sub.first_index != covered || sub.index_count % 3 != 0)
+      return Error{"submesh " + std::to_string(s) + " does not continue the index buffer"};
+    covered += sub.index_count;
+  }
+  if (covered != mesh.indices.size())
+    return Error{"submeshes cover " + std::to_string(covered) + " of " +
+                 std::to_string(mesh.indices.size()) + " indices"};
+  return okStatus();
+}
+
+Bounds computeBounds(const Mesh& mesh) {
+  Bounds b;
+  for (Vec3 p : mesh.positions) b.extend(p);
+  return b;
+}
+
+// Ritter (1990): start from a far pair, grow to include outliers; then a second pass shrinks the
+// slack a little by re-centering on the box centre when that is tighter.
+Sphere computeBoundingSphere(const Mesh& mesh) {
+  if (mesh.positions.empty()) return {};
+  const auto& p = mesh.positions;
+  auto farthest = [&](Vec3 from) {
+    size_t best = 0;
+    float best_d = -1;
+    for (size_t i = 0; i < p.size(); ++i) {
+      float d = dot(p[i] - from, p[i] - from);
+      if (d > best_d) best_d = d, best = i;
+    }
+    return p[best];
+  };
+  Vec3 a = farthest(p[0]);
+  Vec3 b = farthest(a);
+  Sphere s{(a + b) * 0.5f, length(b - a) * 0.5f};
+  for (Vec3 q : p) {
+    float d = length(q - s.center);
+    if (d > s.radius) {
+      float new_radius = (s.radius + d) * 0.5f;
+      s.center = s.center + (q - s.center) * ((new_radius - s.radius) / d);
+      s.radius = new_radius;
+    }
+  }
+  Vec3 box_center = computeBounds(mesh).center();
+  float box_radius = 0;
+  for (Vec3 q : p) box_radius = std::max(box_radius, length(q - box_center));
+  if (box_radius < s.radius) s = {box_center, box_radius};
+  return s;
+}
+
+void computeNormals(Mesh& mesh) {
+  mesh.normals.assign(mesh.vertexCount(), Vec3{});
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    uint32_t i[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
+    Vec3 p[3] = {mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]};
+    Vec3 face = normalize(cross(p[1] - p[0], p[2] - p[0]));
+    if (length(face) == 0) continue;
+    for (int k = 0; k < 3; ++k)
+      mesh.normals[i[k]] += face * cornerAngle(p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+  }
+  for (Vec3& n : mesh.normals) {
+    n = normalize(n);
+    if (length(n) == 0) n = {0, 0, 1};  // isolated or degenerate-only vertex
+  }
+}
+
+void computeTangents(Mesh& mesh) {
+  const size_t n = mesh.vertexCount();
+  if (mesh.normals.size() != n || mesh.uv0.size() != n) return;
+  std::vector<Vec3> tangent_sum(n), bitangent_sum(n);
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    uint32_t i[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
+    Vec3 p[3] = {mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]};
+    Vec2 w[3] = {mesh.uv0[i[0]], mesh.uv0[i[1]], mesh.uv0[i[2]]};
+    Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
+    float du1 = w[1].x - w[0].x, dv1 = w[1].y - w[0].y;
+    float du2 = w[2].x - w[0].x, dv2 = w[2].y - w[0].y;
+    float det = du1 * dv2 - du2 * dv1;
+    if (std::fabs(det) < 1e-20f) continue;  // degenerate UV mapping: contributes nothing
+    float r = 1.0f / det;
+    Vec3 tangent = (e1 * dv2 - e2 * dv1) * r;
+    Vec3 bitangent = (e2 * du1 - e1 * du2) * r;
+    // Normalize per face before angle weighting, so that large UV scale differences between faces
+    // do not dominate (as MikkTSpace does).
+    tangent = normalize(tangent);
+    bitangent = normalize(bitangent);
+    for (int k = 0; k < 3; ++k) {
+      float angle = cornerAngle(p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+      tangent_sum[i[k]] += tangent * angle;
+      bitangent_sum[i[k]] += bitangent * angle;
+    }
+  }
+  mesh.tangents.resize(n);
+  for (size_t v = 0; v < n; ++v) {
+    Vec3 normal = mesh.normals[v];
+    Vec3 t = normalize(tangent_sum[v] - normal * dot(normal, tangent_sum[v]));
+    if (length(t) == 0) {  // no UV gradient here: any vector orthogonal to the normal
+      Vec3 axis = std::fabs(normal.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+      t = normalize(cross(axis, normal));
+    }
+    // glTF: bitangent = cross(normal, tangent.xyz) * tangent.w
+    float handedness = dot(cross(normal, t), bitangent_sum[v]) < 0 ? -1.0f : 1.0f;
+    mesh.tangents[v] = {t.x, t.y, t.z, handedness};
+  }
+}
+
+size_t weldVertices(Mesh& mesh) {
+  const size_t n = mesh.vertexCount();
+  if (n == 0) return 0;
+  // Pack each vertex's attributes into one byte string; equal strings are equal vertices.
+  size_t stride = sizeof(Vec3) + (mesh.normals.empty() ? 0 : sizeof(Vec3)) +
+                  (mesh.tangents.empty() ? 0 : sizeof(Vec4)) +
+                  (mesh.uv0.empty() ? 0 : sizeof(Vec2)) + (mesh.uv1.empty() ? 0 : sizeof(Vec2)) +
+                  (mesh.colors.empty() ? 0 : sizeof(Vec4));
+  std::vector<uint8_t> keys(n * stride);
+  for (size_t v = 0; v < n; ++v) {
+    uint8_t* out = keys.data() + v * stride;
+    auto put = [&](const auto& value) {
+      std::memcpy(out, &value, sizeof(value));
+      out += sizeof(value);
+    };
+    Vec3 pos = mesh.positions[v];
+    if (pos.x == 0) pos.x = 0;  // fold -0 into +0 so they weld
+    if (pos.y == 0) pos.y = 0;
+    if (pos.z == 0) pos.z = 0;
+    put(pos);
+    if (!mesh.normals.empty()) put(mesh.normals[v]);
+    if (!mesh.tangents.empty()) put(mesh.tangents[v]);
+    if (!mesh.uv0.empty()) put(mesh.uv0[v]);
+    if (!mesh.uv1.empty()) put(mesh.uv1[v]);
+    if (!mesh.colors.empty()) put(mesh.colors[v]);
+  }
+  struct KeyHash {
+    const std::vector<uint8_t>* keys;
+    size_t stride;
+    size_t operator()(uint32_t v) const { return hashBytes(keys->data() + v * stride, stride); }
+  };
+  struct KeyEqual {
+    const std::vector<uint8_t>* keys;
+    size_t stride;
+    bool operator()(uint32_t a, uint32_t b) const {
+      return std::memcmp(keys->data() + a * stride, keys->data() + b * stride, stride) == 0;
+    }
+  };
+  std::unordered_map<uint32_t, uint32_t, KeyHash, KeyEqual> first_of(
+      n, KeyHash{&keys, stride}, KeyEqual{&keys, stride});
+  std::vector<uint32_t> remap(n);
+  uint32_t next = 0;
+  for (uint32_t v = 0; v < n; ++v) {
+    auto [it, inserted] = first_of.try_emplace(v, next);
+    if (inserted) ++next;
+    remap[v] = it->second;
+  }
+  if (next == n) return 0;
+  auto compact = [&](auto& stream) {
+    if (stream.empty()) return;
+    std::remove_reference_t<decltype(stream)> out(next);
+    for (size_t v = 0; v < n; ++v) out[remap[v]] = stream[v];
+    stream = std::move(out);
+  };
+  compact(mesh.positions);
+  compact(mesh.normals);
+  compact(mesh.tangents);
+  compact(mesh.uv0);
+  compact(mesh.uv1);
+  compact(mesh.colors);
+  for (uint32_t& i : mesh.indices) i = remap[i];
+  return n - next;
+}
+
+size_t removeDegenerateTriangles(Mesh& mesh) {
+  std::vector<uint32_t> kept;
+  kept.reserve(mesh.indices.size());
+  size_t removed = 0;
+  std::vector<Submesh> submeshes = mesh.submeshes;
+  if (submeshes.empty() && !mesh.indices.empty())
+    submeshes.push_back({0, static_cast<uint32_t>(mesh.indices.size()), 0});
+  for (Submesh& sub : submeshes) {
+    uint32_t first = static_cast<uint32_t>(kept.size());
+    for (uint32_t t = sub.first_index; t + 2 < sub.first_index + sub.index_count; t += 3) {
+      uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+      Vec3 pa = mesh.positions[a], pb = mesh.positions[b], pc = mesh.positions[c];
+      if (a == b || b == c || a == c || length(cross(pb - pa, pc - pa)) == 0) {
+        ++removed;
+        continue;
+      }
+      kept.insert(kept.end(), {a, b, c});
+    }
+    sub.first_index = first;
+    sub.index_count = static_cast<uint32_t>(kept.size()) - first;
+  }
+  mesh.indices = std::move(kept);
+  if (!mesh.submeshes.empty()) mesh.submeshes = std::move(submeshes);
+  return removed;
+}
+
+}  // namespace duolod::core

@@ -1,0 +1,144 @@
+// Files and images: whole-file reads, atomic writes (temporary + rename), image decode/encode
+// through stb (Debian libstb), and the format-dispatching loadAsset with its post-processing.
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <unistd.h>
+
+#include "duolod/io.hpp"
+
+namespace duolod::io {
+namespace fs = std::filesystem;
+using core::Error;
+
+core::Result<std::vector<uint8_t>> readFileBytes(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Error{path + ": file not found"};
+  if (fs::is_directory(path, ec)) return Error{path + ": is a folder, not a file"};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot open (" + std::strerror(errno) + ")"};
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return Error{path + ": read failed"};
+  return bytes;
+}
+
+core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> bytes) {
+  fs::path target(path);
+  std::error_code ec;
+  fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  if (!fs::is_directory(folder, ec)) return Error{path + ": folder " + folder.string() + " does not exist"};
+  // A unique temporary name in the same folder, so rename() is atomic on the same file system.
+  std::random_device entropy;
+  fs::path temp = target;
+  temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() % 1000000);
+  FILE* file = std::fopen(temp.c_str(), "wb");
+  if (!file) return Error{path + ": cannot create (" + std::strerror(errno) + ")"};
+  size_t written = bytes.empty() ? 0 : std::fwrite(bytes.data(), 1, bytes.size(), file);
+  bool flushed = std::fflush(file) == 0 && ::fsync(::fileno(file)) == 0;
+  bool closed = std::fclose(file) == 0;
+  if (written != bytes.size() || !flushed || !closed) {
+    fs::remove(temp, ec);
+    return Error{path + ": write failed (disk full?)"};
+  }
+  fs::rename(temp, target, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    return Error{path + ": cannot move the finished file into place (" + ec.message() + ")"};
+  }
+  return core::okStatus();
+}
+
+core::Status writeFileAtomic(const std::string& path, std::string_view text) {
+  return writeFileAtomic(
+      path, std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
+}
+
+core::Result<core::ImageRGBA8> decodeImage(std::span<const uint8_t> bytes, const std::string& name) {
+  if (bytes.empty()) return Error{name + ": empty image"};
+  if (bytes.size() > static_cast<size_t>(INT32_MAX)) return Error{name + ": image file too large"};
+  int width = 0, height = 0, channels = 0;
+  stbi_uc* pixels = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width,
+                                          &height, &channels, 4);
+  if (!pixels) return Error{name + ": cannot decode image (" + stbi_failure_reason() + ")"};
+  core::ImageRGBA8 image;
+  image.width = width;
+  image.height = height;
+  image.pixels.assign(pixels, pixels + static_cast<size_t>(width) * height * 4);
+  stbi_image_free(pixels);
+  return image;
+}
+
+core::Result<core::ImageRGBA8> readImage(const std::string& path) {
+  auto bytes = readFileBytes(path);
+  if (!bytes) return bytes.error();
+  return decodeImage(*bytes, path);
+}
+
+std::vector<uint8_t> encodePng(const core::ImageRGBA8& image) {
+  std::vector<uint8_t> out;
+  stbi_write_png_to_func(
+      [](void* context, void* data, int size) {
+        auto* sink = static_cast<std::vector<uint8_t>*>(context);
+        auto* begin = static_cast<uint8_t*>(data);
+        sink->insert(sink->end(), begin, begin + size);
+      },
+      &out, image.width, image.height, 4, image.pixels.data(), image.width * 4);
+  return out;
+}
+
+core::Status writePng(const core::ImageRGBA8& image, const std::string& path) {
+  if (image.width <= 0 || image.height <= 0) return Error{path + ": empty image"};
+  std::vector<uint8_t> png = encodePng(image);
+  if (png.empty()) return Error{path + ": PNG encoding failed"};
+  return writeFileAtomic(path, png);
+}
+
+core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& options) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Error{path + ": file not found"};
+  core::Result<core::Asset> loaded = Error{};
+  if (extension == ".gltf" || extension == ".glb")
+    loaded = readGltf(path, options);
+  else if (extension == ".obj")
+    loaded = readObj(path, options);
+  else if (extension == ".ply")
+    loaded = readPly(path, options);
+  else if (extension == ".off")
+    loaded = readOff(path, options);
+  else
+    return Error{path + ": unsupported file type '" + extension +
+                 "' (supported: .gltf .glb .obj .ply .off)"};
+  if (!loaded) return loaded;
+  core::Asset& asset = loaded.value();
+  core::Mesh& mesh = asset.mesh;
+  if (mesh.submeshes.empty() && !mesh.indices.empty())
+    mesh.submeshes.push_back({0, static_cast<uint32_t>(mesh.indices.size()), 0});
+  if (asset.materials.empty()) asset.materials.push_back(core::Material{.name = "default"});
+  if (auto valid = core::validateMesh(mesh); !valid) return Error{path + ": " + valid.error().message};
+  for (const core::Submesh& sub : mesh.submeshes)
+    if (sub.material >= asset.materials.size())
+      return Error{path + ": submesh refers to material " + std::to_string(sub.material) +
+                   " but there are " + std::to_string(asset.materials.size())};
+  size_t degenerate = core::removeDegenerateTriangles(mesh);
+  if (degenerate > 0)
+    asset.warnings.push_back(std::to_string(degenerate) + " degenerate triangles removed");
+  if (mesh.triangleCount() == 0) return Error{path + ": the file contains no triangles"};
+  if (options.weld) core::weldVertices(mesh);
+  if (options.generate_normals && mesh.normals.empty()) core::computeNormals(mesh);
+  if (options.generate_tangents && mesh.tangents.empty() && !mesh.normals.empty() &&
+      !mesh.uv0.empty())
+    core::computeTangents(mesh);
+  asset.source_path = path;
+  return loaded;
+}
+
+}  // namespace duolod::io

@@ -1,0 +1,511 @@
+// glTF 2.0 reader (Khronos glTF 2.0 specification) through tinygltf (Debian libtinygltf-dev):
+// all triangle primitives of the default scene, node transforms flattened, metallic-roughness
+// materials and their textures. Every accessor read is bounds-checked here, because tinygltf
+// leaves out-of-range views to the caller.
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_INCLUDE_STB_IMAGE
+#define TINYGLTF_NO_INCLUDE_STB_IMAGE_WRITE
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+
+#include "duolod/io.hpp"
+
+namespace duolod::io {
+namespace {
+using core::Error;
+using core::Mat4;
+using core::Vec2;
+using core::Vec3;
+using core::Vec4;
+
+struct ImageLoaderContext {
+  bool decode = true;
+};
+
+// tinygltf hands us the encoded bytes of each image (embedded or from a file it read).
+bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* err, std::string*,
+                         int, int, const unsigned char* bytes, int size, void* user) {
+  auto* context = static_cast<ImageLoaderContext*>(user);
+  if (!context->decode) return true;
+  std::string name = image->uri.empty() ? "image " + std::to_string(index) : image->uri;
+  auto decoded = decodeImage(std::span<const uint8_t>(bytes, static_cast<size_t>(size)), name);
+  if (!decoded) {
+    if (err) *err += decoded.error().message + "\n";
+    return false;
+  }
+  image->width = decoded->width;
+  image->height = decoded->height;
+  image->component = 4;
+  image->bits = 8;
+  image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+  image->image = std::move(decoded->pixels);
+  return true;
+}
+
+// A validated view of an accessor's bytes: every element lies inside its buffer.
+struct AccessorBytes {
+  const unsigned char* first = nullptr;  // null when the accessor has no bufferView (all zeros)
+  size_t stride = 0;
+  size_t count = 0;
+  int component_type = 0;
+  int component_size = 0;
+  bool normalized = false;
+};
+
+core::Result<AccessorBytes> viewAccessor(const tinygltf::Model& model, int index, int components,
+                                         const std::string& what) {
+  if (index < 0 || index >= static_cast<int>(model.accessors.size()))
+    return Error{what + ": accessor " + std::to_string(index) + " does not exist"};
+  const tinygltf::Accessor& accessor = model.accessors[index];
+  std::string where = what + " (accessor " + std::to_string(index) + ")";
+  if (accessor.sparse.isSparse) return Error{where + ": sparse accessors are not supported"};
+  int count_per_element = tinygltf::GetNumComponentsInType(accessor.type);
+  if (count_per_element != components)
+    return Error{where + ": expected " + std::to_string(components) + " components, found " +
+                 std::to_string(count_per_element)};
+  AccessorBytes bytes;
+  bytes.component_type = accessor.componentType;
+  bytes.component_size = tinygltf::GetComponentSizeInBytes(accessor.componentType);
+  bytes.count = accessor.count;
+  bytes.normalized = accessor.normalized;
+  if (bytes.component_size <= 0) return Error{where + ": invalid componentType"};
+  if (accessor.bufferView < 0) return bytes;  // all zeros per the specification
+  if (accessor.bufferView >= static_cast<int>(model.bufferViews.size()))
+    return Error{where + ": bufferView " + std::to_string(accessor.bufferView) + " does not exist"};
+  const tinygltf::BufferView& view = model.bufferViews[accessor.bufferView];
+  if (view.buffer < 0 || view.buffer >= static_cast<int>(model.buffers.size()))
+    return Error{where + ": buffer " + std::to_string(view.buffer) + " does not exist"};
+  const std::vector<unsigned char>& data = model.buffers[view.buffer].data;
+  size_t element_size = static_cast<size_t>(bytes.component_size) * components;
+  bytes.stride = view.byteStride ? view.byteStride : element_size;
+  if (bytes.stride < element_size) return Error{where + ": byteStride smaller than the element"};
+  if (view.byteOffset + view.byteLength > data.size())
+    return Error{where + ": bufferView runs past the end of its buffer (" +
+                 std::to_string(view.byteOffset + view.byteLength) + " > " +
+                 std::to_string(data.size()) + " bytes)"};
+  if (accessor.count > view.byteLength ||
+      (accessor.count > 0 && accessor.byteOffset + (accessor.count - 1) * bytes.stride +
+                                     element_size > view.byteLength))
+    return Error{where + ": " + std::to_string(accessor.count) +
+                 " elements do not fit in the bufferView"};
+  bytes.first = data.data() + view.byteOffset + accessor.byteOffset;
+  return bytes;
+}
+
+// Reads accessor `index` as `components` floats per element, normalizing integer types when the
+// accessor says so.
+core::Result<std::vector<float>> readFloats(const tinygltf::Model& model, int index,
+                                            int components, const std::string& what) {
+  auto view = viewAccessor(model, index, components, what);
+  if (!view) return view.error();
+  const AccessorBytes& a = *view;
+  std::vector<float> out(a.count * components, 0.0f);
+  if (!a.first) return out;
+  for (size_t e = 0; e < a.count; ++e) {
+    for (int c = 0; c < components; ++c) {
+      const unsigned char* p = a.first + e * a.stride + c * a.component_size;
+      float value = 0;
+      switch (a.component_type) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&value, p, 4); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: value = a.normalized ? *p / 255.0f : *p; break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE: {
+          auto v = static_cast<int8_t>(*p);
+          value = a.normalized ? std::max(v / 127.0f, -1.0f) : v;
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+          uint16_t v;
+          std::memcpy(&v, p, 2);
+          value = a.normalized ? v / 65535.0f : v;
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_SHORT: {
+          int16_t v;
+          std::memcpy(&v, p, 2);
+          value = a.normalized ? std::max(v / 32767.0f, -1.0f) : v;
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+          uint32_t v;
+          std::memcpy(&v, p, 4);
+          value = static_cast<float>(v);
+          break;
+        }
+        default: return Error{what + ": unsupported componentType"};
+      }
+      if (!std::isfinite(value))
+        return Error{what + ": element " + std::to_string(e) + " is not a finite number"};
+      out[e * components + c] = value;
+    }
+  }
+  return out;
+}
+
+core::Result<std::vector<uint32_t>> readIndices(const tinygltf::Model& model, int index,
+                                                const std::string& what) {
+  auto view = viewAccessor(model, index, 1, what + " indices");
+  if (!view) return view.error();
+  const AccessorBytes& a = *view;
+  std::vector<uint32_t> out(a.count, 0);
+  if (!a.first) return out;
+  for (size_t e = 0; e < a.count; ++e) {
+    const unsigned char* p = a.first + e * a.stride;
+    switch (a.component_type) {
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[e] = *p; break;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t v;
+        std::memcpy(&v, p, 2);
+        out[e] = v;
+        break;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: std::memcpy(&out[e], p, 4); break;
+      default: return Error{what + ": indices must be unsigned integers"};
+    }
+  }
+  return out;
+}
+
+Mat4 nodeMatrix(const tinygltf::Node& node) {
+  if (node.matrix.size() == 16) {
+    Mat4 m;
+    for (int i = 0; i < 16; ++i) m.m[i] = static_cast<float>(node.matrix[i]);
+    return m;
+  }
+  Mat4 t = Mat4::identity(), r = Mat4::identity(), s = Mat4::identity();
+  if (node.translation.size() == 3)
+    for (int i = 0; i < 3; ++i) t.at(i, 3) = static_cast<float>(node.translation[i]);
+  if (node.rotation.size() == 4) {
+    double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
+    r.at(0, 0) = float(1 - 2 * (y * y + z * z)), r.at(0, 1) = float(2 * (x * y - z * w)),
+    r.at(0, 2) = float(2 * (x * z + y * w));
+    r.at(1, 0) = float(2 * (x * y + z * w)), r.at(1, 1) = float(1 - 2 * (x * x + z * z)),
+    r.at(1, 2) = float(2 * (y * z - x * w));
+    r.at(2, 0) = float(2 * (x * z - y * w)), r.at(2, 1) = float(2 * (y * z + x * w)),
+    r.at(2, 2) = float(1 - 2 * (x * x + y * y));
+  }
+  if (node.scale.size() == 3)
+    for (int i = 0; i < 3; ++i) s.at(i, i) = static_cast<float>(node.scale[i]);
+  return t * r * s;
+}
+
+float determinant3(const Mat4& m) {
+  return m.at(0, 0) * (m.at(1, 1) * m.at(2, 2) - m.at(1, 2) * m.at(2, 1)) -
+         m.at(0, 1) * (m.at(1, 0) * m.at(2, 2) - m.at(1, 2) * m.at(2, 0)) +
+         m.at(0, 2) * (m.at(1, 0) * m.at(2, 1) - m.at(1, 1) * m.at(2, 0));
+}
+
+class GltfFlattener {
+ public:
+  GltfFlattener(const tinygltf::Model& model, const std::string& path, core::Asset& asset)
+      : model_(model), path_(path), asset_(asset) {}
+
+  core::Status visit(int node_index, const Mat4& parent, int depth) {
+    if (node_index < 0 || node_index >= static_cast<int>(model_.nodes.size()))
+      return Error{path_ + ": node " + std::to_string(node_index) + " does not exist"};
+    if (depth > 256) return Error{path_ + ": node hierarchy deeper than 256 (a cycle?)"};
+    const tinygltf::Node& node = model_.nodes[node_index];
+    Mat4 world = parent * nodeMatrix(node);
+    if (node.mesh >= 0) {
+      if (node.mesh >= static_cast<int>(model_.meshes.size()))
+        return Error{path_ + ": node " + std::to_string(node_index) + " refers to missing mesh " +
+                     std::to_string(node.mesh)};
+      if (auto added = addMesh(node.mesh, world); !added) return added;
+    }
+    for (int child : node.children)
+      if (auto visited = visit(child, world, depth + 1); !visited) return visited;
+    return core::okStatus();
+  }
+
+  core::Status addMesh(int mesh_index, const Mat4& world) {
+    const tinygltf::Mesh& gmesh = model_.meshes[mesh_index];
+    for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
+      const tinygltf::Primitive& prim = gmesh.primitives[p];
+      std::string what = path_ + ": mesh " + std::to_string(mesh_index) + " primitive " +
+                         std::to_string(p);
+      if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1) {
+        asset_.warnings.push_back(what + ": mode " + std::to_string(prim.mode) +
+                                  " is not triangles; skipped");
+        continue;
+      }
+      if (auto added = addPrimitive(prim, world, what); !added) return added;
+    }
+    return core::okStatus();
+  }
+
+  // Groups triangles per material; the final index buffer is built by finish().
+  core::Status addPrimitive(const tinygltf::Primitive& prim, const Mat4& world,
+                            const std::string& what) {
+    auto position_it = prim.attributes.find("POSITION");
+    if (position_it == prim.attributes.end()) return Error{what + ": has no POSITION attribute"};
+    auto positions = readFloats(model_, position_it->second, 3, what + " POSITION");
+    if (!positions) return positions.error();
+    size_t count = positions->size() / 3;
+    auto optional = [&](const char* name, int components) -> core::Result<std::vector<float>> {
+      auto it = prim.attributes.find(name);
+      if (it == prim.attributes.end()) return std::vector<float>{};
+      auto values = readFloats(model_, it->second, components, what + " " + name);
+      if (values && values->size() != count * components)
+        return Error{what + ": " + name + " has a different count than POSITION"};
+      return values;
+    };
+    auto normals = optional("NORMAL", 3);
+    if (!normals) return normals.error();
+    auto tangents = optional("TANGENT", 4);
+    if (!tangents) return tangents.error();
+    auto uv0 = optional("TEXCOORD_0", 2);
+    if (!uv0) return uv0.error();
+    auto uv1 = optional("TEXCOORD_1", 2);
+    if (!uv1) return uv1.error();
+    std::vector<float> colors;
+    if (auto it = prim.attributes.find("COLOR_0"); it != prim.attributes.end()) {
+      int components = 4;
+      if (it->second >= 0 && it->second < static_cast<int>(model_.accessors.size()))
+        components = model_.accessors[it->second].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+      auto read = optional("COLOR_0", components);
+      if (!read) return read.error();
+      colors.resize(count * 4, 1.0f);
+      for (size_t v = 0; v < count; ++v)
+        for (int c = 0; c < components; ++c) colors[v * 4 + c] = (*read)[v * components + c];
+    }
+    std::vector<uint32_t> indices;
+    if (prim.indices >= 0) {
+      auto read = readIndices(model_, prim.indices, what);
+      if (!read) return read.error();
+      indices = std::move(read.value());
+    } else {
+      indices.resize(count);
+      for (size_t i = 0; i < count; ++i) indices[i] = static_cast<uint32_t>(i);
+    }
+    if (indices.size() % 3 != 0)
+      return Error{what + ": " + std::to_string(indices.size()) +
+                   " indices is not a whole number of triangles"};
+    for (size_t i = 0; i < indices.size(); ++i)
+      if (indices[i] >= count)
+        return Error{what + ": index " + std::to_string(i) + " = " + std::to_string(indices[i]) +
+                     " is out of range (" + std::to_string(count) + " vertices)"};
+
+    // Streams present anywhere must be present everywhere; fill absent ones with defaults.
+    core::Mesh& mesh = asset_.mesh;
+    uint32_t base = static_cast<uint32_t>(mesh.positions.size());
+    Mat4 normal_matrix = core::transpose(core::inverse(world));
+    bool mirrored = determinant3(world) < 0;
+    for (size_t v = 0; v < count; ++v) {
+      Vec3 p{(*positions)[v * 3], (*positions)[v * 3 + 1], (*positions)[v * 3 + 2]};
+      mesh.positions.push_back(core::transformPoint(world, p));
+    }
+    appendStream(mesh.normals, has_normals_, !normals->empty(), base, count, Vec3{0, 0, 1},
+                 [&](size_t v) {
+                   Vec3 n{(*normals)[v * 3], (*normals)[v * 3 + 1], (*normals)[v * 3 + 2]};
+                   return core::normalize(core::transformVector(normal_matrix, n));
+                 });
+    appendStream(mesh.tangents, has_tangents_, !tangents->empty(), base, count, Vec4{1, 0, 0, 1},
+                 [&](size_t v) {
+                   const float* t = &(*tangents)[v * 4];
+                   Vec3 d = core::normalize(core::transformVector(world, Vec3{t[0], t[1], t[2]}));
+                   return Vec4{d.x, d.y, d.z, mirrored ? -t[3] : t[3]};
+                 });
+    appendStream(mesh.uv0, has_uv0_, !uv0->empty(), base, count, Vec2{0, 0},
+                 [&](size_t v) { return Vec2{(*uv0)[v * 2], (*uv0)[v * 2 + 1]}; });
+    appendStream(mesh.uv1, has_uv1_, !uv1->empty(), base, count, Vec2{0, 0},
+                 [&](size_t v) { return Vec2{(*uv1)[v * 2], (*uv1)[v * 2 + 1]}; });
+    appendStream(mesh.colors, has_colors_, !colors.empty(), base, count, Vec4{1, 1, 1, 1},
+                 [&](size_t v) {
+                   return Vec4{colors[v * 4], colors[v * 4 + 1], colors[v * 4 + 2],
+                               colors[v * 4 + 3]};
+                 });
+    int material = prim.material;
+    if (material >= static_cast<int>(model_.materials.size()))
+      return Error{what + ": refers to missing material " + std::to_string(material)};
+    std::vector<uint32_t>& bucket = triangles_by_material_[material];
+    for (size_t i = 0; i < indices.size(); i += 3) {
+      uint32_t a = base + indices[i], b = base + indices[i + 1], c = base + indices[i + 2];
+      if (mirrored) std::swap(b, c);  // keep counter-clockwise front faces after a mirror
+      bucket.insert(bucket.end(), {a, b, c});
+    }
+    return core::okStatus();
+  }
+
+  // Materials in file order; -1 (no material) maps to a default material appended at the end.
+  void finish() {
+    core::Mesh& mesh = asset_.mesh;
+    mesh.indices.clear();
+    mesh.submeshes.clear();
+    for (auto& [material, triangles] : triangles_by_material_) {
+      uint32_t id = material >= 0 ? static_cast<uint32_t>(material)
+                                  : static_cast<uint32_t>(model_.materials.size());
+      mesh.submeshes.push_back({static_cast<uint32_t>(mesh.indices.size()),
+                                static_cast<uint32_t>(triangles.size()), id});
+      mesh.indices.insert(mesh.indices.end(), triangles.begin(), triangles.end());
+    }
+  }
+
+  bool usesDefaultMaterial() const { return triangles_by_material_.count(-1) > 0; }
+
+ private:
+  template <class T, class Get>
+  void appendStream(std::vector<T>& stream, bool& present, bool here, uint32_t base, size_t count,
+                    T fallback, Get get) {
+    if (here && !present) {  // first primitive with this stream: back-fill earlier vertices
+      stream.assign(base, fallback);
+      present = true;
+    }
+    if (!present) return;
+    for (size_t v = 0; v < count; ++v) stream.push_back(here ? get(v) : fallback);
+  }
+
+  const tinygltf::Model& model_;
+  const std::string& path_;
+  core::Asset& asset_;
+  std::map<int, std::vector<uint32_t>> triangles_by_material_;
+  bool has_normals_ = false, has_tangents_ = false, has_uv0_ = false, has_uv1_ = false,
+       has_colors_ = false;
+};
+
+core::Status readMaterials(const tinygltf::Model& model, const std::string& path,
+                           core::Asset& asset) {
+  std::vector<int> srgb_use(model.textures.size(), 0), linear_use(model.textures.size(), 0);
+  auto textureRef = [&](int texture, int tex_coord, const std::string& what, bool srgb,
+                        const tinygltf::ExtensionMap& extensions) -> core::Result<int> {
+    if (texture < 0) return -1;
+    if (texture >= static_cast<int>(model.textures.size()))
+      return Error{path + ": " + what + " refers to missing texture " + std::to_string(texture)};
+    if (tex_coord != 0)
+      asset.warnings.push_back(what + " uses TEXCOORD_" + std::to_string(tex_coord) +
+                               "; duolod's shaders sample TEXCOORD_0");
+    if (extensions.count("KHR_texture_transform"))
+      asset.warnings.push_back(what + ": KHR_texture_transform is ignored");
+    (srgb ? srgb_use : linear_use)[texture]++;
+    return texture;
+  };
+  for (size_t m = 0; m < model.materials.size(); ++m) {
+    const tinygltf::Material& gm = model.materials[m];
+    core::Material mat;
+    std::string what = "material " + std::to_string(m) + (gm.name.empty() ? "" : " '" + gm.name + "'");
+    mat.name = gm.name.empty() ? "material" + std::to_string(m) : gm.name;
+    const auto& pbr = gm.pbrMetallicRoughness;
+    if (pbr.baseColorFactor.size() == 4)
+      mat.base_color_factor = {float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
+                               float(pbr.baseColorFactor[2]), float(pbr.baseColorFactor[3])};
+    mat.metallic_factor = float(pbr.metallicFactor);
+    mat.roughness_factor = float(pbr.roughnessFactor);
+    if (gm.emissiveFactor.size() == 3)
+      mat.emissive_factor = {float(gm.emissiveFactor[0]), float(gm.emissiveFactor[1]),
+                             float(gm.emissiveFactor[2])};
+    mat.normal_scale = float(gm.normalTexture.scale);
+    mat.occlusion_strength = float(gm.occlusionTexture.strength);
+    mat.alpha_cutoff = float(gm.alphaCutoff);
+    mat.alpha_mode = gm.alphaMode == "MASK"    ? core::AlphaMode::kMask
+                     : gm.alphaMode == "BLEND" ? core::AlphaMode::kBlend
+                                               : core::AlphaMode::kOpaque;
+    mat.double_sided = gm.doubleSided;
+    struct Slot {
+      int* target;
+      int texture, tex_coord;
+      const char* name;
+      bool srgb;
+      const tinygltf::ExtensionMap* extensions;
+    } slots[] = {
+        {&mat.base_color_texture, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
+         "baseColorTexture", true, &pbr.baseColorTexture.extensions},
+        {&mat.metallic_roughness_texture, pbr.metallicRoughnessTexture.index,
+         pbr.metallicRoughnessTexture.texCoord, "metallicRoughnessTexture", false,
+         &pbr.metallicRoughnessTexture.extensions},
+        {&mat.normal_texture, gm.normalTexture.index, gm.normalTexture.texCoord, "normalTexture",
+         false, &gm.normalTexture.extensions},
+        {&mat.occlusion_texture, gm.occlusionTexture.index, gm.occlusionTexture.texCoord,
+         "occlusionTexture", false, &gm.occlusionTexture.extensions},
+        {&mat.emissive_texture, gm.emissiveTexture.index, gm.emissiveTexture.texCoord,
+         "emissiveTexture", true, &gm.emissiveTexture.extensions},
+    };
+    for (const Slot& slot : slots) {
+      auto ref = textureRef(slot.texture, slot.tex_coord, what + " " + slot.name, slot.srgb,
+                            *slot.extensions);
+      if (!ref) return ref.error();
+      *slot.target = *ref;
+    }
+    asset.materials.push_back(mat);
+  }
+  for (size_t t = 0; t < model.textures.size(); ++t) {
+    const tinygltf::Texture& gt = model.textures[t];
+    core::Texture texture;
+    if (gt.source < 0 || gt.source >= static_cast<int>(model.images.size())) {
+      if (srgb_use[t] + linear_use[t] > 0)
+        return Error{path + ": texture " + std::to_string(t) + " has no valid image source"};
+      asset.textures.push_back(texture);
+      continue;
+    }
+    const tinygltf::Image& image = model.images[gt.source];
+    texture.name = !image.uri.empty() ? image.uri : !image.name.empty() ? image.name
+                                                   : "image" + std::to_string(gt.source);
+    if (srgb_use[t] && linear_use[t])
+      asset.warnings.push_back("texture " + texture.name +
+                               " is used both as colour and as data; treated as colour");
+    texture.srgb = srgb_use[t] > 0;
+    if (image.width > 0 && image.height > 0 && image.component == 4 && image.bits == 8 &&
+        image.image.size() == static_cast<size_t>(image.width) * image.height * 4) {
+      texture.image.width = image.width;
+      texture.image.height = image.height;
+      texture.image.pixels = image.image;
+    }
+    asset.textures.push_back(std::move(texture));
+  }
+  return core::okStatus();
+}
+
+}  // namespace
+
+core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& options) {
+  tinygltf::TinyGLTF loader;
+  ImageLoaderContext context{options.load_textures};
+  loader.SetImageLoader(loadImageThroughStb, &context);
+  tinygltf::Model model;
+  std::string error, warning;
+  bool binary = false;
+  {
+    auto head = readFileBytes(path);
+    if (!head) return head.error();
+    binary = head->size() >= 4 && std::memcmp(head->data(), "glTF", 4) == 0;
+  }
+  bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
+                   : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  if (!ok) {
+    while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
+    if (error.empty()) error = "not a valid glTF file";
+    std::replace(error.begin(), error.end(), '\n', ';');
+    return Error{path + ": " + error};
+  }
+  core::Asset asset;
+  asset.source_path = path;
+  if (!warning.empty()) asset.warnings.push_back(warning);
+  if (auto materials = readMaterials(model, path, asset); !materials) return materials.error();
+  GltfFlattener flattener(model, path, asset);
+  std::vector<int> roots;
+  int scene = model.defaultScene >= 0 ? model.defaultScene : (model.scenes.empty() ? -1 : 0);
+  if (scene >= static_cast<int>(model.scenes.size()))
+    return Error{path + ": default scene " + std::to_string(scene) + " does not exist"};
+  if (scene >= 0) {
+    roots = model.scenes[scene].nodes;
+  } else {
+    // No scene: take every mesh once, untransformed.
+    for (size_t m = 0; m < model.meshes.size(); ++m)
+      if (auto added = flattener.addMesh(static_cast<int>(m), core::Mat4::identity()); !added)
+        return added.error();
+  }
+  for (int root : roots)
+    if (auto visited = flattener.visit(root, core::Mat4::identity(), 0); !visited)
+      return visited.error();
+  flattener.finish();
+  if (flattener.usesDefaultMaterial()) asset.materials.push_back(core::Material{.name = "default"});
+  if (options.load_textures)
+    for (const core::Texture& texture : asset.textures)
+      if (texture.image.pixels.empty() && !texture.name.empty())
+        return Error{path + ": texture image '" + texture.name + "' could not be loaded"};
+  return asset;
+}
+
+}  // namespace duolod::io

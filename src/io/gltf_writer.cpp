@@ -1,0 +1,209 @@
+// glTF 2.0 writer (Khronos glTF 2.0 specification §5 for the JSON schema, §4.4 for GLB): one mesh
+// with a primitive per submesh, metallic-roughness materials, PNG textures, written as .gltf with a
+// .bin and PNG files beside it, or as a single .glb. Every file goes through writeFileAtomic.
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+
+#include "duolod/io.hpp"
+
+namespace duolod::io {
+namespace {
+namespace fs = std::filesystem;
+using core::Error;
+using nlohmann::json;
+
+constexpr int kFloat = 5126;
+constexpr int kUnsignedInt = 5125;
+constexpr int kArrayBuffer = 34962;
+constexpr int kElementArrayBuffer = 34963;
+
+class GltfBuilder {
+ public:
+  // Appends bytes to the binary buffer (4-byte aligned) and returns the bufferView index.
+  int addView(const void* data, size_t size, int target) {
+    while (bin_.size() % 4) bin_.push_back(0);
+    json view = {{"buffer", 0}, {"byteOffset", bin_.size()}, {"byteLength", size}};
+    if (target) view["target"] = target;
+    const auto* bytes = static_cast<const uint8_t*>(data);
+    bin_.insert(bin_.end(), bytes, bytes + size);
+    views_.push_back(view);
+    return static_cast<int>(views_.size()) - 1;
+  }
+
+  template <class T>
+  int addFloatAccessor(const std::vector<T>& stream, const char* type, bool with_bounds) {
+    int components = static_cast<int>(sizeof(T) / sizeof(float));
+    int view = addView(stream.data(), stream.size() * sizeof(T), kArrayBuffer);
+    json accessor = {{"bufferView", view}, {"componentType", kFloat},
+                     {"count", stream.size()}, {"type", type}};
+    if (with_bounds) {  // required for POSITION (glTF §5.1.1)
+      std::vector<float> lo(components, INFINITY), hi(components, -INFINITY);
+      for (const T& v : stream)
+        for (int c = 0; c < components; ++c) {
+          float x = reinterpret_cast<const float*>(&v)[c];
+          lo[c] = std::min(lo[c], x);
+          hi[c] = std::max(hi[c], x);
+        }
+      accessor["min"] = lo;
+      accessor["max"] = hi;
+    }
+    accessors_.push_back(accessor);
+    return static_cast<int>(accessors_.size()) - 1;
+  }
+
+  int addIndexAccessor(const uint32_t* indices, size_t count) {
+    int view = addView(indices, count * 4, kElementArrayBuffer);
+    accessors_.push_back({{"bufferView", view}, {"componentType", kUnsignedInt},
+                          {"count", count}, {"type", "SCALAR"}});
+    return static_cast<int>(accessors_.size()) - 1;
+  }
+
+  json views_ = json::array();
+  json accessors_ = json::array();
+  std::vector<uint8_t> bin_;
+};
+
+json materialJson(const core::Material& m) {
+  json pbr = {{"baseColorFactor", {m.base_color_factor.x, m.base_color_factor.y,
+                                   m.base_color_factor.z, m.base_color_factor.w}},
+              {"metallicFactor", m.metallic_factor},
+              {"roughnessFactor", m.roughness_factor}};
+  if (m.base_color_texture >= 0) pbr["baseColorTexture"] = {{"index", m.base_color_texture}};
+  if (m.metallic_roughness_texture >= 0)
+    pbr["metallicRoughnessTexture"] = {{"index", m.metallic_roughness_texture}};
+  json out = {{"name", m.name}, {"pbrMetallicRoughness", pbr}};
+  if (m.normal_texture >= 0)
+    out["normalTexture"] = {{"index", m.normal_texture}, {"scale", m.normal_scale}};
+  if (m.occlusion_texture >= 0)
+    out["occlusionTexture"] = {{"index", m.occlusion_texture}, {"strength", m.occlusion_strength}};
+  if (m.emissive_texture >= 0) out["emissiveTexture"] = {{"index", m.emissive_texture}};
+  if (m.emissive_factor.x != 0 || m.emissive_factor.y != 0 || m.emissive_factor.z != 0)
+    out["emissiveFactor"] = {m.emissive_factor.x, m.emissive_factor.y, m.emissive_factor.z};
+  if (m.alpha_mode == core::AlphaMode::kMask) {
+    out["alphaMode"] = "MASK";
+    out["alphaCutoff"] = m.alpha_cutoff;
+  } else if (m.alpha_mode == core::AlphaMode::kBlend) {
+    out["alphaMode"] = "BLEND";
+  }
+  if (m.double_sided) out["doubleSided"] = true;
+  return out;
+}
+
+bool sameFile(const std::string& a, const std::string& b) {
+  if (a.empty() || b.empty()) return false;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+}  // namespace
+
+core::Status writeGltf(const core::Asset& asset, const std::string& path) {
+  if (sameFile(path, asset.source_path))
+    return Error{path + ": refusing to overwrite the asset's own source file"};
+  if (auto valid = core::validateMesh(asset.mesh); !valid)
+    return Error{path + ": cannot write an invalid mesh: " + valid.error().message};
+  fs::path target(path);
+  std::string extension = target.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+  bool binary = extension == ".glb";
+  if (!binary && extension != ".gltf")
+    return Error{path + ": glTF output needs a .gltf or .glb extension"};
+
+  const core::Mesh& mesh = asset.mesh;
+  GltfBuilder builder;
+  json attributes = {{"POSITION", builder.addFloatAccessor(mesh.positions, "VEC3", true)}};
+  if (!mesh.normals.empty()) attributes["NORMAL"] = builder.addFloatAccessor(mesh.normals, "VEC3", false);
+  if (!mesh.tangents.empty())
+    attributes["TANGENT"] = builder.addFloatAccessor(mesh.tangents, "VEC4", false);
+  if (!mesh.uv0.empty()) attributes["TEXCOORD_0"] = builder.addFloatAccessor(mesh.uv0, "VEC2", false);
+  if (!mesh.uv1.empty()) attributes["TEXCOORD_1"] = builder.addFloatAccessor(mesh.uv1, "VEC2", false);
+  if (!mesh.colors.empty()) attributes["COLOR_0"] = builder.addFloatAccessor(mesh.colors, "VEC4", false);
+
+  json primitives = json::array();
+  for (const core::Submesh& sub : mesh.submeshes) {
+    if (sub.index_count == 0) continue;
+    json primitive = {{"attributes", attributes},
+                      {"indices", builder.addIndexAccessor(mesh.indices.data() + sub.first_index,
+                                                           sub.index_count)},
+                      {"mode", 4}};
+    if (sub.material < asset.materials.size()) primitive["material"] = sub.material;
+    primitives.push_back(primitive);
+  }
+
+  json materials = json::array();
+  for (const core::Material& m : asset.materials) materials.push_back(materialJson(m));
+
+  // Textures: PNG beside a .gltf, or embedded bufferViews in a .glb.
+  json images = json::array(), textures = json::array();
+  std::vector<std::pair<std::string, std::vector<uint8_t>>> side_files;
+  for (size_t t = 0; t < asset.textures.size(); ++t) {
+    const core::Texture& texture = asset.textures[t];
+    core::ImageRGBA8 image = texture.image;
+    if (image.pixels.empty()) image = {1, 1, {255, 255, 255, 255}};  // keep indices stable
+    std::vector<uint8_t> png = encodePng(image);
+    if (binary) {
+      images.push_back({{"bufferView", builder.addView(png.data(), png.size(), 0)},
+                        {"mimeType", "image/png"}});
+    } else {
+      std::string name = target.stem().string() + "_texture" + std::to_string(t) + ".png";
+      images.push_back({{"uri", name}});
+      side_files.emplace_back((target.parent_path() / name).string(), std::move(png));
+    }
+    textures.push_back({{"source", t}, {"sampler", 0}});
+  }
+
+  json document = {
+      {"asset", {{"version", "2.0"}, {"generator", "duolod " DUOLOD_VERSION}}},
+      {"scene", 0},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"nodes", {{{"mesh", 0}, {"name", target.stem().string()}}}},
+      {"meshes", {{{"primitives", primitives}, {"name", target.stem().string()}}}},
+      {"accessors", builder.accessors_},
+      {"bufferViews", builder.views_},
+  };
+  if (!materials.empty()) document["materials"] = materials;
+  if (!textures.empty()) {
+    document["textures"] = textures;
+    document["images"] = images;
+    // Trilinear, repeat: what duolod renders with.
+    document["samplers"] = {{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497},
+                             {"wrapT", 10497}}};
+  }
+  while (builder.bin_.size() % 4) builder.bin_.push_back(0);
+
+  if (binary) {
+    document["buffers"] = {{{"byteLength", builder.bin_.size()}}};
+    std::string text = document.dump();
+    while (text.size() % 4) text.push_back(' ');
+    std::vector<uint8_t> glb;
+    auto put32 = [&](uint32_t v) {
+      for (int i = 0; i < 4; ++i) glb.push_back(static_cast<uint8_t>(v >> (8 * i)));
+    };
+    uint32_t total = 12 + 8 + static_cast<uint32_t>(text.size()) + 8 +
+                     static_cast<uint32_t>(builder.bin_.size());
+    put32(0x46546C67);  // "glTF"
+    put32(2);
+    put32(total);
+    put32(static_cast<uint32_t>(text.size()));
+    put32(0x4E4F534A);  // "JSON"
+    glb.insert(glb.end(), text.begin(), text.end());
+    put32(static_cast<uint32_t>(builder.bin_.size()));
+    put32(0x004E4942);  // "BIN\0"
+    glb.insert(glb.end(), builder.bin_.begin(), builder.bin_.end());
+    return writeFileAtomic(path, glb);
+  }
+  std::string bin_name = target.stem().string() + ".bin";
+  document["buffers"] = {{{"byteLength", builder.bin_.size()}, {"uri", bin_name}}};
+  for (const auto& [file, bytes] : side_files)
+    if (auto written = writeFileAtomic(file, bytes); !written) return written;
+  if (auto written = writeFileAtomic((target.parent_path() / bin_name).string(), builder.bin_);
+      !written)
+    return written;
+  return writeFileAtomic(path, document.dump(2));
+}
+
+}  // namespace duolod::io

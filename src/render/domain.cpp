@@ -1,0 +1,92 @@
+// The view × light domain of Liang et al., "Automatic Mesh and Shader Level of Detail", §7:
+// cameras at the vertices of a dodecahedron centred on the object, and for each camera 5 point
+// lights on the plane through the camera orthogonal to the view direction, at the centre and the
+// four ends of a fixed cross.
+#include <algorithm>
+#include <cmath>
+
+#include "duolod/render.hpp"
+
+namespace duolod::render {
+namespace {
+using core::Vec3;
+
+constexpr float kPhi = 1.6180339887498949f;  // golden ratio
+constexpr float kPi = 3.14159265358979f;
+
+// Keeps a camera outside the sphere it frames, where the framing angle is defined.
+float clampedDistance(const core::Sphere& bounds, float distance) {
+  return std::max(distance, bounds.radius * 1.001f);
+}
+
+}  // namespace
+
+std::vector<Vec3> viewDirections(ViewSet views) {
+  std::vector<Vec3> directions;
+  if (views == ViewSet::kDodecahedron) {
+    // (±1, ±1, ±1), (0, ±1/φ, ±φ), (±1/φ, ±φ, 0), (±φ, 0, ±1/φ)
+    for (float x : {-1.f, 1.f})
+      for (float y : {-1.f, 1.f})
+        for (float z : {-1.f, 1.f}) directions.push_back({x, y, z});
+    for (float a : {-1.f, 1.f})
+      for (float b : {-1.f, 1.f}) {
+        directions.push_back({0, a / kPhi, b * kPhi});
+        directions.push_back({a / kPhi, b * kPhi, 0});
+        directions.push_back({a * kPhi, 0, b / kPhi});
+      }
+  } else {
+    // (0, ±1, ±φ), (±1, ±φ, 0), (±φ, 0, ±1): the dual's vertices are the dodecahedron's face
+    // centres, so no held-out view coincides with a training view.
+    for (float a : {-1.f, 1.f})
+      for (float b : {-1.f, 1.f}) {
+        directions.push_back({0, a, b * kPhi});
+        directions.push_back({a, b * kPhi, 0});
+        directions.push_back({a * kPhi, 0, b});
+      }
+  }
+  for (Vec3& d : directions) d = core::normalize(d);
+  return directions;
+}
+
+int footprintPixels(const core::Sphere& bounds, float distance, const Display& display) {
+  float d = clampedDistance(bounds, distance);
+  // The sphere's silhouette subtends asin(r/d); its projected half-size on the image plane is
+  // tan(asin(r/d)) against the display's tan(fov/2) for half the screen height.
+  float half_angle = std::asin(std::min(bounds.radius / d, 0.9999f));
+  float screen_half = std::tan(display.fov_y_deg * kPi / 360.0f);
+  double pixels = display.height_px * std::tan(half_angle) / screen_half;
+  return std::clamp(static_cast<int>(std::ceil(pixels)), 1, 16384);
+}
+
+std::vector<Sample> domainSamples(const core::Sphere& bounds, float distance,
+                                  const DomainOptions& options) {
+  float d = clampedDistance(bounds, distance);
+  float half_angle = std::asin(std::min(bounds.radius / d, 0.9999f));
+  core::Mat4 projection = core::perspective(2 * half_angle, 1.0f, std::max(d - bounds.radius * 1.01f, d * 1e-3f),
+                                            d + bounds.radius * 1.01f);
+  std::vector<Sample> samples;
+  std::vector<Vec3> directions = viewDirections(options.views);
+  for (size_t v = 0; v < directions.size(); ++v) {
+    Vec3 direction = directions[v];
+    Vec3 eye = bounds.center + direction * d;
+    Vec3 up = std::fabs(direction.y) > 0.99f ? Vec3{0, 0, 1} : Vec3{0, 1, 0};
+    core::Mat4 view = core::lookAt(eye, bounds.center, up);
+    // Screen-aligned axes of the light plane.
+    Vec3 right = core::normalize(core::cross(-direction, up));
+    Vec3 screen_up = core::cross(right, -direction);
+    float rotation = options.light_rotation_deg * kPi / 180.0f;
+    Vec3 axis_a = right * std::cos(rotation) + screen_up * std::sin(rotation);
+    Vec3 axis_b = screen_up * std::cos(rotation) - right * std::sin(rotation);
+    float arm = options.light_cross_arm * d;
+    std::vector<Vec3> offsets;
+    if (options.light_cross_center) offsets.push_back({0, 0, 0});
+    for (Vec3 axis : {axis_a, axis_b})
+      for (float sign : {1.f, -1.f}) offsets.push_back(axis * (sign * arm));
+    for (size_t l = 0; l < offsets.size(); ++l)
+      samples.push_back({static_cast<int>(v), static_cast<int>(l), eye, eye + offsets[l], view,
+                         projection});
+  }
+  return samples;
+}
+
+}  // namespace duolod::render

@@ -1,0 +1,29 @@
+// The EGL context behind the Renderer: surfaceless Mesa (llvmpipe without a GPU) or an EGL device.
+#pragma once
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+
+#include <string>
+
+#include "duolod/core.hpp"
+#include "duolod/render.hpp"
+
+namespace duolod::render {
+
+class GlContext {
+ public:
+  static core::Result<GlContext> create(const ContextOptions& options);
+  GlContext() = default;
+  GlContext(GlContext&& other) noexcept { *this = std::move(other); }
+  GlContext& operator=(GlContext&& other) noexcept;
+  ~GlContext();
+
+  std::string description() const;
+
+ private:
+  EGLDisplay display_ = EGL_NO_DISPLAY;
+  EGLContext context_ = EGL_NO_CONTEXT;
+};
+
+}  // namespace duolod::render

@@ -1,0 +1,734 @@
+// Batched offscreen rendering of the view × light domain. Every sample gets its own tile of one
+// atlas framebuffer (its own viewport and scissor), all per-sample uniforms live in one buffer
+// bound by range, and the atlas is read back once: on llvmpipe a readback per view would cost more
+// than the drawing. References (f̄, eq. 1) are drawn k× larger and box-filtered on the GPU.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+#include "duolod/render.hpp"
+#include "render/gl_context.hpp"
+
+namespace duolod::render {
+namespace {
+using core::Error;
+
+// std140 layouts of shaders/INTERFACE.md.
+struct FrameBlock {
+  float model[16];
+  float view[16];
+  float projection[16];
+  float normal_matrix[16];
+  float camera_position[4];
+  float light_position[4];
+  float light_color[4];
+  float ambient_color[4];
+  float object_info[4];
+};
+struct MaterialBlock {
+  float base_color_factor[4];
+  float emissive_factor[4];
+  float material_params[4];
+  float texture_flags[4];
+  float texture_flags2[4];
+};
+
+constexpr const char* kDownsampleVertex = R"(#version 450 core
+void main() {
+  // One triangle covering the viewport.
+  vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+)";
+// Box filter of eq. (1)'s supersampling: destination pixel p averages the k×k source block at k·p.
+constexpr const char* kDownsampleFragment = R"(#version 450 core
+layout(binding = 0) uniform sampler2D uSource;
+layout(location = 0) uniform int uFactor;
+layout(location = 0) out vec4 outColor;
+void main() {
+  ivec2 base = ivec2(gl_FragCoord.xy) * uFactor;
+  vec4 sum = vec4(0.0);
+  for (int y = 0; y < uFactor; ++y)
+    for (int x = 0; x < uFactor; ++x) sum += texelFetch(uSource, base + ivec2(x, y), 0);
+  outColor = sum / float(uFactor * uFactor);
+}
+)";
+
+struct GpuSubmesh {
+  GLsizei index_count = 0;
+  size_t first_index = 0;
+  uint32_t material = 0;
+};
+
+struct GpuAsset {
+  GLuint vao = 0;
+  std::vector<GLuint> buffers;
+  GLuint material_ubo = 0;
+  GLsizeiptr material_stride = 0;
+  std::vector<GLuint> textures;  // one per asset texture
+  std::vector<core::Material> materials;
+  std::vector<GpuSubmesh> submeshes;
+  core::Sphere bounds;
+  bool has[6] = {};  // position, normal, tangent, uv0, uv1, color
+};
+
+struct Framebuffer {
+  GLuint fbo = 0, color = 0, depth = 0;
+  int width = 0, height = 0, samples = 0;
+  GLenum format = 0;
+  bool texture = false;
+};
+
+void destroyFramebuffer(Framebuffer& f) {
+  if (f.fbo) glDeleteFramebuffers(1, &f.fbo);
+  if (f.texture) {
+    if (f.color) glDeleteTextures(1, &f.color);
+  } else if (f.color) {
+    glDeleteRenderbuffers(1, &f.color);
+  }
+  if (f.depth) glDeleteRenderbuffers(1, &f.depth);
+  f = {};
+}
+
+// (Re)creates `f` only when its shape changes: allocation is costly on llvmpipe at atlas sizes.
+core::Status ensureFramebuffer(Framebuffer& f, int width, int height, int samples, GLenum format,
+                               bool with_depth, bool as_texture) {
+  if (f.fbo && f.width == width && f.height == height && f.samples == samples &&
+      f.format == format && f.texture == as_texture && (f.depth != 0) == with_depth)
+    return core::okStatus();
+  destroyFramebuffer(f);
+  f.width = width, f.height = height, f.samples = samples, f.format = format,
+  f.texture = as_texture;
+  glCreateFramebuffers(1, &f.fbo);
+  if (as_texture) {
+    glCreateTextures(GL_TEXTURE_2D, 1, &f.color);
+    glTextureStorage2D(f.color, 1, format, width, height);
+    glTextureParameteri(f.color, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(f.color, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glNamedFramebufferTexture(f.fbo, GL_COLOR_ATTACHMENT0, f.color, 0);
+  } else {
+    glCreateRenderbuffers(1, &f.color);
+    if (samples > 0)
+      glNamedRenderbufferStorageMultisample(f.color, samples, format, width, height);
+    else
+      glNamedRenderbufferStorage(f.color, format, width, height);
+    glNamedFramebufferRenderbuffer(f.fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, f.color);
+  }
+  if (with_depth) {
+    glCreateRenderbuffers(1, &f.depth);
+    if (samples > 0)
+      glNamedRenderbufferStorageMultisample(f.depth, samples, GL_DEPTH_COMPONENT24, width, height);
+    else
+      glNamedRenderbufferStorage(f.depth, GL_DEPTH_COMPONENT24, width, height);
+    glNamedFramebufferRenderbuffer(f.fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, f.depth);
+  }
+  GLenum status = glCheckNamedFramebufferStatus(f.fbo, GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    destroyFramebuffer(f);
+    return Error{"cannot create a " + std::to_string(width) + "x" + std::to_string(height) +
+                 " framebuffer (status 0x" + std::to_string(status) + ")"};
+  }
+  return core::okStatus();
+}
+
+std::string shaderLog(GLuint shader) {
+  GLint length = 0;
+  glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+  std::string log(std::max(length, 1), '\0');
+  glGetShaderInfoLog(shader, length, nullptr, log.data());
+  while (!log.empty() && (log.back() == '\0' || log.back() == '\n')) log.pop_back();
+  return log;
+}
+
+std::string programLog(GLuint program) {
+  GLint length = 0;
+  glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+  std::string log(std::max(length, 1), '\0');
+  glGetProgramInfoLog(program, length, nullptr, log.data());
+  while (!log.empty() && (log.back() == '\0' || log.back() == '\n')) log.pop_back();
+  return log;
+}
+
+core::Result<GLuint> linkProgram(GLuint vertex, GLuint fragment, const std::string& what) {
+  GLuint program = glCreateProgram();
+  glAttachShader(program, vertex);
+  glAttachShader(program, fragment);
+  glLinkProgram(program);
+  glDeleteShader(vertex);
+  glDeleteShader(fragment);
+  GLint linked = 0;
+  glGetProgramiv(program, GL_LINK_STATUS, &linked);
+  if (!linked) {
+    std::string log = programLog(program);
+    glDeleteProgram(program);
+    return Error{what + ": program failed to link:\n" + log};
+  }
+  return program;
+}
+
+void copyMatrix(float* out, const core::Mat4& m) { std::memcpy(out, m.m.data(), 64); }
+
+int roundUp(int value, int multiple) { return (value + multiple - 1) / multiple * multiple; }
+
+}  // namespace
+
+struct Renderer::State {
+  GlContext context;
+  std::vector<std::optional<GpuAsset>> assets;
+  std::vector<GLuint> programs;  // 0 = released
+  Bindings bindings;
+  core::Vec3 ambient{0.03f, 0.03f, 0.03f};
+  core::Vec3 light_color{3.0f, 3.0f, 3.0f};
+  GLuint white_texture = 0, flat_normal_texture = 0;
+  GLuint frame_ubo = 0;
+  GLsizeiptr frame_ubo_size = 0;
+  GLint ubo_alignment = 256;
+  GLint max_size = 4096;
+  Framebuffer atlas, resolved, reference_float;
+  GLuint downsample_program = 0;
+  GLuint empty_vao = 0;
+
+  ~State() {
+    if (context_alive) {
+      for (auto& asset : assets)
+        if (asset) release(*asset);
+      for (GLuint p : programs)
+        if (p) glDeleteProgram(p);
+      destroyFramebuffer(atlas);
+      destroyFramebuffer(resolved);
+      destroyFramebuffer(reference_float);
+      if (downsample_program) glDeleteProgram(downsample_program);
+      GLuint textures[] = {white_texture, flat_normal_texture};
+      glDeleteTextures(2, textures);
+      if (frame_ubo) glDeleteBuffers(1, &frame_ubo);
+      if (empty_vao) glDeleteVertexArrays(1, &empty_vao);
+    }
+  }
+
+  static void release(GpuAsset& asset) {
+    glDeleteVertexArrays(1, &asset.vao);
+    glDeleteBuffers(static_cast<GLsizei>(asset.buffers.size()), asset.buffers.data());
+    glDeleteBuffers(1, &asset.material_ubo);
+    if (!asset.textures.empty())
+      glDeleteTextures(static_cast<GLsizei>(asset.textures.size()), asset.textures.data());
+  }
+
+  GLuint makeSolidTexture(uint8_t r, uint8_t g, uint8_t b) {
+    GLuint texture;
+    glCreateTextures(GL_TEXTURE_2D, 1, &texture);
+    glTextureStorage2D(texture, 1, GL_RGBA8, 1, 1);
+    uint8_t texel[4] = {r, g, b, 255};
+    glTextureSubImage2D(texture, 0, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
+    return texture;
+  }
+
+  bool context_alive = false;
+};
+
+Renderer::Renderer() : state_(std::make_unique<State>()) {}
+Renderer::~Renderer() = default;
+
+core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& options) {
+  auto context = GlContext::create(options);
+  if (!context) return context.error();
+  std::unique_ptr<Renderer> renderer(new Renderer());
+  State& s = *renderer->state_;
+  s.context = std::move(context.value());
+  s.context_alive = true;
+  glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &s.ubo_alignment);
+  GLint max_texture = 0, max_renderbuffer = 0, max_viewport[2] = {0, 0};
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_renderbuffer);
+  glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_viewport);
+  s.max_size = std::min({max_texture, max_renderbuffer, max_viewport[0], max_viewport[1], 16384});
+  s.white_texture = s.makeSolidTexture(255, 255, 255);
+  s.flat_normal_texture = s.makeSolidTexture(128, 128, 255);
+  glCreateBuffers(1, &s.frame_ubo);
+  glCreateVertexArrays(1, &s.empty_vao);
+  auto downsample =
+      renderer->compileProgram(GlslSource{kDownsampleVertex, kDownsampleFragment, "downsample.vert",
+                                          "downsample.frag"});
+  if (!downsample) return downsample.error();
+  s.downsample_program = s.programs[*downsample];
+  s.programs[*downsample] = 0;  // owned separately, never released by id
+  return renderer;
+}
+
+std::string Renderer::deviceDescription() const { return state_->context.description(); }
+
+void Renderer::setBindings(const Bindings& bindings) { state_->bindings = bindings; }
+void Renderer::setAmbient(core::Vec3 ambient_color) { state_->ambient = ambient_color; }
+void Renderer::setLightColor(core::Vec3 light_color) { state_->light_color = light_color; }
+
+core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) {
+  const core::Mesh& mesh = asset.mesh;
+  if (auto valid = core::validateMesh(mesh); !valid)
+    return Error{asset.source_path + ": " + valid.error().message};
+  if (mesh.triangleCount() == 0) return Error{asset.source_path + ": no triangles to render"};
+  GpuAsset gpu;
+  gpu.bounds = core::computeBoundingSphere(mesh);
+  gpu.materials = asset.materials;
+  glCreateVertexArrays(1, &gpu.vao);
+  auto addStream = [&](const void* data, size_t bytes) {
+    GLuint buffer;
+    glCreateBuffers(1, &buffer);
+    glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(bytes), data, 0);
+    gpu.buffers.push_back(buffer);
+    return buffer;
+  };
+  // Stream slot i binds to VAO binding point i; the attribute location comes from the bindings at
+  // draw time (so one upload serves any bindings).
+  auto stream = [&](int slot, const auto& values) {
+    if (values.empty()) return;
+    GLuint buffer = addStream(values.data(), values.size() * sizeof(values[0]));
+    glVertexArrayVertexBuffer(gpu.vao, slot, buffer, 0, sizeof(values[0]));
+    gpu.has[slot] = true;
+  };
+  stream(0, mesh.positions);
+  stream(1, mesh.normals);
+  stream(2, mesh.tangents);
+  stream(3, mesh.uv0);
+  stream(4, mesh.uv1);
+  stream(5, mesh.colors);
+  GLuint index_buffer = addStream(mesh.indices.data(), mesh.indices.size() * 4);
+  glVertexArrayElementBuffer(gpu.vao, index_buffer);
+  for (const core::Submesh& sub : mesh.submeshes)
+    if (sub.index_count > 0)
+      gpu.submeshes.push_back({static_cast<GLsizei>(sub.index_count), sub.first_index, sub.material});
+
+  // One material block per material, at aligned offsets of one buffer.
+  gpu.material_stride = roundUp(sizeof(MaterialBlock), state_->ubo_alignment);
+  std::vector<uint8_t> material_bytes(std::max<size_t>(1, asset.materials.size()) *
+                                      gpu.material_stride);
+  for (size_t m = 0; m < asset.materials.size(); ++m) {
+    const core::Material& mat = asset.materials[m];
+    MaterialBlock block{};
+    float* f = block.base_color_factor;
+    f[0] = mat.base_color_factor.x, f[1] = mat.base_color_factor.y, f[2] = mat.base_color_factor.z,
+    f[3] = mat.base_color_factor.w;
+    block.emissive_factor[0] = mat.emissive_factor.x;
+    block.emissive_factor[1] = mat.emissive_factor.y;
+    block.emissive_factor[2] = mat.emissive_factor.z;
+    block.material_params[0] = mat.metallic_factor;
+    block.material_params[1] = mat.roughness_factor;
+    block.material_params[2] = mat.normal_scale;
+    block.material_params[3] = mat.occlusion_strength;
+    block.texture_flags[0] = mat.base_color_texture >= 0;
+    block.texture_flags[1] = mat.metallic_roughness_texture >= 0;
+    block.texture_flags[2] = mat.normal_texture >= 0;
+    block.texture_flags[3] = mat.occlusion_texture >= 0;
+    block.texture_flags2[0] = mat.emissive_texture >= 0;
+    std::memcpy(material_bytes.data() + m * gpu.material_stride, &block, sizeof block);
+  }
+  glCreateBuffers(1, &gpu.material_ubo);
+  glNamedBufferStorage(gpu.material_ubo, static_cast<GLsizeiptr>(material_bytes.size()),
+                       material_bytes.data(), 0);
+
+  for (const core::Texture& texture : asset.textures) {
+    GLuint id = 0;
+    if (!texture.image.pixels.empty()) {
+      const core::ImageRGBA8& image = texture.image;
+      int levels = 1 + static_cast<int>(std::floor(std::log2(std::max(image.width, image.height))));
+      glCreateTextures(GL_TEXTURE_2D, 1, &id);
+      glTextureStorage2D(id, levels, texture.srgb ? GL_SRGB8_ALPHA8 : GL_RGBA8, image.width,
+                         image.height);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glTextureSubImage2D(id, 0, 0, 0, image.width, image.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                          image.pixels.data());
+      glGenerateTextureMipmap(id);
+      glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+      glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_REPEAT);
+      glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    }
+    gpu.textures.push_back(id);
+  }
+  GLenum error = glGetError();
+  if (error != GL_NO_ERROR) {
+    State::release(gpu);
+    return Error{asset.source_path + ": uploading to the GPU failed (GL error " +
+                 std::to_string(error) + ")"};
+  }
+  state_->assets.push_back(std::move(gpu));
+  return static_cast<AssetId>(state_->assets.size() - 1);
+}
+
+void Renderer::releaseAsset(AssetId asset) {
+  if (asset >= 0 && asset < static_cast<int>(state_->assets.size()) && state_->assets[asset]) {
+    State::release(*state_->assets[asset]);
+    state_->assets[asset].reset();
+  }
+}
+
+core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& source) {
+  auto compile = [](GLenum stage, const std::string& text,
+                    const std::string& name) -> core::Result<GLuint> {
+    GLuint shader = glCreateShader(stage);
+    const char* pointer = text.c_str();
+    glShaderSource(shader, 1, &pointer, nullptr);
+    glCompileShader(shader);
+    GLint compiled = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &compiled);
+    if (!compiled) {
+      std::string log = shaderLog(shader);
+      glDeleteShader(shader);
+      return Error{name + ": failed to compile:\n" + log};
+    }
+    return shader;
+  };
+  auto vertex = compile(GL_VERTEX_SHADER, source.vertex, source.vertex_name);
+  if (!vertex) return vertex.error();
+  auto fragment = compile(GL_FRAGMENT_SHADER, source.fragment, source.fragment_name);
+  if (!fragment) {
+    glDeleteShader(*vertex);
+    return fragment.error();
+  }
+  auto program = linkProgram(*vertex, *fragment, source.vertex_name + " + " + source.fragment_name);
+  if (!program) return program.error();
+  state_->programs.push_back(*program);
+  return static_cast<ProgramId>(state_->programs.size() - 1);
+}
+
+core::Result<Renderer::ProgramId> Renderer::compileProgram(const SpirvBinary& binary) {
+  auto specialize = [](GLenum stage, const std::vector<uint32_t>& words,
+                       const char* name) -> core::Result<GLuint> {
+    if (words.size() < 5 || words[0] != 0x07230203u)
+      return Error{std::string(name) + " SPIR-V: not a SPIR-V module (bad magic number)"};
+    GLuint shader = glCreateShader(stage);
+    glShaderBinary(1, &shader, GL_SHADER_BINARY_FORMAT_SPIR_V_ARB, words.data(),
+                   static_cast<GLsizei>(words.size() * 4));
+    glSpecializeShaderARB(shader, "main", 0, nullptr, nullptr);
+    GLint compiled = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &compiled);
+    if (!compiled) {
+      std::string log = shaderLog(shader);
+      glDeleteShader(shader);
+      return Error{std::string(name) + " SPIR-V: specialization failed:\n" + log};
+    }
+    return shader;
+  };
+  auto vertex = specialize(GL_VERTEX_SHADER, binary.vertex, "vertex");
+  if (!vertex) return vertex.error();
+  auto fragment = specialize(GL_FRAGMENT_SHADER, binary.fragment, "fragment");
+  if (!fragment) {
+    glDeleteShader(*vertex);
+    return fragment.error();
+  }
+  auto program = linkProgram(*vertex, *fragment, "SPIR-V program");
+  if (!program) return program.error();
+  state_->programs.push_back(*program);
+  return static_cast<ProgramId>(state_->programs.size() - 1);
+}
+
+void Renderer::releaseProgram(ProgramId program) {
+  if (program >= 0 && program < static_cast<int>(state_->programs.size()) &&
+      state_->programs[program]) {
+    glDeleteProgram(state_->programs[program]);
+    state_->programs[program] = 0;
+  }
+}
+
+namespace {
+
+// How many tiles of `tile` pixels fit one atlas pass: bounded by the GL limits and by a memory
+// budget (colour + depth at 4 bytes each, times MSAA samples).
+struct AtlasLayout {
+  int columns = 1, rows = 1, per_chunk = 1;
+};
+
+AtlasLayout planAtlas(int count, int tile, int max_size, int samples) {
+  const size_t kBudgetPixels = size_t(48) << 20;  // ~400 MB of colour + depth at 1 sample
+  size_t per_pixel_factor = std::max(1, samples);
+  int max_columns = std::max(1, max_size / tile);
+  size_t budget_tiles = std::max<size_t>(1, kBudgetPixels / per_pixel_factor / (size_t(tile) * tile));
+  int per_chunk = static_cast<int>(std::min<size_t>({size_t(count), budget_tiles,
+                                                     size_t(max_columns) * max_columns}));
+  AtlasLayout layout;
+  layout.columns = std::min(per_chunk, std::max(1, static_cast<int>(std::ceil(std::sqrt(per_chunk)))));
+  layout.columns = std::min(layout.columns, max_columns);
+  layout.rows = (per_chunk + layout.columns - 1) / layout.columns;
+  layout.per_chunk = per_chunk;
+  return layout;
+}
+
+}  // namespace
+
+// Shared by render() and renderReference(): draws samples [first, first+n) of a chunk into the
+// atlas at `tile` pixels per sample.
+struct ChunkDrawer {
+  Renderer::State& s;
+  const GpuAsset& asset;
+  GLuint program;
+
+  void uploadFrames(std::span<const Sample> samples, GLsizeiptr stride) {
+    std::vector<uint8_t> bytes(samples.size() * stride);
+    core::Mat4 model = core::Mat4::identity();
+    core::Mat4 normal_matrix = core::transpose(core::inverse(model));
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const Sample& sample = samples[i];
+      FrameBlock block{};
+      copyMatrix(block.model, model);
+      copyMatrix(block.view, sample.view);
+      copyMatrix(block.projection, sample.projection);
+      copyMatrix(block.normal_matrix, normal_matrix);
+      float eye[4] = {sample.eye.x, sample.eye.y, sample.eye.z, 1};
+      float light[4] = {sample.light.x, sample.light.y, sample.light.z, 1};
+      float light_color[4] = {s.light_color.x, s.light_color.y, s.light_color.z, 0};
+      float ambient[4] = {s.ambient.x, s.ambient.y, s.ambient.z, 0};
+      float object[4] = {asset.bounds.center.x, asset.bounds.center.y, asset.bounds.center.z,
+                         asset.bounds.radius};
+      std::memcpy(block.camera_position, eye, 16);
+      std::memcpy(block.light_position, light, 16);
+      std::memcpy(block.light_color, light_color, 16);
+      std::memcpy(block.ambient_color, ambient, 16);
+      std::memcpy(block.object_info, object, 16);
+      std::memcpy(bytes.data() + i * stride, &block, sizeof block);
+    }
+    GLsizeiptr needed = static_cast<GLsizeiptr>(bytes.size());
+    if (needed > s.frame_ubo_size) {
+      glDeleteBuffers(1, &s.frame_ubo);
+      glCreateBuffers(1, &s.frame_ubo);
+      glNamedBufferStorage(s.frame_ubo, needed, nullptr, GL_DYNAMIC_STORAGE_BIT);
+      s.frame_ubo_size = needed;
+    }
+    glNamedBufferSubData(s.frame_ubo, 0, needed, bytes.data());
+  }
+
+  void bindInputs() {
+    const Bindings& b = s.bindings;
+    glUseProgram(program);
+    glBindVertexArray(asset.vao);
+    const int locations[6] = {b.position, b.normal, b.tangent, b.uv0, b.uv1, b.color};
+    const int components[6] = {3, 3, 4, 2, 2, 4};
+    const float defaults[6][4] = {{0, 0, 0, 1}, {0, 0, 1, 0}, {1, 0, 0, 1},
+                                  {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 1, 1, 1}};
+    for (int slot = 0; slot < 6; ++slot) {
+      int location = locations[slot];
+      if (location < 0) continue;
+      if (asset.has[slot]) {
+        glEnableVertexArrayAttrib(asset.vao, location);
+        glVertexArrayAttribFormat(asset.vao, location, components[slot], GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(asset.vao, location, slot);
+      } else {
+        glDisableVertexArrayAttrib(asset.vao, location);
+        glVertexAttrib4fv(location, defaults[slot]);
+      }
+    }
+  }
+
+  void bindMaterial(uint32_t material_index) {
+    const Bindings& b = s.bindings;
+    glBindBufferRange(GL_UNIFORM_BUFFER, b.material_block, asset.material_ubo,
+                      asset.material_stride * material_index, sizeof(MaterialBlock));
+    core::Material fallback;
+    const core::Material& m =
+        material_index < asset.materials.size() ? asset.materials[material_index] : fallback;
+    auto texture = [&](int index, GLuint missing) {
+      return index >= 0 && index < static_cast<int>(asset.textures.size()) && asset.textures[index]
+                 ? asset.textures[index]
+                 : missing;
+    };
+    const std::pair<int, GLuint> units[] = {
+        {b.base_color, texture(m.base_color_texture, s.white_texture)},
+        {b.metallic_roughness, texture(m.metallic_roughness_texture, s.white_texture)},
+        {b.normal_map, texture(m.normal_texture, s.flat_normal_texture)},
+        {b.occlusion, texture(m.occlusion_texture, s.white_texture)},
+        {b.emissive, texture(m.emissive_texture, s.white_texture)},
+    };
+    for (auto [unit, id] : units)
+      if (unit >= 0) glBindTextureUnit(unit, id);
+  }
+
+  // Draws `count` samples starting at `first` into atlas tiles of `tile` pixels.
+  int drawChunk(int first, int count, int tile, const AtlasLayout& layout, GLsizeiptr stride) {
+    int draws = 0;
+    bindInputs();
+    for (int i = 0; i < count; ++i) {
+      int x = (i % layout.columns) * tile, y = (i / layout.columns) * tile;
+      glViewport(x, y, tile, tile);
+      glScissor(x, y, tile, tile);
+      glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo,
+                        stride * (first + i), sizeof(FrameBlock));
+      for (const GpuSubmesh& sub : asset.submeshes) {
+        bindMaterial(sub.material);
+        glDrawElements(GL_TRIANGLES, sub.index_count, GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(sub.first_index * 4));
+        ++draws;
+      }
+    }
+    return draws;
+  }
+};
+
+// Copies chunk tiles (bottom-up GL rows, atlas layout) into the batch (top-down, contiguous tiles).
+template <class T>
+void scatterTiles(const std::vector<T>& atlas, int atlas_width, const AtlasLayout& layout,
+                  int tile, int first, int count, TiledImages<T>& batch) {
+  for (int i = 0; i < count; ++i) {
+    int x0 = (i % layout.columns) * tile, y0 = (i / layout.columns) * tile;
+    T* out = batch.tile(first + i);
+    for (int row = 0; row < tile; ++row) {
+      const T* source = atlas.data() + (size_t(y0 + tile - 1 - row) * atlas_width + x0) * 4;
+      std::copy_n(source, size_t(tile) * 4, out + size_t(row) * tile * 4);
+    }
+  }
+}
+
+namespace {
+
+core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
+                          Renderer::ProgramId program, std::span<const Sample> samples,
+                          const RenderOptions& options) {
+  if (asset < 0 || asset >= static_cast<int>(s.assets.size()) || !s.assets[asset])
+    return Error{"render: unknown asset id " + std::to_string(asset)};
+  if (program < 0 || program >= static_cast<int>(s.programs.size()) || !s.programs[program])
+    return Error{"render: unknown program id " + std::to_string(program)};
+  if (samples.empty()) return Error{"render: no samples to render"};
+  if (options.resolution < 1 || options.supersample < 1 || options.supersample > 16)
+    return Error{"render: resolution must be >= 1 and supersampling 1..16"};
+  if (options.resolution * options.supersample > s.max_size)
+    return Error{"render: a " + std::to_string(options.resolution * options.supersample) +
+                 "-pixel tile exceeds the device's " + std::to_string(s.max_size) + " limit"};
+  return core::okStatus();
+}
+
+void beginDrawing(const Framebuffer& target) {
+  glBindFramebuffer(GL_FRAMEBUFFER, target.fbo);
+  glDisable(GL_BLEND);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glDisable(GL_SCISSOR_TEST);
+  glViewport(0, 0, target.width, target.height);
+  glClearColor(0, 0, 0, 0);
+  glClearDepth(1.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_SCISSOR_TEST);
+  if (target.samples > 0) glEnable(GL_MULTISAMPLE);
+}
+
+}  // namespace
+
+core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_id,
+                                           std::span<const Sample> samples,
+                                           const RenderOptions& options, RenderStats* stats) {
+  State& s = *state_;
+  if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
+  if (options.supersample != 1)
+    return Error{"render: use renderReference() for supersampled images"};
+  auto start = std::chrono::steady_clock::now();
+  const GpuAsset& asset = *s.assets[asset_id];
+  int tile = options.resolution;
+  int count = static_cast<int>(samples.size());
+  AtlasLayout layout = planAtlas(count, tile, s.max_size, options.msaa_samples);
+  GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
+  ChunkDrawer drawer{s, asset, s.programs[program_id]};
+  drawer.uploadFrames(samples, stride);
+
+  ImageBatch8 batch;
+  batch.width = batch.height = tile;
+  batch.count = count;
+  batch.pixels.resize(size_t(count) * tile * tile * 4);
+  int width = layout.columns * tile, height = layout.rows * tile;
+  std::vector<uint8_t> atlas_pixels(size_t(width) * height * 4);
+  RenderStats local;
+  for (int first = 0; first < count; first += layout.per_chunk) {
+    int n = std::min(layout.per_chunk, count - first);
+    if (auto ok = ensureFramebuffer(s.atlas, width, height, options.msaa_samples, GL_RGBA8, true,
+                                    false);
+        !ok)
+      return ok.error();
+    beginDrawing(s.atlas);
+    local.draws += drawer.drawChunk(first, n, tile, layout, stride);
+    GLuint read_fbo = s.atlas.fbo;
+    if (options.msaa_samples > 0) {
+      if (auto ok = ensureFramebuffer(s.resolved, width, height, 0, GL_RGBA8, false, false); !ok)
+        return ok.error();
+      glDisable(GL_SCISSOR_TEST);
+      glBlitNamedFramebuffer(s.atlas.fbo, s.resolved.fbo, 0, 0, width, height, 0, 0, width,
+                             height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+      read_fbo = s.resolved.fbo;
+    }
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, read_fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    int used_rows = (n + layout.columns - 1) / layout.columns;
+    glReadPixels(0, 0, width, used_rows * tile, GL_RGBA, GL_UNSIGNED_BYTE, atlas_pixels.data());
+    scatterTiles(atlas_pixels, width, layout, tile, first, n, batch);
+    ++local.chunks;
+  }
+  glDisable(GL_SCISSOR_TEST);
+  if (GLenum error = glGetError(); error != GL_NO_ERROR)
+    return Error{"render: OpenGL error " + std::to_string(error)};
+  local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (stats) *stats = local;
+  return batch;
+}
+
+core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId program_id,
+                                                    std::span<const Sample> samples,
+                                                    const RenderOptions& options,
+                                                    RenderStats* stats) {
+  State& s = *state_;
+  if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
+  auto start = std::chrono::steady_clock::now();
+  const GpuAsset& asset = *s.assets[asset_id];
+  int k = options.supersample;
+  int tile = options.resolution, big_tile = tile * k;
+  int count = static_cast<int>(samples.size());
+  AtlasLayout layout = planAtlas(count, big_tile, s.max_size, options.msaa_samples);
+  GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
+  ChunkDrawer drawer{s, asset, s.programs[program_id]};
+  drawer.uploadFrames(samples, stride);
+
+  ImageBatchF batch;
+  batch.width = batch.height = tile;
+  batch.count = count;
+  batch.pixels.resize(size_t(count) * tile * tile * 4);
+  int big_width = layout.columns * big_tile, big_height = layout.rows * big_tile;
+  int width = layout.columns * tile, height = layout.rows * tile;
+  std::vector<float> atlas_pixels(size_t(width) * height * 4);
+  RenderStats local;
+  for (int first = 0; first < count; first += layout.per_chunk) {
+    int n = std::min(layout.per_chunk, count - first);
+    if (auto ok = ensureFramebuffer(s.atlas, big_width, big_height, options.msaa_samples, GL_RGBA8,
+                                    true, false);
+        !ok)
+      return ok.error();
+    beginDrawing(s.atlas);
+    local.draws += drawer.drawChunk(first, n, big_tile, layout, stride);
+    glDisable(GL_SCISSOR_TEST);
+    // The box filter reads a single-sample texture: resolve (or copy) the atlas into one.
+    if (auto ok = ensureFramebuffer(s.resolved, big_width, big_height, 0, GL_RGBA8, false, true);
+        !ok)
+      return ok.error();
+    glBlitNamedFramebuffer(s.atlas.fbo, s.resolved.fbo, 0, 0, big_width, big_height, 0, 0,
+                           big_width, big_height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    if (auto ok = ensureFramebuffer(s.reference_float, width, height, 0, GL_RGBA32F, false, true);
+        !ok)
+      return ok.error();
+    glBindFramebuffer(GL_FRAMEBUFFER, s.reference_float.fbo);
+    glViewport(0, 0, width, height);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    glUseProgram(s.downsample_program);
+    glUniform1i(0, k);
+    glBindTextureUnit(0, s.resolved.color);
+    glBindVertexArray(s.empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    int used_rows = (n + layout.columns - 1) / layout.columns;
+    glReadPixels(0, 0, width, used_rows * tile, GL_RGBA, GL_FLOAT, atlas_pixels.data());
+    scatterTiles(atlas_pixels, width, layout, tile, first, n, batch);
+    ++local.chunks;
+  }
+  if (GLenum error = glGetError(); error != GL_NO_ERROR)
+    return Error{"renderReference: OpenGL error " + std::to_string(error)};
+  local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (stats) *stats = local;
+  return batch;
+}
+
+}  // namespace duolod::render

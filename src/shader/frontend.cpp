@@ -1,0 +1,129 @@
+// GLSL/HLSL → SPIR-V through glslang's public API (Debian glslang-dev 12), targeting OpenGL 4.5
+// with ARB_gl_spirv; validation through SPIRV-Tools' public API.
+#include <glslang/Public/ResourceLimits.h>
+#include <glslang/Public/ShaderLang.h>
+#include <glslang/SPIRV/GlslangToSpv.h>
+#include <spirv-tools/libspirv.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "duolod/shader.hpp"
+
+namespace duolod::shader {
+namespace {
+using core::Error;
+
+EShLanguage toGlslang(Stage stage) {
+  switch (stage) {
+    case Stage::kVertex: return EShLangVertex;
+    case Stage::kTessControl: return EShLangTessControl;
+    case Stage::kTessEvaluation: return EShLangTessEvaluation;
+    case Stage::kGeometry: return EShLangGeometry;
+    case Stage::kFragment: return EShLangFragment;
+  }
+  return EShLangVertex;
+}
+
+void ensureGlslangInitialized() {
+  static std::once_flag once;
+  std::call_once(once, [] { glslang::InitializeProcess(); });
+}
+
+// Resolves #include "file" relative to the including file's folder, then the include dirs.
+class FileIncluder : public glslang::TShader::Includer {
+ public:
+  explicit FileIncluder(std::vector<std::string> dirs) : dirs_(std::move(dirs)) {}
+
+  IncludeResult* includeLocal(const char* header, const char* includer, size_t depth) override {
+    std::filesystem::path base = std::filesystem::path(includer ? includer : "").parent_path();
+    if (auto* found = tryOpen(base / header)) return found;
+    return includeSystem(header, includer, depth);
+  }
+  IncludeResult* includeSystem(const char* header, const char*, size_t) override {
+    for (const std::string& dir : dirs_)
+      if (auto* found = tryOpen(std::filesystem::path(dir) / header)) return found;
+    return nullptr;
+  }
+  void releaseInclude(IncludeResult* result) override {
+    if (!result) return;
+    delete static_cast<std::string*>(result->userData);
+    delete result;
+  }
+
+ private:
+  IncludeResult* tryOpen(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    if (!in) return nullptr;
+    std::stringstream text;
+    text << in.rdbuf();
+    auto* contents = new std::string(text.str());
+    return new IncludeResult(path.string(), contents->data(), contents->size(), contents);
+  }
+  std::vector<std::string> dirs_;
+};
+
+std::string trimLog(std::string log) {
+  while (!log.empty() && (log.back() == '\n' || log.back() == ' ')) log.pop_back();
+  return log;
+}
+
+}  // namespace
+
+core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, Stage stage,
+                                                   const std::string& file_name,
+                                                   const CompileOptions& options) {
+  ensureGlslangInitialized();
+  EShLanguage language = toGlslang(stage);
+  glslang::TShader shader(language);
+  const char* text = source.c_str();
+  const char* name = file_name.c_str();
+  shader.setStringsWithLengthsAndNames(&text, nullptr, &name, 1);
+  shader.setEntryPoint(options.entry_point.c_str());
+  std::string preamble;
+  for (const auto& [key, value] : options.defines) preamble += "#define " + key + " " + value + "\n";
+  shader.setPreamble(preamble.c_str());
+  bool hlsl = options.language == Language::kHlsl;
+  shader.setEnvInput(hlsl ? glslang::EShSourceHlsl : glslang::EShSourceGlsl, language,
+                     glslang::EShClientOpenGL, 450);
+  shader.setEnvClient(glslang::EShClientOpenGL, glslang::EShTargetOpenGL_450);
+  shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_0);
+  if (hlsl) {
+    // HLSL has no explicit locations/bindings by default; let glslang assign them.
+    shader.setAutoMapLocations(true);
+    shader.setAutoMapBindings(true);
+  }
+  FileIncluder includer(options.include_dirs);
+  EShMessages messages = static_cast<EShMessages>(
+      EShMsgSpvRules | (hlsl ? static_cast<int>(EShMsgReadHlsl) : 0));
+  if (!shader.parse(GetDefaultResources(), 450, ENoProfile, false, false, messages, includer))
+    return Error{file_name + ": " + trimLog(shader.getInfoLog())};
+  glslang::TProgram program;
+  program.addShader(&shader);
+  if (!program.link(messages)) return Error{file_name + ": link: " + trimLog(program.getInfoLog())};
+  std::vector<uint32_t> words;
+  glslang::SpvOptions spv_options;
+  spv_options.generateDebugInfo = false;
+  spv_options.disableOptimizer = true;
+  spv_options.optimizeSize = false;
+  spv::SpvBuildLogger logger;
+  glslang::GlslangToSpv(*program.getIntermediate(language), words, &logger, &spv_options);
+  std::string log = logger.getAllMessages();
+  if (words.empty()) return Error{file_name + ": SPIR-V generation failed: " + log};
+  return words;
+}
+
+core::Status validateSpirv(const std::vector<uint32_t>& words, const std::string& what) {
+  spvtools::SpirvTools tools(SPV_ENV_OPENGL_4_5);
+  std::string messages;
+  tools.SetMessageConsumer([&](spv_message_level_t, const char*, const spv_position_t& position,
+                               const char* message) {
+    messages += "word " + std::to_string(position.index) + ": " + message + "\n";
+  });
+  if (!tools.Validate(words)) return Error{what + ": invalid SPIR-V: " + trimLog(messages)};
+  return core::okStatus();
+}
+
+}  // namespace duolod::shader

@@ -1,0 +1,224 @@
+// Renderer tests with analytically known answers: coverage of a quad, a constant colour, ε of an
+// image with itself, ε growing with a vertex displacement, supersampled coverage, GLSL vs SPIR-V.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "duolod/metric.hpp"
+#include "duolod/render.hpp"
+#include "duolod/shader.hpp"
+#include "test_support.hpp"
+
+namespace duolod {
+namespace {
+using core::Vec3;
+
+// A 2×2 square in the z = 0 plane facing +z, one material with the given constant colour.
+core::Asset squareAsset(core::Vec4 color) {
+  core::Asset asset;
+  asset.source_path = "square";
+  asset.mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+  asset.mesh.normals.assign(4, Vec3{0, 0, 1});
+  asset.mesh.indices = {0, 1, 2, 0, 2, 3};
+  asset.mesh.submeshes = {{0, 6, 0}};
+  core::Material material;
+  material.base_color_factor = color;
+  asset.materials = {material};
+  return asset;
+}
+
+// A camera on +z at distance `distance` whose field of view makes the square cover exactly half the
+// image side: tan(fov/2) = 2 / distance.
+render::Sample frontSample(float distance) {
+  render::Sample sample;
+  sample.eye = {0, 0, distance};
+  sample.light = sample.eye;
+  sample.view = core::lookAt(sample.eye, {0, 0, 0}, {0, 1, 0});
+  sample.projection = core::perspective(2 * std::atan(2.0f / distance), 1.0f, 0.1f, 100.0f);
+  return sample;
+}
+
+class RendererTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto created = render::Renderer::create();
+    if (!created) {
+      failure_ = created.error().message;
+      return;
+    }
+    renderer_ = std::move(created.value()).release();
+    auto source = render::loadShaderPair(test::sourcePath("shaders/constant"));
+    ASSERT_TRUE(source) << source.error().message;
+    auto program = renderer_->compileProgram(*source);
+    ASSERT_TRUE(program) << program.error().message;
+    constant_program_ = *program;
+  }
+  static void TearDownTestSuite() {
+    delete renderer_;
+    renderer_ = nullptr;
+  }
+  void SetUp() override {
+    ASSERT_NE(renderer_, nullptr) << "no OpenGL 4.5 context: " << failure_;
+  }
+
+  static inline render::Renderer* renderer_ = nullptr;
+  static inline render::Renderer::ProgramId constant_program_ = -1;
+  static inline std::string failure_;
+};
+
+TEST_F(RendererTest, SquareCoversKnownPixelsWithConstantColour) {
+  auto asset = renderer_->uploadAsset(squareAsset({0.25f, 0.5f, 0.75f, 1}));
+  ASSERT_TRUE(asset) << asset.error().message;
+  render::Sample sample = frontSample(4.0f);
+  auto batch = renderer_->render(*asset, constant_program_, std::span(&sample, 1), {.resolution = 64});
+  ASSERT_TRUE(batch) << batch.error().message;
+  int covered = 0;
+  for (int p = 0; p < 64 * 64; ++p) {
+    const uint8_t* px = batch->tile(0) + p * 4;
+    if (px[3] == 0) continue;
+    ++covered;
+    EXPECT_NEAR(px[0], 64, 1);   // 0.25 * 255
+    EXPECT_NEAR(px[1], 128, 1);  // 0.5 * 255
+    EXPECT_NEAR(px[2], 191, 1);  // 0.75 * 255
+  }
+  // Half the side of a 64-pixel image: edges fall on pixel boundaries 16 and 48.
+  EXPECT_EQ(covered, 32 * 32);
+  // The top-left covered pixel is (16, 16): row order is top first.
+  EXPECT_EQ(batch->tile(0)[(15 * 64 + 16) * 4 + 3], 0);
+  EXPECT_EQ(batch->tile(0)[(16 * 64 + 16) * 4 + 3], 255);
+  renderer_->releaseAsset(*asset);
+}
+
+TEST_F(RendererTest, SupersampledReferenceHasFractionalEdgeCoverage) {
+  auto asset = renderer_->uploadAsset(squareAsset({1, 1, 1, 1}));
+  ASSERT_TRUE(asset);
+  // Square spans 0.4 of the image side: 25.6 of 64 pixels, so its edges cut pixels in part.
+  render::Sample sample = frontSample(4.0f);
+  sample.projection = core::perspective(2 * std::atan(1.0f / (4.0f * 0.4f)), 1.0f, 0.1f, 100.0f);
+  auto reference = renderer_->renderReference(*asset, constant_program_, std::span(&sample, 1),
+                                              {.resolution = 64, .supersample = 4});
+  ASSERT_TRUE(reference) << reference.error().message;
+  double coverage = metric::tileCoverage(reference->tile(0), 64 * 64);
+  // Exact area 25.6² = 655.36; a 4×4 grid per pixel quantizes each edge to 1/4 px.
+  EXPECT_NEAR(coverage, 25.6 * 25.6, 25.6 * 4 * 0.25);
+  bool fractional = false;
+  for (int p = 0; p < 64 * 64; ++p) {
+    float alpha = reference->tile(0)[p * 4 + 3];
+    if (alpha > 0.05f && alpha < 0.95f) fractional = true;
+  }
+  EXPECT_TRUE(fractional);
+  renderer_->releaseAsset(*asset);
+}
+
+TEST_F(RendererTest, ErrorOfImageWithItselfIsZeroAndGrowsWithDisplacement) {
+  core::Asset base = squareAsset({0.8f, 0.6f, 0.4f, 1});
+  auto base_id = renderer_->uploadAsset(base);
+  ASSERT_TRUE(base_id);
+  core::Sphere sphere = core::computeBoundingSphere(base.mesh);
+  std::vector<render::Sample> samples = render::domainSamples(sphere, 5.0f);
+  ASSERT_EQ(samples.size(), 100u);
+  render::RenderOptions options{.resolution = 48};
+  auto image = renderer_->render(*base_id, constant_program_, samples, options);
+  ASSERT_TRUE(image);
+  auto again = renderer_->render(*base_id, constant_program_, samples, options);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(metric::imageError(*image, *again).epsilon, 0.0);
+
+  double previous = 0;
+  for (float shift : {0.1f, 0.3f, 0.6f}) {
+    core::Asset moved = base;
+    moved.mesh.positions[2] = moved.mesh.positions[2] + Vec3{shift, shift, 0};
+    auto moved_id = renderer_->uploadAsset(moved);
+    ASSERT_TRUE(moved_id);
+    auto moved_image = renderer_->render(*moved_id, constant_program_, samples, options);
+    ASSERT_TRUE(moved_image);
+    double epsilon = metric::imageError(*moved_image, *image).epsilon;
+    EXPECT_GT(epsilon, previous) << "shift " << shift;
+    previous = epsilon;
+    renderer_->releaseAsset(*moved_id);
+  }
+  renderer_->releaseAsset(*base_id);
+}
+
+TEST_F(RendererTest, SpirvProgramRendersLikeGlsl) {
+  auto source = render::loadShaderPair(test::sourcePath("shaders/constant"));
+  ASSERT_TRUE(source);
+  auto vertex = shader::compileToSpirv(source->vertex, shader::Stage::kVertex, source->vertex_name);
+  ASSERT_TRUE(vertex) << vertex.error().message;
+  auto fragment =
+      shader::compileToSpirv(source->fragment, shader::Stage::kFragment, source->fragment_name);
+  ASSERT_TRUE(fragment) << fragment.error().message;
+  ASSERT_TRUE(shader::validateSpirv(*vertex, "vertex"));
+  auto program = renderer_->compileProgram(render::SpirvBinary{*vertex, *fragment});
+  ASSERT_TRUE(program) << program.error().message;
+  auto asset = renderer_->uploadAsset(squareAsset({0.1f, 0.9f, 0.3f, 1}));
+  ASSERT_TRUE(asset);
+  render::Sample sample = frontSample(4.0f);
+  auto from_glsl = renderer_->render(*asset, constant_program_, std::span(&sample, 1), {.resolution = 32});
+  auto from_spirv = renderer_->render(*asset, *program, std::span(&sample, 1), {.resolution = 32});
+  ASSERT_TRUE(from_glsl && from_spirv);
+  EXPECT_EQ(from_glsl->pixels, from_spirv->pixels);
+  renderer_->releaseProgram(*program);
+  renderer_->releaseAsset(*asset);
+}
+
+TEST_F(RendererTest, CompileErrorsCarryTheShaderLog) {
+  render::GlslSource broken{"#version 450 core\nvoid main() { gl_Position = vec4(0); }\n",
+                            "#version 450 core\nlayout(location=0) out vec4 c;\nvoid main() { c = "
+                            "undefined_thing; }\n",
+                            "ok.vert", "broken.frag"};
+  auto program = renderer_->compileProgram(broken);
+  ASSERT_FALSE(program);
+  EXPECT_NE(program.error().message.find("broken.frag"), std::string::npos);
+  EXPECT_NE(program.error().message.find("undefined_thing"), std::string::npos);
+
+  auto bad_spirv = renderer_->compileProgram(render::SpirvBinary{{1, 2, 3}, {4, 5, 6}});
+  ASSERT_FALSE(bad_spirv);
+  EXPECT_NE(bad_spirv.error().message.find("magic"), std::string::npos);
+}
+
+TEST(Domain, DodecahedronHasTwentyUnitViewsAndFiveLightsEach) {
+  auto directions = render::viewDirections(render::ViewSet::kDodecahedron);
+  ASSERT_EQ(directions.size(), 20u);
+  // All adjacent vertex pairs of a unit dodecahedron subtend the same angle: the minimum pairwise
+  // dot product among neighbours is √5/3 ≈ 0.745.
+  for (size_t i = 0; i < directions.size(); ++i) {
+    EXPECT_NEAR(core::length(directions[i]), 1.0f, 1e-6f);
+    float best = -1;
+    for (size_t j = 0; j < directions.size(); ++j)
+      if (i != j) best = std::max(best, core::dot(directions[i], directions[j]));
+    EXPECT_NEAR(best, std::sqrt(5.0f) / 3.0f, 1e-5f);
+  }
+  core::Sphere sphere{{1, 2, 3}, 0.5f};
+  auto samples = render::domainSamples(sphere, 4.0f);
+  ASSERT_EQ(samples.size(), 100u);
+  for (const render::Sample& s : samples) {
+    EXPECT_NEAR(core::length(s.eye - sphere.center), 4.0f, 1e-4f);
+    // Lights lie on the plane through the camera orthogonal to the view direction.
+    Vec3 direction = core::normalize(s.eye - sphere.center);
+    EXPECT_NEAR(core::dot(s.light - s.eye, direction), 0.0f, 1e-4f);
+  }
+  EXPECT_EQ(render::viewDirections(render::ViewSet::kIcosahedron).size(), 12u);
+}
+
+TEST(Domain, FootprintMatchesTheProjectedSphere) {
+  // fov 90°: tan(45°) = 1. r = 1, d = 2: tan(asin(1/2)) = 1/√3 → 1000/√3 = 577.35 → 578 px.
+  EXPECT_EQ(render::footprintPixels({{0, 0, 0}, 1.0f}, 2.0f, {90.0f, 1000}), 578);
+  // Twice as far, roughly half the pixels.
+  EXPECT_EQ(render::footprintPixels({{0, 0, 0}, 1.0f}, 20.0f, {90.0f, 1000}), 51);
+}
+
+TEST(Metric, BoundFollowsEquationFour) {
+  metric::BoundConfig config{.d_near = 1, .d_far = 5, .q = 0.5f, .e_max = 0.2f};
+  EXPECT_DOUBLE_EQ(metric::perPixelBound(config, 1.0), 0.0);
+  EXPECT_NEAR(metric::perPixelBound(config, 2.0), std::sqrt(0.25) * 0.2, 1e-7);
+  EXPECT_NEAR(metric::perPixelBound(config, 5.0), 0.2, 1e-7);
+  EXPECT_NEAR(metric::perPixelBound(config, 9.0), 0.2, 1e-7);  // clamped beyond d_far
+  metric::ImageError error{.epsilon = 9.9, .coverage_px = 100};
+  EXPECT_TRUE(metric::withinBound(error, config, 5.0));  // 9.9 < 0.2 * 100
+  error.epsilon = 20.5;
+  EXPECT_FALSE(metric::withinBound(error, config, 5.0));
+}
+
+}  // namespace
+}  // namespace duolod
