@@ -10,6 +10,7 @@ packages=(
   libtinygltf-dev nlohmann-json3-dev libstb-dev libeigen3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libmeshoptimizer-dev gltfpack
+  assimp-testmodels  # real (and deliberately broken) OBJ/PLY/glTF files for the robustness tests
 )
 
 missing=()

@@ -100,6 +100,37 @@ core::Status writePng(const core::ImageRGBA8& image, const std::string& path) {
   return writeFileAtomic(path, png);
 }
 
+namespace {
+
+// Many OBJ files ship without an .mtl but with their texture beside them (Keenan Crane's Spot:
+// spot.obj + spot_texture.png). When a textured-looking OBJ has no texture at all, adopt a single
+// image named after it as the base colour, and say so.
+void adoptSiblingTexture(core::Asset& asset, const std::string& path, const LoadOptions& options) {
+  if (!options.load_textures || asset.mesh.uv0.empty() || !asset.textures.empty()) return;
+  fs::path source(path);
+  std::string stem = source.stem().string();
+  for (const char* suffix : {"_texture", "_diffuse", "_albedo", "_basecolor", ""}) {
+    for (const char* extension : {".png", ".jpg", ".jpeg"}) {
+      fs::path candidate = source.parent_path() / (stem + suffix + extension);
+      std::error_code ec;
+      if (!fs::is_regular_file(candidate, ec)) continue;
+      auto image = readImage(candidate.string());
+      if (!image) {
+        asset.warnings.push_back(image.error().message);
+        return;
+      }
+      asset.textures.push_back({candidate.filename().string(), std::move(image.value()), true});
+      if (asset.materials.empty()) asset.materials.push_back(core::Material{.name = "default"});
+      for (core::Material& material : asset.materials) material.base_color_texture = 0;
+      asset.warnings.push_back("no material texture; using " + candidate.filename().string() +
+                               " found beside it as the base colour");
+      return;
+    }
+  }
+}
+
+}  // namespace
+
 core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& options) {
   std::string extension = fs::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
@@ -120,6 +151,7 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
   if (!loaded) return loaded;
   core::Asset& asset = loaded.value();
   core::Mesh& mesh = asset.mesh;
+  if (extension == ".obj") adoptSiblingTexture(asset, path, options);
   if (mesh.submeshes.empty() && !mesh.indices.empty())
     mesh.submeshes.push_back({0, static_cast<uint32_t>(mesh.indices.size()), 0});
   if (asset.materials.empty()) asset.materials.push_back(core::Material{.name = "default"});

@@ -179,8 +179,8 @@ struct Renderer::State {
   std::vector<std::optional<GpuAsset>> assets;
   std::vector<GLuint> programs;  // 0 = released
   Bindings bindings;
-  core::Vec3 ambient{0.03f, 0.03f, 0.03f};
-  core::Vec3 light_color{3.0f, 3.0f, 3.0f};
+  core::Vec3 ambient{0.1f, 0.1f, 0.1f};
+  core::Vec3 light_color{2.0f, 2.0f, 2.0f};
   GLuint white_texture = 0, flat_normal_texture = 0;
   GLuint frame_ubo = 0;
   GLsizeiptr frame_ubo_size = 0;

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh Debian 12 machine: installs what it needs, builds, and runs
+# every test twice — once in the normal build, once built with AddressSanitizer + UBSan.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+jobs="$(nproc 2>/dev/null || echo 2)"
+
+bash "$root/scripts/setup.sh"
+
+echo "== build (RelWithDebInfo) =="
+bash "$root/scripts/build.sh" "$root/build"
+echo "== tests =="
+(cd "$root/build" && ctest --output-on-failure -j"$jobs")
+
+echo "== build (ASan + UBSan) =="
+bash "$root/scripts/build.sh" "$root/build-asan" -DDUOLOD_SANITIZE=ON -DDUOLOD_BUILD_BENCH=OFF
+echo "== tests under ASan + UBSan =="
+# Mesa's llvmpipe and LLVM keep process-lifetime allocations; everything else must not leak.
+export LSAN_OPTIONS="suppressions=$root/tests/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+(cd "$root/build-asan" && ctest --output-on-failure -j"$jobs")
