@@ -1,0 +1,209 @@
+// Wavefront OBJ + MTL writer, after "Object Files (.obj)" and "MTL Material Format" (Wavefront
+// Advanced Visualizer manual, Appendix B1) with the Exocortex PBR extension (Pr, Pm, Ke, map_Pr,
+// map_Pm, norm), so that readObj reads back what is written here. Textures with decoded images
+// are written as PNG beside the .obj.
+#include <charconv>
+#include <filesystem>
+#include <set>
+
+#include "duolod/io.hpp"
+
+namespace duolod::io {
+namespace {
+
+namespace fs = std::filesystem;
+using core::Error;
+
+// Shortest text that reads back to the same float.
+void appendFloat(std::string& out, float value) {
+  char buffer[32];
+  auto [end, ec] = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, ec == std::errc() ? end : buffer);
+}
+
+void appendFloats(std::string& out, std::string_view keyword, std::initializer_list<float> values) {
+  out += keyword;
+  for (float value : values) {
+    out += ' ';
+    appendFloat(out, value);
+  }
+  out += '\n';
+}
+
+bool samePath(const fs::path& a, const fs::path& b) {
+  std::error_code ec_a, ec_b;
+  fs::path canonical_a = fs::weakly_canonical(a, ec_a);
+  fs::path canonical_b = fs::weakly_canonical(b, ec_b);
+  if (ec_a || ec_b) return a.lexically_normal() == b.lexically_normal();
+  return canonical_a == canonical_b;
+}
+
+// usemtl/newmtl take the rest of the line, so names may hold spaces, but not line breaks, and an
+// empty or repeated name would merge materials on reading back.
+std::vector<std::string> uniqueMaterialNames(const std::vector<core::Material>& materials) {
+  std::vector<std::string> names;
+  std::set<std::string> taken;
+  for (size_t i = 0; i < materials.size(); ++i) {
+    std::string name = materials[i].name;
+    for (char& c : name) {
+      if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+    }
+    while (!name.empty() && name.back() == ' ') name.pop_back();
+    while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+    if (name.empty()) name = "material_" + std::to_string(i);
+    std::string unique = name;
+    for (int suffix = 1; taken.count(unique); ++suffix)
+      unique = name + "_" + std::to_string(suffix);
+    taken.insert(unique);
+    names.push_back(unique);
+  }
+  return names;
+}
+
+class ObjWriter {
+ public:
+  ObjWriter(const core::Asset& asset, const std::string& path) : asset_(asset), path_(path) {}
+
+  core::Status write() {
+    const core::Mesh& mesh = asset_.mesh;
+    if (auto status = core::validateMesh(mesh); !status) {
+      return Error{path_ + ": cannot write an invalid mesh: " + status.error().message};
+    }
+    fs::path obj_path(path_);
+    fs::path mtl_path = fs::path(obj_path).replace_extension(".mtl");
+    if (auto status = refuseSource(obj_path); !status) return status;
+    if (!asset_.materials.empty()) {
+      if (auto status = refuseSource(mtl_path); !status) return status;
+    }
+    std::string stem = obj_path.stem().string();
+
+    // Textures first, so the MTL can name their files.
+    std::vector<std::string> texture_files(asset_.textures.size());
+    for (size_t i = 0; i < asset_.textures.size(); ++i) {
+      const core::Texture& texture = asset_.textures[i];
+      if (texture.image.pixels.empty()) {
+        // Not decoded: point at the original file, if it is one, relative to the output folder.
+        std::error_code ec;
+        if (!texture.name.empty() && fs::is_regular_file(texture.name, ec)) {
+          fs::path original = fs::absolute(texture.name, ec);
+          fs::path relative = original.lexically_relative(fs::absolute(obj_path, ec).parent_path());
+          texture_files[i] = relative.empty() ? original.string() : relative.string();
+        }
+        continue;
+      }
+      std::string file = stem + "_texture" + std::to_string(i) + ".png";
+      fs::path png_path = obj_path.parent_path() / file;
+      if (auto status = refuseSource(png_path); !status) return status;
+      std::vector<uint8_t> png = encodePng(texture.image);
+      if (png.empty()) return Error{png_path.string() + ": cannot encode texture as PNG"};
+      if (auto status = writeFileAtomic(png_path.string(), std::span<const uint8_t>(png));
+          !status) {
+        return status;
+      }
+      texture_files[i] = file;
+    }
+
+    std::vector<std::string> names = uniqueMaterialNames(asset_.materials);
+    std::string obj = "# written by duolod\n";
+    if (!asset_.materials.empty()) obj += "mtllib " + mtl_path.filename().string() + "\n";
+    bool colors = !mesh.colors.empty();
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      const core::Vec3& p = mesh.positions[i];
+      if (colors) {
+        const core::Vec4& c = mesh.colors[i];
+        appendFloats(obj, "v", {p.x, p.y, p.z, c.x, c.y, c.z});
+      } else {
+        appendFloats(obj, "v", {p.x, p.y, p.z});
+      }
+    }
+    // Ours is v down (glTF); OBJ's is v up.
+    for (const core::Vec2& uv : mesh.uv0) appendFloats(obj, "vt", {uv.x, 1.0f - uv.y});
+    for (const core::Vec3& n : mesh.normals) appendFloats(obj, "vn", {n.x, n.y, n.z});
+
+    bool uvs = !mesh.uv0.empty();
+    bool normals = !mesh.normals.empty();
+    auto appendCorner = [&](uint32_t index) {
+      // Every stream has one entry per vertex, so one index serves v, vt and vn.
+      std::string number = std::to_string(index + 1ull);
+      obj += ' ';
+      obj += number;
+      if (uvs || normals) obj += '/';
+      if (uvs) obj += number;
+      if (normals) {
+        obj += '/';
+        obj += number;
+      }
+    };
+    for (const core::Submesh& submesh : mesh.submeshes) {
+      if (submesh.material < names.size()) obj += "usemtl " + names[submesh.material] + "\n";
+      for (uint32_t i = 0; i + 2 < submesh.index_count; i += 3) {
+        obj += 'f';
+        for (uint32_t k = 0; k < 3; ++k) appendCorner(mesh.indices[submesh.first_index + i + k]);
+        obj += '\n';
+      }
+    }
+
+    if (!asset_.materials.empty()) {
+      std::string mtl = "# written by duolod\n";
+      for (size_t i = 0; i < asset_.materials.size(); ++i) {
+        appendMaterial(mtl, asset_.materials[i], names[i], texture_files);
+      }
+      if (auto status = writeFileAtomic(mtl_path.string(), std::string_view(mtl)); !status) {
+        return status;
+      }
+    }
+    return writeFileAtomic(path_, std::string_view(obj));
+  }
+
+ private:
+  core::Status refuseSource(const fs::path& output) const {
+    if (!asset_.source_path.empty() && samePath(output, asset_.source_path)) {
+      return Error{output.string() + ": refusing to overwrite the file the asset was read from"};
+    }
+    return core::okStatus();
+  }
+
+  void appendMaterial(std::string& mtl, const core::Material& material, const std::string& name,
+                      const std::vector<std::string>& texture_files) const {
+    auto file = [&](int texture) -> const std::string* {
+      if (texture < 0 || static_cast<size_t>(texture) >= texture_files.size()) return nullptr;
+      return texture_files[texture].empty() ? nullptr : &texture_files[texture];
+    };
+    mtl += "\nnewmtl " + name + "\n";
+    const core::Vec4& base = material.base_color_factor;
+    appendFloats(mtl, "Kd", {base.x, base.y, base.z});
+    if (base.w < 1.0f) appendFloats(mtl, "d", {base.w});
+    const core::Vec3& emissive = material.emissive_factor;
+    if (emissive.x != 0 || emissive.y != 0 || emissive.z != 0 || material.emissive_texture >= 0) {
+      appendFloats(mtl, "Ke", {emissive.x, emissive.y, emissive.z});
+    }
+    appendFloats(mtl, "Pr", {material.roughness_factor});
+    appendFloats(mtl, "Pm", {material.metallic_factor});
+    if (const std::string* f = file(material.base_color_texture)) mtl += "map_Kd " + *f + "\n";
+    if (const std::string* f = file(material.emissive_texture)) mtl += "map_Ke " + *f + "\n";
+    if (const std::string* f = file(material.normal_texture)) {
+      mtl += "norm";
+      if (material.normal_scale != 1.0f) {
+        mtl += " -bm ";
+        appendFloat(mtl, material.normal_scale);
+      }
+      mtl += " " + *f + "\n";
+    }
+    // glTF packs roughness in G and metallic in B of one texture; point both maps at it.
+    if (const std::string* f = file(material.metallic_roughness_texture)) {
+      mtl += "map_Pr -imfchan g " + *f + "\n";
+      mtl += "map_Pm -imfchan b " + *f + "\n";
+    }
+  }
+
+  const core::Asset& asset_;
+  const std::string& path_;
+};
+
+}  // namespace
+
+core::Status writeObj(const core::Asset& asset, const std::string& path) {
+  return ObjWriter(asset, path).write();
+}
+
+}  // namespace duolod::io

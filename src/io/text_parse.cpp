@@ -1,0 +1,206 @@
+// Private text-parsing helpers for the OBJ/MTL/PLY/OFF readers (see text_parse.hpp).
+#include "io/text_parse.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+#include "duolod/io.hpp"
+
+namespace duolod::io::text {
+
+std::string_view trim(std::string_view text) {
+  size_t begin = 0;
+  while (begin < text.size() && (isSpace(text[begin]) || isLineBreak(text[begin]))) ++begin;
+  size_t end = text.size();
+  while (end > begin && (isSpace(text[end - 1]) || isLineBreak(text[end - 1]))) --end;
+  return text.substr(begin, end - begin);
+}
+
+bool startsWith(std::string_view text, std::string_view prefix) {
+  return text.substr(0, prefix.size()) == prefix;
+}
+
+bool equalsIgnoreCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    char x = a[i] >= 'A' && a[i] <= 'Z' ? static_cast<char>(a[i] - 'A' + 'a') : a[i];
+    char y = b[i] >= 'A' && b[i] <= 'Z' ? static_cast<char>(b[i] - 'A' + 'a') : b[i];
+    if (x != y) return false;
+  }
+  return true;
+}
+
+LineReader::LineReader(std::string_view text) : text_(text) {
+  if (startsWith(text_, "\xEF\xBB\xBF")) offset_ = 3;
+}
+
+bool LineReader::next(std::string_view& line) {
+  if (offset_ >= text_.size()) return false;
+  size_t end = offset_;
+  while (end < text_.size() && !isLineBreak(text_[end])) ++end;
+  line = text_.substr(offset_, end - offset_);
+  if (end < text_.size()) {
+    // CRLF counts as one terminator; a lone CR (old Mac files) as one too.
+    end += (text_[end] == '\r' && end + 1 < text_.size() && text_[end + 1] == '\n') ? 2 : 1;
+  }
+  offset_ = end;
+  ++line_number_;
+  return true;
+}
+
+bool Tokens::next(std::string_view& token) {
+  size_t begin = 0;
+  while (begin < rest_.size() && (isSpace(rest_[begin]) || isLineBreak(rest_[begin]))) ++begin;
+  if (begin == rest_.size()) {
+    rest_ = {};
+    return false;
+  }
+  size_t end = begin;
+  while (end < rest_.size() && !isSpace(rest_[end]) && !isLineBreak(rest_[end])) ++end;
+  token = rest_.substr(begin, end - begin);
+  rest_ = rest_.substr(end);
+  return true;
+}
+
+bool TokenStream::next(std::string_view& token) {
+  while (offset_ < text_.size()) {
+    char c = text_[offset_];
+    if (c == '\n') {
+      ++line_;
+    } else if (c == '\r') {
+      // A CR followed by LF is counted once, at the LF.
+      if (offset_ + 1 >= text_.size() || text_[offset_ + 1] != '\n') ++line_;
+    } else if (!isSpace(c)) {
+      break;
+    }
+    ++offset_;
+  }
+  token_line_ = line_;
+  if (offset_ >= text_.size()) return false;
+  size_t begin = offset_;
+  while (offset_ < text_.size() && !isSpace(text_[offset_]) && !isLineBreak(text_[offset_])) {
+    ++offset_;
+  }
+  token = text_.substr(begin, offset_ - begin);
+  return true;
+}
+
+namespace {
+
+// std::from_chars rejects a leading '+', which OBJ files written by some tools use.
+std::string_view stripPlus(std::string_view token) {
+  if (token.size() > 1 && token[0] == '+' && token[1] != '-' && token[1] != '+') {
+    return token.substr(1);
+  }
+  return token;
+}
+
+bool hasNegativeExponent(std::string_view token) {
+  return token.find("e-") != std::string_view::npos || token.find("E-") != std::string_view::npos;
+}
+
+}  // namespace
+
+bool parseDouble(std::string_view token, double& value) {
+  token = stripPlus(token);
+  if (token.empty()) return false;
+  const char* end = token.data() + token.size();
+  auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  if (ptr != end) return false;
+  if (ec == std::errc::result_out_of_range) {
+    // from_chars reports both underflow and overflow this way and leaves value unspecified.
+    bool negative = token[0] == '-';
+    value = hasNegativeExponent(token) ? 0.0 : (negative ? -HUGE_VAL : HUGE_VAL);
+    return true;
+  }
+  return ec == std::errc();
+}
+
+bool parseFloat(std::string_view token, float& value) {
+  double wide = 0;
+  if (!parseDouble(token, wide)) return false;
+  // Values beyond float range become +-inf here, which callers reject as non-finite.
+  value = static_cast<float>(wide);
+  return true;
+}
+
+bool parseInt(std::string_view token, int64_t& value) {
+  token = stripPlus(token);
+  if (token.empty()) return false;
+  const char* end = token.data() + token.size();
+  auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  return ec == std::errc() && ptr == end;
+}
+
+bool parseUint(std::string_view token, uint64_t& value) {
+  token = stripPlus(token);
+  if (token.empty() || token[0] == '-') return false;
+  const char* end = token.data() + token.size();
+  auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  return ec == std::errc() && ptr == end;
+}
+
+std::string quote(std::string_view token) {
+  constexpr size_t kMaxShown = 40;  // long enough to recognise a token, short enough for one line
+  std::string out = "'";
+  for (size_t i = 0; i < token.size() && i < kMaxShown; ++i) {
+    unsigned char c = static_cast<unsigned char>(token[i]);
+    if (c >= 0x20 && c < 0x7F) {
+      out += static_cast<char>(c);
+    } else {
+      char buffer[8];
+      std::snprintf(buffer, sizeof(buffer), "\\x%02X", c);
+      out += buffer;
+    }
+  }
+  if (token.size() > kMaxShown) out += "...";
+  out += "'";
+  return out;
+}
+
+core::Error errorAt(std::string_view path, size_t line, std::string_view message) {
+  std::string text(path);
+  text += ':';
+  text += std::to_string(line);
+  text += ": ";
+  text += message;
+  return core::Error{std::move(text)};
+}
+
+core::Error errorIn(std::string_view path, std::string_view message) {
+  std::string text(path);
+  text += ": ";
+  text += message;
+  return core::Error{std::move(text)};
+}
+
+core::Result<std::vector<uint8_t>> readInputFile(const std::string& path) {
+  auto bytes = readFileBytes(path);
+  if (!bytes && bytes.error().message.find(path) == std::string::npos) {
+    return errorIn(path, bytes.error().message);
+  }
+  return bytes;
+}
+
+void appendFan(std::span<const uint32_t> polygon, std::vector<uint32_t>& indices) {
+  for (size_t i = 1; i + 1 < polygon.size(); ++i) {
+    indices.push_back(polygon[0]);
+    indices.push_back(polygon[i]);
+    indices.push_back(polygon[i + 1]);
+  }
+}
+
+void finishSingleMaterialAsset(core::Asset& asset) {
+  core::Material material;
+  material.name = "default";
+  material.metallic_factor = 0.0f;  // glTF's default of 1 would make plain scans look metallic
+  asset.materials.push_back(material);
+  if (!asset.mesh.indices.empty()) {
+    asset.mesh.submeshes.push_back({.first_index = 0,
+                                    .index_count = static_cast<uint32_t>(asset.mesh.indices.size()),
+                                    .material = 0});
+  }
+}
+
+}  // namespace duolod::io::text

@@ -1,0 +1,416 @@
+// Tests for the OBJ/MTL reader and writer: tiny hand-written files with exact expected results,
+// and Keenan Crane's Spot (shared asset) for a real file with UV seams and a texture.
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "duolod/io.hpp"
+#include "test_support.hpp"
+
+namespace duolod {
+namespace {
+
+using test::writeScratchFile;
+
+io::LoadOptions noTextures() {
+  io::LoadOptions options;
+  options.load_textures = false;
+  return options;
+}
+
+core::Asset readOk(const std::string& path, const io::LoadOptions& options = noTextures()) {
+  auto asset = io::readObj(path, options);
+  EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
+  if (!asset.ok()) return {};
+  EXPECT_TRUE(core::validateMesh(asset->mesh).ok());
+  return std::move(asset).value();
+}
+
+bool hasWarningContaining(const core::Asset& asset, const std::string& text) {
+  for (const std::string& warning : asset.warnings) {
+    if (warning.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+const char* kQuad =
+    "# a unit quad in z = 0\n"
+    "v 0 0 0\n"
+    "v 1 0 0\n"
+    "v 1 1 0\n"
+    "v 0 1 0\n"
+    "f 1 2 3 4\n";
+
+TEST(ObjReader, QuadIsFanTriangulated) {
+  std::string path = writeScratchFile("quad.obj", kQuad);
+  core::Asset asset = readOk(path);
+  EXPECT_EQ(asset.source_path, path);
+  ASSERT_EQ(asset.mesh.vertexCount(), 4u);
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_TRUE(asset.mesh.uv0.empty());
+  EXPECT_TRUE(asset.mesh.normals.empty());  // loadAsset generates them
+  EXPECT_TRUE(asset.mesh.tangents.empty());
+  EXPECT_TRUE(asset.mesh.colors.empty());
+  ASSERT_EQ(asset.materials.size(), 1u);
+  EXPECT_EQ(asset.materials[0].name, "default");
+  EXPECT_EQ(asset.materials[0].metallic_factor, 0.0f);  // OBJ materials are not metal by default
+  ASSERT_EQ(asset.mesh.submeshes.size(), 1u);
+  EXPECT_EQ(asset.mesh.submeshes[0].first_index, 0u);
+  EXPECT_EQ(asset.mesh.submeshes[0].index_count, 6u);
+  EXPECT_EQ(asset.mesh.positions[2], (core::Vec3{1, 1, 0}));
+}
+
+TEST(ObjReader, NegativeIndicesCountBackFromTheLastVertex) {
+  // The same quad with relative indices; then a second quad defined after more vertices, where
+  // -4 must mean the 5th vertex, not the 1st.
+  std::string path = writeScratchFile("relative.obj",
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                      "f -4 -3 -2 -1\n"
+                                      "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                      "f -4 -3 -2 -1\n");
+  core::Asset asset = readOk(path);
+  ASSERT_EQ(asset.mesh.vertexCount(), 8u);
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7}));
+  EXPECT_EQ(asset.mesh.positions[4], (core::Vec3{0, 0, 1}));
+}
+
+TEST(ObjReader, CubeWithPerFaceNormalsHas24Corners) {
+  // 8 positions x 6 face normals; each corner of each face is a distinct (v, vn) pair: 6 * 4 = 24.
+  std::string path =
+      writeScratchFile("cube.obj",
+                       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                       "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                       "vn 0 0 -1\nvn 0 0 1\nvn 0 -1 0\nvn 0 1 0\nvn -1 0 0\nvn 1 0 0\n"
+                       "f 1//1 4//1 3//1 2//1\n"
+                       "f 5//2 6//2 7//2 8//2\n"
+                       "f 1//3 2//3 6//3 5//3\n"
+                       "f 4//4 8//4 7//4 3//4\n"
+                       "f 1//5 5//5 8//5 4//5\n"
+                       "f 2//6 3//6 7//6 6//6\n");
+  core::Asset asset = readOk(path);
+  EXPECT_EQ(asset.mesh.vertexCount(), 24u);
+  EXPECT_EQ(asset.mesh.triangleCount(), 12u);
+  ASSERT_EQ(asset.mesh.normals.size(), 24u);
+  EXPECT_TRUE(asset.mesh.uv0.empty());
+  // First face: all four corners carry normal 1.
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(asset.mesh.normals[i], (core::Vec3{0, 0, -1}));
+  EXPECT_EQ(asset.mesh.normals[23], (core::Vec3{1, 0, 0}));
+}
+
+TEST(ObjReader, SharedCornersAreMergedAndVIsFlipped) {
+  // Two triangles share the edge 1-3 with the same texcoords: 4 vertices, not 6.
+  std::string path = writeScratchFile("uv.obj",
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0.25 0.75\n"
+                                      "f 1/1 2/2 3/3\n"
+                                      "f 1/1 3/3 4/4\n");
+  core::Asset asset = readOk(path);
+  ASSERT_EQ(asset.mesh.vertexCount(), 4u);
+  ASSERT_EQ(asset.mesh.uv0.size(), 4u);
+  // OBJ's v points up; ours down: (0.25, 0.75) becomes (0.25, 0.25).
+  EXPECT_EQ(asset.mesh.uv0[3].x, 0.25f);
+  EXPECT_EQ(asset.mesh.uv0[3].y, 0.25f);
+  EXPECT_EQ(asset.mesh.uv0[0].y, 1.0f);
+}
+
+TEST(ObjReader, SameVertexWithTwoTexcoordsIsSplit) {
+  // A UV seam: position 1 appears with vt 1 and vt 4 -> two vertices.
+  std::string path = writeScratchFile("seam.obj",
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\n"
+                                      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 0.5\n"
+                                      "f 1/1 2/2 3/3\n"
+                                      "f 1/4 3/3 2/2\n");
+  core::Asset asset = readOk(path);
+  EXPECT_EQ(asset.mesh.vertexCount(), 4u);
+  EXPECT_EQ(asset.mesh.positions[3], asset.mesh.positions[0]);
+}
+
+TEST(ObjReader, MissingTexcoordsOrNormalsOnSomeCorners) {
+  std::string path = writeScratchFile("partial.obj",
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                      "vt 0.5 0.5\nvn 0 0 1\n"
+                                      "f 1/1/1 2/1/1 3/1/1\n"
+                                      "f 1 3 4\n");
+  core::Asset asset = readOk(path);
+  // UVs kept ((0, 0) where missing); normals dropped entirely, as an incomplete stream would be
+  // wrong and loadAsset regenerates them.
+  EXPECT_EQ(asset.mesh.uv0.size(), asset.mesh.vertexCount());
+  EXPECT_TRUE(asset.mesh.normals.empty());
+  EXPECT_TRUE(hasWarningContaining(asset, "no texture coordinate"));
+  EXPECT_TRUE(hasWarningContaining(asset, "no normal"));
+  // Corner 1 with uv and corner 1 without are different vertices: 1/1, 2/1, 3/1, 1, 3, 4.
+  EXPECT_EQ(asset.mesh.vertexCount(), 6u);
+  EXPECT_EQ(asset.mesh.uv0[3].x, 0.0f);
+  EXPECT_EQ(asset.mesh.uv0[3].y, 0.0f);
+}
+
+TEST(ObjReader, VertexColorsAndTrailingComments) {
+  std::string path = writeScratchFile("colors.obj",
+                                      "v 0 0 0 1 0 0  # red\n"
+                                      "v 1 0 0 0 1 0\n"
+                                      "v 1 1 0 0 0 1\n"
+                                      "f 1 2 3 # one triangle\n");
+  core::Asset asset = readOk(path);
+  ASSERT_EQ(asset.mesh.colors.size(), 3u);
+  EXPECT_EQ(asset.mesh.colors[0].x, 1.0f);
+  EXPECT_EQ(asset.mesh.colors[0].w, 1.0f);
+  EXPECT_EQ(asset.mesh.colors[2].z, 1.0f);
+  EXPECT_EQ(asset.mesh.triangleCount(), 1u);
+}
+
+TEST(ObjReader, CrlfLinesAndContinuations) {
+  std::string path = writeScratchFile("crlf.obj",
+                                      "v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\n"
+                                      "f 1 2 \\\r\n 3 4\r\n");
+  core::Asset asset = readOk(path);
+  EXPECT_EQ(asset.mesh.triangleCount(), 2u);
+}
+
+TEST(ObjReader, MaterialsGroupTrianglesIntoContiguousSubmeshes) {
+  std::filesystem::path dir = test::scratchDir("materials");
+  std::ofstream(dir / "two.mtl") << "# two materials\n"
+                                    "newmtl red\n"
+                                    "Kd 1 0 0\n"
+                                    "Ke 0.5 0.25 0\n"
+                                    "Pr 0.3\n"
+                                    "Pm 0.7\n"
+                                    "d 1\n"
+                                    "\n"
+                                    "newmtl shiny blue\n"
+                                    "Kd 0 0 1\n"
+                                    "Ns 98\n";
+  std::ofstream(dir / "mats.obj") << "mtllib two.mtl\n"
+                                     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                     "usemtl red\n"
+                                     "f 1 2 3\n"
+                                     "usemtl shiny blue\n"
+                                     "f 1 3 4\n"
+                                     "usemtl red\n"
+                                     "f 2 3 4\n"
+                                     "usemtl unknown\n"
+                                     "f 1 2 4\n";
+  core::Asset asset = readOk((dir / "mats.obj").string());
+  ASSERT_EQ(asset.materials.size(), 3u);
+  EXPECT_EQ(asset.materials[0].name, "red");
+  EXPECT_EQ(asset.materials[1].name, "shiny blue");
+  EXPECT_EQ(asset.materials[2].name, "unknown");
+  ASSERT_EQ(asset.mesh.submeshes.size(), 3u);
+  // red: faces 1 and 3 together, first.
+  EXPECT_EQ(asset.mesh.submeshes[0].first_index, 0u);
+  EXPECT_EQ(asset.mesh.submeshes[0].index_count, 6u);
+  EXPECT_EQ(asset.mesh.submeshes[0].material, 0u);
+  EXPECT_EQ(asset.mesh.submeshes[1].first_index, 6u);
+  EXPECT_EQ(asset.mesh.submeshes[1].index_count, 3u);
+  EXPECT_EQ(asset.mesh.submeshes[1].material, 1u);
+  EXPECT_EQ(asset.mesh.submeshes[2].first_index, 9u);
+  EXPECT_EQ(asset.mesh.submeshes[2].material, 2u);
+
+  const core::Material& red = asset.materials[0];
+  EXPECT_EQ(red.base_color_factor.x, 1.0f);
+  EXPECT_EQ(red.base_color_factor.y, 0.0f);
+  EXPECT_EQ(red.base_color_factor.w, 1.0f);
+  EXPECT_EQ(red.emissive_factor, (core::Vec3{0.5f, 0.25f, 0}));
+  EXPECT_FLOAT_EQ(red.roughness_factor, 0.3f);
+  EXPECT_FLOAT_EQ(red.metallic_factor, 0.7f);
+  // Ns 98: alpha = sqrt(2 / 100), roughness = sqrt(alpha) = 0.37606.
+  EXPECT_NEAR(asset.materials[1].roughness_factor, 0.37606f, 1e-4f);
+  EXPECT_EQ(asset.materials[1].metallic_factor, 0.0f);
+  EXPECT_TRUE(hasWarningContaining(asset, "'unknown' is not defined"));
+  EXPECT_FALSE(hasWarningContaining(asset, "transparency"));  // "d 1" is opaque
+}
+
+TEST(ObjReader, MtlTexturesWithoutDecoding) {
+  std::filesystem::path dir = test::scratchDir("textures");
+  std::ofstream(dir / "tex.mtl") << "newmtl a\n"
+                                    "map_Kd -s 1 1 1 -o 0 0 textures\\wood grain.png\n"
+                                    "norm -bm 0.5 normal.png\n"
+                                    "map_Ke glow.png\n"
+                                    "map_Pr rough.png\n"
+                                    "newmtl b\n"
+                                    "map_Kd textures/wood grain.png\n"
+                                    "bump normal.png\n";
+  std::ofstream(dir / "tex.obj") << "mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
+                                    "usemtl a\nf 1 2 3\nusemtl b\nf 3 2 1\n";
+  core::Asset asset = readOk((dir / "tex.obj").string());
+  ASSERT_EQ(asset.materials.size(), 2u);
+  const core::Material& a = asset.materials[0];
+  const core::Material& b = asset.materials[1];
+  ASSERT_GE(a.base_color_texture, 0);
+  // Same file and colour space: one texture shared; backslashes read as folder separators.
+  EXPECT_EQ(a.base_color_texture, b.base_color_texture);
+  EXPECT_EQ(a.normal_texture, b.normal_texture);
+  const core::Texture& wood = asset.textures[a.base_color_texture];
+  EXPECT_TRUE(wood.srgb);
+  EXPECT_TRUE(wood.image.pixels.empty());
+  EXPECT_EQ(std::filesystem::path(wood.name).filename().string(), "wood grain.png");
+  EXPECT_FALSE(asset.textures[a.normal_texture].srgb);
+  EXPECT_EQ(a.normal_scale, 0.5f);
+  ASSERT_GE(a.emissive_texture, 0);
+  EXPECT_TRUE(asset.textures[a.emissive_texture].srgb);
+  EXPECT_EQ(a.emissive_factor, (core::Vec3{1, 1, 1}));  // a map without Ke must still show
+  ASSERT_GE(a.metallic_roughness_texture, 0);
+  EXPECT_FALSE(asset.textures[a.metallic_roughness_texture].srgb);
+  EXPECT_EQ(a.roughness_factor, 1.0f);
+  EXPECT_EQ(asset.textures.size(), 4u);
+}
+
+TEST(ObjReader, MissingMtlFileIsAWarning) {
+  std::string path = writeScratchFile("nomtl.obj",
+                                      "mtllib does_not_exist.mtl\n"
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl stone\nf 1 2 3\n");
+  core::Asset asset = readOk(path);
+  EXPECT_TRUE(hasWarningContaining(asset, "does_not_exist.mtl"));
+  EXPECT_TRUE(hasWarningContaining(asset, "nomtl.obj:1:"));
+  ASSERT_EQ(asset.materials.size(), 1u);
+  EXPECT_EQ(asset.materials[0].name, "stone");
+  EXPECT_EQ(asset.mesh.triangleCount(), 1u);
+}
+
+TEST(ObjReader, PointsLinesAndFreeFormAreSkipped) {
+  std::string path = writeScratchFile("mixed.obj",
+                                      "o thing\ng part\ns 1\n"
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\n"
+                                      "l 1 2\np 3\nf 1 2 3\n");
+  core::Asset asset = readOk(path);
+  EXPECT_EQ(asset.mesh.triangleCount(), 1u);
+  EXPECT_TRUE(hasWarningContaining(asset, "(p, l) ignored"));
+}
+
+TEST(ObjReader, NoFacesIsNotAnErrorHere) {
+  // Zero triangles is loadAsset's call to reject, not the reader's.
+  auto asset = io::readObj(writeScratchFile("points.obj", "v 0 0 0\nv 1 0 0\n"), noTextures());
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  EXPECT_EQ(asset->mesh.triangleCount(), 0u);
+  EXPECT_TRUE(asset->mesh.submeshes.empty());
+  EXPECT_EQ(asset->materials.size(), 1u);
+}
+
+TEST(ObjReader, SpotHasExactCounts) {
+  DUOLOD_REQUIRE_ASSET(path, "obj/spot/spot.obj");
+  core::Asset asset = readOk(path);
+  EXPECT_EQ(asset.mesh.triangleCount(), 5856u);
+  // Every vertex is a distinct (position, texcoord) pair: at least the 3,225 texcoords and the
+  // 2,930 positions are all used.
+  EXPECT_GE(asset.mesh.vertexCount(), 3225u);
+  EXPECT_EQ(asset.mesh.uv0.size(), asset.mesh.vertexCount());
+  EXPECT_TRUE(asset.mesh.normals.empty());
+  EXPECT_TRUE(asset.warnings.empty());
+  // The first face is "f 739/1 735/2 736/3": vertex 0 is v 739 with vt 1 = (0.800375, 0.667457).
+  EXPECT_EQ(asset.mesh.positions[0], (core::Vec3{0.317288f, -0.397295f, 0.364448f}));
+  EXPECT_EQ(asset.mesh.uv0[0].x, 0.800375f);
+  EXPECT_EQ(asset.mesh.uv0[0].y, 1.0f - 0.667457f);
+}
+
+TEST(ObjReader, SpotTextureLoadsThroughAnMtl) {
+  // spot.obj has no mtllib; give it one in a scratch folder that points at the real texture.
+  DUOLOD_REQUIRE_ASSET(obj_path, "obj/spot/spot.obj");
+  DUOLOD_REQUIRE_ASSET(png_path, "obj/spot/spot_texture.png");
+  std::filesystem::path dir = test::scratchDir("spot");
+  std::ofstream(dir / "spot.mtl") << "newmtl spot\nKd 1 1 1\nmap_Kd "
+                                  << std::filesystem::absolute(png_path).string() << "\n";
+  std::ifstream original(obj_path);
+  std::stringstream contents;
+  contents << original.rdbuf();
+  std::ofstream(dir / "spot.obj") << "mtllib spot.mtl\nusemtl spot\n" << contents.str();
+
+  auto asset = io::readObj((dir / "spot.obj").string(), io::LoadOptions{});
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  EXPECT_EQ(asset->mesh.triangleCount(), 5856u);
+  ASSERT_EQ(asset->materials.size(), 1u);
+  ASSERT_EQ(asset->textures.size(), 1u);
+  EXPECT_EQ(asset->materials[0].base_color_texture, 0);
+  const core::Texture& texture = asset->textures[0];
+  EXPECT_TRUE(texture.srgb);
+  EXPECT_EQ(texture.image.width, 1024);
+  EXPECT_EQ(texture.image.height, 1024);
+  EXPECT_EQ(texture.image.pixels.size(), 1024u * 1024u * 4u);
+}
+
+TEST(ObjWriter, RoundTripKeepsGeometryAndMaterials) {
+  std::filesystem::path dir = test::scratchDir("roundtrip");
+  std::ofstream(dir / "in.mtl") << "newmtl red\nKd 1 0 0\nPr 0.25\nPm 0.5\nKe 0 0.5 0\n"
+                                   "newmtl blue\nKd 0 0 1\n";
+  std::ofstream(dir / "in.obj") << "mtllib in.mtl\n"
+                                   "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 1 1 1\n"
+                                   "vt 0 0\nvt 1 0\nvt 1 1\nvt 0.1 0.7\n"
+                                   "vn 0 0 1\n"
+                                   "usemtl red\nf 1/1/1 2/2/1 3/3/1\n"
+                                   "usemtl blue\nf 1/1/1 3/3/1 4/4/1\n";
+  core::Asset in = readOk((dir / "in.obj").string());
+  std::string out_path = (dir / "out.obj").string();
+  auto written = io::writeObj(in, out_path);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out.mtl"));
+  core::Asset out = readOk(out_path);
+
+  EXPECT_EQ(out.mesh.positions.size(), in.mesh.positions.size());
+  for (size_t i = 0; i < in.mesh.positions.size(); ++i) {
+    EXPECT_EQ(out.mesh.positions[i], in.mesh.positions[i]);
+    EXPECT_EQ(out.mesh.normals[i], in.mesh.normals[i]);
+    EXPECT_NEAR(out.mesh.uv0[i].x, in.mesh.uv0[i].x, 1e-6f);
+    EXPECT_NEAR(out.mesh.uv0[i].y, in.mesh.uv0[i].y, 1e-6f);  // v is flipped twice
+    EXPECT_EQ(out.mesh.colors[i].x, in.mesh.colors[i].x);
+  }
+  EXPECT_EQ(out.mesh.indices, in.mesh.indices);
+  ASSERT_EQ(out.mesh.submeshes.size(), 2u);
+  ASSERT_EQ(out.materials.size(), 2u);
+  EXPECT_EQ(out.materials[0].name, "red");
+  EXPECT_EQ(out.materials[1].name, "blue");
+  EXPECT_EQ(out.materials[0].roughness_factor, 0.25f);
+  EXPECT_EQ(out.materials[0].metallic_factor, 0.5f);
+  EXPECT_EQ(out.materials[0].emissive_factor, (core::Vec3{0, 0.5f, 0}));
+  EXPECT_EQ(out.materials[1].base_color_factor.z, 1.0f);
+}
+
+TEST(ObjWriter, TexturesAreWrittenAsPngAndReadBack) {
+  std::filesystem::path dir = test::scratchDir("texture_out");
+  core::Asset asset;
+  asset.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}};
+  asset.mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}};
+  asset.mesh.indices = {0, 1, 2};
+  asset.mesh.submeshes = {{.first_index = 0, .index_count = 3, .material = 0}};
+  core::Material material;
+  material.name = "checker";
+  material.base_color_texture = 0;
+  material.metallic_roughness_texture = 1;
+  asset.materials = {material};
+  core::Texture color{.name = "c", .image = {2, 1, {255, 0, 0, 255, 0, 255, 0, 255}}, .srgb = true};
+  core::Texture mr{.name = "mr", .image = {1, 1, {0, 64, 200, 255}}, .srgb = false};
+  asset.textures = {color, mr};
+  std::string path = (dir / "tex.obj").string();
+  auto written = io::writeObj(asset, path);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+
+  auto back = io::readObj(path, io::LoadOptions{});
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_EQ(back->materials.size(), 1u);
+  const core::Material& read = back->materials[0];
+  ASSERT_GE(read.base_color_texture, 0);
+  const core::ImageRGBA8& image = back->textures[read.base_color_texture].image;
+  EXPECT_EQ(image.width, 2);
+  EXPECT_EQ(image.pixels, color.image.pixels);
+  // map_Pr -imfchan g / map_Pm -imfchan b put the packed texture back together.
+  ASSERT_GE(read.metallic_roughness_texture, 0);
+  const core::ImageRGBA8& packed = back->textures[read.metallic_roughness_texture].image;
+  ASSERT_EQ(packed.pixels.size(), 4u);
+  EXPECT_EQ(packed.pixels[1], 64);
+  EXPECT_EQ(packed.pixels[2], 200);
+  EXPECT_EQ(read.metallic_factor, 1.0f);
+  EXPECT_EQ(read.roughness_factor, 1.0f);
+}
+
+TEST(ObjWriter, RefusesToOverwriteItsSource) {
+  std::string path = writeScratchFile("source.obj", kQuad);
+  core::Asset asset = readOk(path);
+  auto written = io::writeObj(asset, path);
+  ASSERT_FALSE(written.ok());
+  EXPECT_NE(written.error().message.find("source.obj"), std::string::npos);
+  // The original is untouched.
+  std::ifstream in(path);
+  std::stringstream contents;
+  contents << in.rdbuf();
+  EXPECT_EQ(contents.str(), kQuad);
+}
+
+}  // namespace
+}  // namespace duolod
