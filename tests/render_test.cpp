@@ -222,3 +222,73 @@ TEST(Metric, BoundFollowsEquationFour) {
 
 }  // namespace
 }  // namespace duolod
+
+namespace duolod {
+namespace {
+
+TEST_F(RendererTest, MultisamplingGivesPartialEdgeCoverage) {
+  auto asset = renderer_->uploadAsset(squareAsset({1, 1, 1, 1}));
+  ASSERT_TRUE(asset);
+  render::Sample sample = frontSample(4.0f);
+  sample.projection = core::perspective(2 * std::atan(1.0f / (4.0f * 0.4f)), 1.0f, 0.1f, 100.0f);
+  auto plain = renderer_->render(*asset, constant_program_, std::span(&sample, 1), {.resolution = 64});
+  auto msaa = renderer_->render(*asset, constant_program_, std::span(&sample, 1),
+                                {.resolution = 64, .msaa_samples = 4});
+  ASSERT_TRUE(plain && msaa) << (plain ? msaa.error().message : plain.error().message);
+  int plain_partial = 0, msaa_partial = 0;
+  for (int p = 0; p < 64 * 64; ++p) {
+    uint8_t a = plain->tile(0)[p * 4 + 3], b = msaa->tile(0)[p * 4 + 3];
+    plain_partial += a > 0 && a < 255;
+    msaa_partial += b > 0 && b < 255;
+  }
+  EXPECT_EQ(plain_partial, 0);  // without MSAA a pixel is either covered or not
+  EXPECT_GT(msaa_partial, 50);  // the 4 edges of a 25.6-pixel square cut ~100 pixels
+  renderer_->releaseAsset(*asset);
+}
+
+TEST_F(RendererTest, ManySamplesSpanSeveralAtlasChunksInOrder) {
+  // Large tiles force several atlas passes; tile i must still hold sample i.
+  auto asset = renderer_->uploadAsset(squareAsset({1, 0, 0, 1}));
+  ASSERT_TRUE(asset);
+  std::vector<render::Sample> samples;
+  for (int i = 0; i < 6; ++i) {
+    render::Sample s = frontSample(4.0f + i);  // farther → smaller square
+    s.projection = core::perspective(2 * std::atan(2.0f / 4.0f), 1.0f, 0.1f, 100.0f);
+    samples.push_back(s);
+  }
+  render::RenderStats stats;
+  auto batch = renderer_->render(*asset, constant_program_, samples, {.resolution = 3000}, &stats);
+  ASSERT_TRUE(batch) << batch.error().message;
+  EXPECT_GT(stats.chunks, 1);
+  int previous = 1 << 30;
+  for (int i = 0; i < 6; ++i) {
+    int covered = 0;
+    for (size_t p = 0; p < size_t(3000) * 3000; ++p) covered += batch->tile(i)[p * 4 + 3] > 0;
+    EXPECT_LT(covered, previous) << "tile " << i;
+    previous = covered;
+  }
+  renderer_->releaseAsset(*asset);
+}
+
+TEST(Bindings, ParsesAndRejectsWithTheKeyNamed) {
+  auto parsed = render::parseBindings(
+      R"({"attributes": {"position": 2, "uv0": -1}, "textures": {"baseColor": 7}})", "b.json");
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  EXPECT_EQ(parsed->position, 2);
+  EXPECT_EQ(parsed->uv0, -1);
+  EXPECT_EQ(parsed->base_color, 7);
+  EXPECT_EQ(parsed->normal, 1);  // untouched default
+
+  auto unknown = render::parseBindings(R"({"attributes": {"colour": 5}})", "b.json");
+  ASSERT_FALSE(unknown);
+  EXPECT_NE(unknown.error().message.find("attributes.colour"), std::string::npos);
+  auto range = render::parseBindings(R"({"blocks": {"frame": 99}})", "b.json");
+  ASSERT_FALSE(range);
+  EXPECT_NE(range.error().message.find("blocks.frame"), std::string::npos);
+  auto broken = render::parseBindings("{not json", "b.json");
+  ASSERT_FALSE(broken);
+  EXPECT_NE(broken.error().message.find("b.json"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace duolod
