@@ -159,6 +159,33 @@ class Renderer {
                                             const RenderOptions& options,
                                             RenderStats* stats = nullptr);
 
+  // ---- Local re-rendering, for image-driven simplification (§4.2, Lindstrom & Turk 2000) ----
+  // A collapse changes only a few pixels of each view. Each tile is a small screen region of one
+  // view; the soup holds the triangles to draw there (the region's neighbourhood with the change
+  // applied). All tiles of a view are drawn for each of its lights in one draw per material.
+
+  // The program for renderRegions(): the user's vertex stage wrapped so that each vertex is moved
+  // into its tile of the atlas and clipped to it (GLSL source only).
+  core::Result<ProgramId> compileRegionProgram(const GlslSource& source);
+
+  struct RegionTile {
+    int view_index = 0;  // which view's camera (samples are view-major)
+    int x0 = 0, y0 = 0;  // top-left pixel of the region in the view's image (rows top first)
+  };
+  struct RegionSoup {
+    core::Mesh triangles;  // non-indexed: 3 consecutive vertices per triangle; attribute streams
+    std::vector<uint32_t> triangle_tile;      // tile index of each triangle
+    std::vector<uint32_t> triangle_material;  // material index of each triangle
+    std::vector<RegionTile> tiles;
+  };
+  // Output tile for (tile t, light l) is t * lights_per_view + l, each tile_size² pixels. `samples`
+  // are the full view-major domain (view v's lights at v*lights_per_view ...). The footprint
+  // `view_resolution` must be the one the samples were framed for.
+  core::Result<ImageBatch8> renderRegions(AssetId asset, ProgramId region_program,
+                                          const RegionSoup& soup, std::span<const Sample> samples,
+                                          int lights_per_view, int view_resolution, int tile_size,
+                                          RenderStats* stats = nullptr);
+
   struct State;  // implementation detail (renderer.cpp)
 
  private:

@@ -1,0 +1,259 @@
+// Internals shared by the renderer's passes (renderer.cpp: whole-view batches and references;
+// region_renderer.cpp: local re-rendering). Not part of the public API.
+#pragma once
+
+#include <cstring>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "duolod/render.hpp"
+#include "render/gl_context.hpp"
+
+namespace duolod::render {
+namespace internal {
+
+// std140 layouts of shaders/INTERFACE.md.
+struct FrameBlock {
+  float model[16];
+  float view[16];
+  float projection[16];
+  float normal_matrix[16];
+  float camera_position[4];
+  float light_position[4];
+  float light_color[4];
+  float ambient_color[4];
+  float object_info[4];
+};
+struct MaterialBlock {
+  float base_color_factor[4];
+  float emissive_factor[4];
+  float material_params[4];
+  float texture_flags[4];
+  float texture_flags2[4];
+};
+
+struct GpuSubmesh {
+  GLsizei index_count = 0;
+  size_t first_index = 0;
+  uint32_t material = 0;
+};
+
+struct GpuAsset {
+  GLuint vao = 0;
+  std::vector<GLuint> buffers;
+  GLuint material_ubo = 0;
+  GLsizeiptr material_stride = 0;
+  std::vector<GLuint> textures;  // one per asset texture
+  std::vector<core::Material> materials;
+  std::vector<GpuSubmesh> submeshes;
+  core::Sphere bounds;
+  bool has[6] = {};  // position, normal, tangent, uv0, uv1, color
+};
+
+struct Framebuffer {
+  GLuint fbo = 0, color = 0, depth = 0;
+  int width = 0, height = 0, samples = 0;
+  GLenum format = 0;
+  bool texture = false;
+};
+
+
+void destroyFramebuffer(Framebuffer& f);
+// (Re)creates `f` only when its shape changes: allocation is costly on llvmpipe at atlas sizes.
+core::Status ensureFramebuffer(Framebuffer& f, int width, int height, int samples, GLenum format,
+                               bool with_depth, bool as_texture);
+std::string shaderLog(GLuint shader);
+core::Result<GLuint> linkProgram(GLuint vertex, GLuint fragment, const std::string& what);
+// Clears `target` and sets the state every pass draws with (depth test, back-face culling).
+void beginDrawing(const Framebuffer& target);
+// How many tiles of `tile` pixels fit one atlas pass: bounded by the GL limits and by a memory
+// budget (colour + depth at 4 bytes each, times MSAA samples).
+struct AtlasLayout {
+  int columns = 1, rows = 1, per_chunk = 1;
+};
+AtlasLayout planAtlas(int count, int tile, int max_size, int samples);
+
+// Copies chunk tiles (bottom-up GL rows, atlas layout) into the batch (top-down, contiguous tiles).
+template <class T>
+void scatterTiles(const std::vector<T>& atlas, int atlas_width, const AtlasLayout& layout,
+                  int tile, int first, int count, TiledImages<T>& batch) {
+  for (int i = 0; i < count; ++i) {
+    int x0 = (i % layout.columns) * tile, y0 = (i / layout.columns) * tile;
+    T* out = batch.tile(first + i);
+    for (int row = 0; row < tile; ++row) {
+      const T* source = atlas.data() + (size_t(y0 + tile - 1 - row) * atlas_width + x0) * 4;
+      std::copy_n(source, size_t(tile) * 4, out + size_t(row) * tile * 4);
+    }
+  }
+}
+
+inline void copyMatrix(float* out, const core::Mat4& m) { std::memcpy(out, m.m.data(), 64); }
+inline int roundUp(int value, int multiple) { return (value + multiple - 1) / multiple * multiple; }
+
+}  // namespace internal
+
+struct Renderer::State {
+  GlContext context;
+  std::vector<std::optional<internal::GpuAsset>> assets;
+  std::vector<GLuint> programs;  // 0 = released
+  Bindings bindings;
+  core::Vec3 ambient{0.1f, 0.1f, 0.1f};
+  core::Vec3 light_color{2.0f, 2.0f, 2.0f};
+  GLuint white_texture = 0, flat_normal_texture = 0;
+  GLuint frame_ubo = 0;
+  GLsizeiptr frame_ubo_size = 0;
+  GLint ubo_alignment = 256;
+  GLint max_size = 4096;
+  internal::Framebuffer atlas, resolved, reference_float;
+  GLuint downsample_program = 0;
+  GLuint empty_vao = 0;
+
+  ~State() {
+    if (context_alive) {
+      for (auto& asset : assets)
+        if (asset) release(*asset);
+      for (GLuint p : programs)
+        if (p) glDeleteProgram(p);
+      destroyFramebuffer(atlas);
+      destroyFramebuffer(resolved);
+      destroyFramebuffer(reference_float);
+      if (downsample_program) glDeleteProgram(downsample_program);
+      GLuint textures[] = {white_texture, flat_normal_texture};
+      glDeleteTextures(2, textures);
+      if (frame_ubo) glDeleteBuffers(1, &frame_ubo);
+      if (empty_vao) glDeleteVertexArrays(1, &empty_vao);
+    }
+  }
+
+  static void release(internal::GpuAsset& asset) {
+    glDeleteVertexArrays(1, &asset.vao);
+    glDeleteBuffers(static_cast<GLsizei>(asset.buffers.size()), asset.buffers.data());
+    glDeleteBuffers(1, &asset.material_ubo);
+    if (!asset.textures.empty())
+      glDeleteTextures(static_cast<GLsizei>(asset.textures.size()), asset.textures.data());
+  }
+
+  GLuint makeSolidTexture(uint8_t r, uint8_t g, uint8_t b) {
+    GLuint texture;
+    glCreateTextures(GL_TEXTURE_2D, 1, &texture);
+    glTextureStorage2D(texture, 1, GL_RGBA8, 1, 1);
+    uint8_t texel[4] = {r, g, b, 255};
+    glTextureSubImage2D(texture, 0, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
+    return texture;
+  }
+
+  bool context_alive = false;
+};
+
+namespace internal {
+
+// Shared by render() and renderReference(): draws samples [first, first+n) of a chunk into the
+// atlas at `tile` pixels per sample.
+struct ChunkDrawer {
+  Renderer::State& s;
+  const GpuAsset& asset;
+  GLuint program;
+
+  void uploadFrames(std::span<const Sample> samples, GLsizeiptr stride) {
+    std::vector<uint8_t> bytes(samples.size() * stride);
+    core::Mat4 model = core::Mat4::identity();
+    core::Mat4 normal_matrix = core::transpose(core::inverse(model));
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const Sample& sample = samples[i];
+      FrameBlock block{};
+      copyMatrix(block.model, model);
+      copyMatrix(block.view, sample.view);
+      copyMatrix(block.projection, sample.projection);
+      copyMatrix(block.normal_matrix, normal_matrix);
+      float eye[4] = {sample.eye.x, sample.eye.y, sample.eye.z, 1};
+      float light[4] = {sample.light.x, sample.light.y, sample.light.z, 1};
+      float light_color[4] = {s.light_color.x, s.light_color.y, s.light_color.z, 0};
+      float ambient[4] = {s.ambient.x, s.ambient.y, s.ambient.z, 0};
+      float object[4] = {asset.bounds.center.x, asset.bounds.center.y, asset.bounds.center.z,
+                         asset.bounds.radius};
+      std::memcpy(block.camera_position, eye, 16);
+      std::memcpy(block.light_position, light, 16);
+      std::memcpy(block.light_color, light_color, 16);
+      std::memcpy(block.ambient_color, ambient, 16);
+      std::memcpy(block.object_info, object, 16);
+      std::memcpy(bytes.data() + i * stride, &block, sizeof block);
+    }
+    GLsizeiptr needed = static_cast<GLsizeiptr>(bytes.size());
+    if (needed > s.frame_ubo_size) {
+      glDeleteBuffers(1, &s.frame_ubo);
+      glCreateBuffers(1, &s.frame_ubo);
+      glNamedBufferStorage(s.frame_ubo, needed, nullptr, GL_DYNAMIC_STORAGE_BIT);
+      s.frame_ubo_size = needed;
+    }
+    glNamedBufferSubData(s.frame_ubo, 0, needed, bytes.data());
+  }
+
+  void bindInputs() {
+    const Bindings& b = s.bindings;
+    glUseProgram(program);
+    glBindVertexArray(asset.vao);
+    const int locations[6] = {b.position, b.normal, b.tangent, b.uv0, b.uv1, b.color};
+    const int components[6] = {3, 3, 4, 2, 2, 4};
+    const float defaults[6][4] = {{0, 0, 0, 1}, {0, 0, 1, 0}, {1, 0, 0, 1},
+                                  {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 1, 1, 1}};
+    for (int slot = 0; slot < 6; ++slot) {
+      int location = locations[slot];
+      if (location < 0) continue;
+      if (asset.has[slot]) {
+        glEnableVertexArrayAttrib(asset.vao, location);
+        glVertexArrayAttribFormat(asset.vao, location, components[slot], GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(asset.vao, location, slot);
+      } else {
+        glDisableVertexArrayAttrib(asset.vao, location);
+        glVertexAttrib4fv(location, defaults[slot]);
+      }
+    }
+  }
+
+  void bindMaterial(uint32_t material_index) {
+    const Bindings& b = s.bindings;
+    glBindBufferRange(GL_UNIFORM_BUFFER, b.material_block, asset.material_ubo,
+                      asset.material_stride * material_index, sizeof(MaterialBlock));
+    core::Material fallback;
+    const core::Material& m =
+        material_index < asset.materials.size() ? asset.materials[material_index] : fallback;
+    auto texture = [&](int index, GLuint missing) {
+      return index >= 0 && index < static_cast<int>(asset.textures.size()) && asset.textures[index]
+                 ? asset.textures[index]
+                 : missing;
+    };
+    const std::pair<int, GLuint> units[] = {
+        {b.base_color, texture(m.base_color_texture, s.white_texture)},
+        {b.metallic_roughness, texture(m.metallic_roughness_texture, s.white_texture)},
+        {b.normal_map, texture(m.normal_texture, s.flat_normal_texture)},
+        {b.occlusion, texture(m.occlusion_texture, s.white_texture)},
+        {b.emissive, texture(m.emissive_texture, s.white_texture)},
+    };
+    for (auto [unit, id] : units)
+      if (unit >= 0) glBindTextureUnit(unit, id);
+  }
+
+  // Draws `count` samples starting at `first` into atlas tiles of `tile` pixels.
+  int drawChunk(int first, int count, int tile, const AtlasLayout& layout, GLsizeiptr stride) {
+    int draws = 0;
+    bindInputs();
+    for (int i = 0; i < count; ++i) {
+      int x = (i % layout.columns) * tile, y = (i / layout.columns) * tile;
+      glViewport(x, y, tile, tile);
+      glScissor(x, y, tile, tile);
+      glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo,
+                        stride * (first + i), sizeof(FrameBlock));
+      for (const GpuSubmesh& sub : asset.submeshes) {
+        bindMaterial(sub.material);
+        glDrawElements(GL_TRIANGLES, sub.index_count, GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(sub.first_index * 4));
+        ++draws;
+      }
+    }
+    return draws;
+  }
+};
+
+}  // namespace internal
+}  // namespace duolod::render
