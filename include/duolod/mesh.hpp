@@ -1,0 +1,127 @@
+// duolod mesh: simplification by edge collapse (quadric error with attribute quadrics; the
+// image-driven cost of the paper, §4.2/§5.1), vertex clustering, the progressive record that
+// turns one run into K candidate meshes (§5.1), and geometric quality measures.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "duolod/core.hpp"
+
+namespace duolod::mesh {
+
+// ---------------------------------------------------------------------------------------------
+// Edge collapse.
+
+enum class Placement {
+  kOptimal,   // quadric minimizer (Garland & Heckbert 1997), falling back to the best endpoint
+  kEndpoint,  // one of the two endpoints (the paper's "place-to-endpoints", §4.2)
+};
+
+struct SimplifyOptions {
+  // Stop when the mesh has at most this many triangles (0 = no triangle target).
+  size_t target_triangles = 0;
+  // Stop before a collapse whose error would exceed this (geometric: asset units of distance, the
+  // square root of the quadric error; image-driven: eq. 6 units). Infinity = no error target.
+  double target_error = std::numeric_limits<double>::infinity();
+  Placement placement = Placement::kOptimal;
+  bool lock_border = false;  // open-boundary vertices never move
+  // Weight of the attribute quadrics (Hoppe 1999) relative to geometry, after the automatic
+  // scale normalization (attributes are measured against the mesh's bounding-box diagonal).
+  float attribute_weight = 1.0f;
+  // Collapses across submesh (material) borders are refused unless this is set.
+  bool allow_material_border_collapse = false;
+  // Record every collapse (needed for candidates); costs memory proportional to the collapses.
+  bool record = true;
+};
+
+// One step of a progressive record: vertex `removed` merges into `kept`, whose attributes become
+// `kept_vertex` (an index into ProgressiveRecord::vertex_values).
+struct CollapseStep {
+  uint32_t removed = 0;
+  uint32_t kept = 0;
+  uint32_t kept_value = 0;         // index into ProgressiveRecord's value streams
+  uint32_t triangles_after = 0;    // triangle count once this collapse is applied
+  float error = 0;                 // the cost that ordered this collapse
+  float cumulative_error = 0;      // max error so far (monotone)
+  // One edge collapse moves every wedge of a position together (attribute seams keep their
+  // discontinuity), so it can take several steps; all but the last have `continues` set. A prefix
+  // that ends on such a step would tear the seam open; chooseCandidates never picks one and
+  // extractMesh rounds it up to the end of the collapse.
+  bool continues = false;
+};
+
+// The collapse sequence of one run (§5.1: any intermediate mesh can be extracted cheaply). Vertex
+// attribute values after a collapse are appended to `values`, which starts as the input mesh's
+// vertices (so values.vertexCount() >= base vertex count).
+struct ProgressiveRecord {
+  core::Mesh base;                  // the input (welded) mesh
+  core::Mesh values;                // attribute streams only: base vertices, then one per step
+  std::vector<CollapseStep> steps;
+};
+
+struct SimplifyStats {
+  size_t collapses = 0;
+  size_t rejected_topology = 0;  // link condition / non-manifold
+  size_t rejected_flip = 0;      // normal flip
+  size_t rejected_border = 0;    // locked border, material border, seam rules
+  double seconds = 0;
+};
+
+struct SimplifyResult {
+  core::Mesh mesh;
+  double error = 0;  // largest collapse error applied (same units as target_error)
+  SimplifyStats stats;
+  ProgressiveRecord record;  // empty unless options.record
+};
+
+// Quadric error simplification with attribute quadrics. Attribute seams (vertices with equal
+// positions but different normals/UVs/colours) are collapsed only along the seam; submesh borders
+// are kept unless allowed. The result is compacted (no unreferenced vertices).
+SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& options);
+
+// The mesh after the first `step_count` collapses of `record`, compacted: collapsed and degenerate
+// triangles dropped, triangles in their original order (submesh ranges recomputed, empty submeshes
+// kept so material indices stay valid), referenced vertices in their original order. A count past
+// the end is clamped; one inside a multi-step collapse is rounded up to its end (see `continues`).
+core::Mesh extractMesh(const ProgressiveRecord& record, size_t step_count);
+// Several prefixes at once by one incremental replay of the record (cost: one pass over the steps
+// plus the size of the outputs), for the §5.1 candidates. `step_counts` must be ascending; the
+// result has one mesh per count, each equal to extractMesh(record, count).
+std::vector<core::Mesh> extractMeshes(const ProgressiveRecord& record,
+                                      std::span<const size_t> step_counts);
+
+// K candidate step counts (§5.1): the record's prefix lengths where the error changes most,
+// always including 0 (the input) and the last step; ascending, unique, never inside a multi-step
+// collapse. A candidate is the prefix just before a jump of the cumulative error. Jumps are
+// compared on a log scale (relative change), because absolute jumps grow with the error and would
+// put every candidate at the coarse end; when fewer than k-2 prefixes have a jump, the rest are
+// spread evenly by triangle count. Returns fewer than k when the record has fewer prefixes.
+std::vector<size_t> chooseCandidates(const ProgressiveRecord& record, size_t k);
+
+// ---------------------------------------------------------------------------------------------
+// Vertex clustering (Rossignac & Borrel 1993, with Willmott 2011's attribute-aware
+// representatives): the fast, coarse mode.
+
+struct ClusterOptions {
+  int grid_resolution = 32;  // cells along the bounding box's longest side
+  bool keep_attribute_seams = true;
+};
+SimplifyResult simplifyCluster(const core::Mesh& mesh, const ClusterOptions& options);
+
+// ---------------------------------------------------------------------------------------------
+// Geometric quality (Metro-style, Cignoni et al. 1998): surface sampling both ways.
+
+struct SurfaceDistance {
+  double hausdorff = 0;  // max of the two one-sided maxima
+  double mean = 0;       // mean of the two one-sided means
+  double rms = 0;
+};
+// `samples_per_mesh` points are sampled (area-weighted, deterministic for a seed) on each mesh.
+SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
+                                size_t samples_per_mesh = 100000, uint64_t seed = 1);
+
+}  // namespace duolod::mesh
