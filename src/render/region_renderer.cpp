@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <numeric>
-#include <regex>
+#include <cctype>
 
 #include "render/renderer_internal.hpp"
 
@@ -40,15 +40,34 @@ void main() {
 }
 )";
 
+// Finds "void main()" / "void main(void)" (any spacing) and returns [begin, end) of it, or npos.
+std::pair<size_t, size_t> findMainDefinition(const std::string& text) {
+  auto skipSpace = [&](size_t i) {
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    return i;
+  };
+  auto isIdentifier = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (size_t at = text.find("void"); at != std::string::npos; at = text.find("void", at + 4)) {
+    if (at > 0 && isIdentifier(text[at - 1])) continue;
+    size_t i = skipSpace(at + 4);
+    if (i == at + 4 || text.compare(i, 4, "main") != 0) continue;
+    i = skipSpace(i + 4);
+    if (i >= text.size() || text[i] != '(') continue;
+    i = skipSpace(i + 1);
+    if (text.compare(i, 4, "void") == 0) i = skipSpace(i + 4);
+    if (i < text.size() && text[i] == ')') return {at, i + 1};
+  }
+  return {std::string::npos, std::string::npos};
+}
+
 }  // namespace
 
 core::Result<Renderer::ProgramId> Renderer::compileRegionProgram(const GlslSource& source) {
-  static const std::regex kMain(R"(\bvoid\s+main\s*\(\s*(void)?\s*\))");
-  std::smatch match;
-  if (!std::regex_search(source.vertex, match, kMain))
+  auto [begin, end] = findMainDefinition(source.vertex);
+  if (begin == std::string::npos)
     return Error{source.vertex_name + ": no 'void main()' found to wrap for region rendering"};
-  std::string wrapped = std::regex_replace(source.vertex, kMain, "void duolod_user_main()",
-                                           std::regex_constants::format_first_only);
+  std::string wrapped = source.vertex;
+  wrapped.replace(begin, end - begin, "void duolod_user_main()");
   if (wrapped.find("gl_PerVertex") != std::string::npos)
     return Error{source.vertex_name +
                  ": redeclares gl_PerVertex; region rendering needs gl_ClipDistance[4]"};
