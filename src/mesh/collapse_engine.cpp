@@ -1,0 +1,887 @@
+// Edge-collapse engine (see collapse_engine.hpp for the rules). Based on:
+//   Hoppe, "Progressive meshes", SIGGRAPH 1996 (collapse sequence, wedges);
+//   Garland & Heckbert, "Surface simplification using quadric error metrics", SIGGRAPH 1997
+//     (greedy loop over a priority queue of edge collapses);
+//   Dey, Edelsbrunner, Guha, Nekhayev, "Topology preserving edge contraction", 1999 (link
+//     condition).
+// Data layout: flat arrays only. Each position keeps a singly linked list of its triangle corners
+// (corner_next), spliced in O(degree) on a collapse; dead triangles are unlinked lazily whenever
+// the engine walks a list. The queue is a binary heap of directed candidates stamped with both
+// endpoints' versions. No allocation happens per collapse once the scratch buffers have grown.
+#include "mesh/collapse_engine.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+namespace duolod::mesh {
+namespace {
+
+uint64_t mixHash(uint64_t h) {  // splitmix64 finalizer: spreads bits for linear probing
+  h ^= h >> 30;
+  h *= 0xbf58476d1ce4e5b9ull;
+  h ^= h >> 27;
+  h *= 0x94d049bb133111ebull;
+  h ^= h >> 31;
+  return h;
+}
+
+uint64_t hashWords(const uint32_t* words, size_t count, uint64_t seed = 0) {
+  uint64_t h = seed;
+  for (size_t i = 0; i < count; ++i) h = mixHash(h ^ (words[i] + 0x9e3779b97f4a7c15ull));
+  return h;
+}
+
+// Open addressing with linear probing over item indices; the caller supplies hash and equality.
+class IndexTable {
+ public:
+  explicit IndexTable(size_t expected) {
+    size_t capacity = 16;
+    while (capacity < expected * 2) capacity *= 2;
+    slots_.assign(capacity, kAbsent);
+  }
+  // Returns the index of an equal item already present, or inserts `item` and returns it.
+  template <class Equal>
+  uint32_t findOrInsert(uint32_t item, uint64_t hash, Equal&& equal) {
+    size_t mask = slots_.size() - 1;
+    for (size_t i = hash & mask;; i = (i + 1) & mask) {
+      uint32_t slot = slots_[i];
+      if (slot == kAbsent) return slots_[i] = item;
+      if (equal(slot)) return slot;
+    }
+  }
+
+ private:
+  std::vector<uint32_t> slots_;
+};
+
+// Bit pattern of a position with -0 folded into +0, so that the two weld.
+void positionBits(core::Vec3 p, uint32_t out[3]) {
+  for (int i = 0; i < 3; ++i) {
+    float v = p[i] == 0 ? 0.0f : p[i];
+    std::memcpy(&out[i], &v, 4);
+  }
+}
+
+// Position ids: equal (bitwise, ±0 folded) positions share an id. Returns the id count.
+uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint32_t>& ids) {
+  const size_t n = positions.size();
+  ids.assign(n, kAbsent);
+  std::vector<uint32_t> bits(n * 3);
+  for (size_t v = 0; v < n; ++v) positionBits(positions[v], &bits[v * 3]);
+  IndexTable table(n);
+  std::vector<uint32_t> first_to_id(n, kAbsent);
+  uint32_t count = 0;
+  for (uint32_t v = 0; v < n; ++v) {
+    uint32_t first = table.findOrInsert(v, hashWords(&bits[v * 3], 3), [&](uint32_t other) {
+      return std::memcmp(&bits[v * 3], &bits[other * 3], 12) == 0;
+    });
+    if (first == v) first_to_id[v] = count++;
+    ids[v] = first_to_id[first];
+  }
+  return count;
+}
+
+// Submesh index per triangle when the submeshes tile the index buffer in order; otherwise
+// everything is group 0 and `valid` is false.
+std::vector<uint32_t> triangleGroups(const core::Mesh& mesh, bool& valid) {
+  const size_t triangles = mesh.indices.size() / 3;
+  std::vector<uint32_t> groups(triangles, 0);
+  valid = !mesh.submeshes.empty();
+  size_t covered = 0;
+  for (const core::Submesh& sub : mesh.submeshes) {
+    if (sub.first_index != covered || sub.index_count % 3 != 0 ||
+        size_t(sub.first_index) + sub.index_count > triangles * 3) {
+      valid = false;
+      break;
+    }
+    covered += sub.index_count;
+  }
+  if (covered != triangles * 3) valid = false;
+  if (!valid) return groups;
+  for (uint32_t s = 0; s < mesh.submeshes.size(); ++s) {
+    const core::Submesh& sub = mesh.submeshes[s];
+    for (uint32_t t = sub.first_index / 3; t < (sub.first_index + sub.index_count) / 3; ++t)
+      groups[t] = s;
+  }
+  return groups;
+}
+
+bool isFinite(Vec3d p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+// A queued directed collapse. The survivor's position is kept so the collapse can be applied
+// without asking the model again: exactly one endpoint (kAtTo / kAtFrom) or a free point in float.
+struct HeapEntry {
+  float cost;
+  float error;
+  uint32_t from, to;
+  uint32_t stamp_from, stamp_to;
+  float x, y, z;
+  uint8_t placement;
+};
+enum : uint8_t { kAtTo, kAtFrom, kAtPoint };
+
+// Heap order: a max-heap on "worse", so the top is the cheapest; ties by ids, for determinism.
+struct WorseEntry {
+  bool operator()(const HeapEntry& a, const HeapEntry& b) const {
+    if (a.cost != b.cost) return a.cost > b.cost;
+    if (a.from != b.from) return a.from > b.from;
+    return a.to > b.to;
+  }
+};
+
+// One neighbour of the position being examined, with the (first two) triangles on the edge.
+struct Neighbor {
+  uint32_t vertex;
+  uint32_t count;            // live triangles on the edge
+  uint32_t local[2];         // their index in the incident list
+  uint32_t other_corner[2];  // the neighbour's corner in them
+  uint8_t outgoing;          // bit i: triangle i runs self -> neighbour
+};
+
+class Engine {
+ public:
+  Engine(const core::Mesh& base, CostModel& model, const EngineOptions& options)
+      : base_(base), model_(model), options_(options) {}
+
+  SimplifyResult run();
+
+ private:
+  void buildState();
+  void classifyPositions();
+  void gatherNeighbors(uint32_t p);
+  uint8_t edgeFeatures(const Neighbor& nb) const;
+  bool makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool self_is_from,
+                     uint8_t features, CandidateCollapse& out) const;
+  void emitEdgeCandidates(uint32_t p, uint32_t done_round);
+  void flushBatch();
+  void fillQueue();
+  bool tryCollapse(const HeapEntry& entry);
+  bool linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge);
+  bool flipsOrDegenerates(uint32_t moving, uint32_t other, Vec3d position,
+                          std::span<const uint32_t> incident) const;
+  void applyCollapse(CandidateCollapse& candidate, uint8_t placement);
+  void invalidateAround(uint32_t survivor);
+  core::Mesh buildOutput() const;
+  uint32_t nextRound() {
+    if (++round_ == 0) {  // wrapped: clear the marks once
+      std::fill(mark_.begin(), mark_.end(), 0);
+      round_ = 1;
+    }
+    return round_;
+  }
+
+  const core::Mesh& base_;
+  CostModel& model_;
+  EngineOptions options_;
+  EngineState state_;
+  std::vector<uint32_t> stamps_;
+
+  // Scratch (sized once).
+  std::vector<uint32_t> neighbor_slot_;  // per position: index into neighbors_, or kAbsent
+  std::vector<Neighbor> neighbors_;
+  std::vector<uint32_t> incident_;       // live corners of the gathered position
+  std::vector<uint32_t> to_incident_;    // live corners of the survivor (link/flip tests)
+  std::vector<uint32_t> mark_;           // per position: round marks
+  uint32_t round_ = 0;
+  std::vector<uint32_t> union_find_;
+  std::vector<uint32_t> affected_;
+  std::vector<CandidateCollapse> batch_;
+  std::vector<float> placed_;
+  std::vector<HeapEntry> heap_;
+
+  SimplifyStats stats_;
+  size_t pass_rejections_ = 0;
+  double max_error_ = 0;
+  ProgressiveRecord record_;
+};
+
+void Engine::buildState() {
+  EngineState& s = state_;
+  const core::Mesh& m = base_;
+  const size_t wedges = m.vertexCount();
+  const size_t triangles = m.triangleCount();
+
+  s.layout = attributeLayout(m);
+  s.attributes = packAttributes(m, s.layout);
+  const uint32_t position_count = positionIds(m.positions, s.wedge_position);
+
+  core::Bounds bounds;
+  for (core::Vec3 p : m.positions)
+    if (core::isFinite(p)) bounds.extend(p);
+  if (!bounds.empty()) {
+    s.origin = {bounds.min.x, bounds.min.y, bounds.min.z};
+    core::Vec3 size = bounds.size();
+    double diagonal = std::sqrt(double(size.x) * size.x + double(size.y) * size.y +
+                                double(size.z) * size.z);
+    s.scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
+  }
+  const double inverse_scale = 1.0 / s.scale;
+
+  s.positions.assign(position_count, Vec3d{});
+  s.asset_positions.assign(position_count, core::Vec3{});
+  s.first_wedge.assign(position_count, kAbsent);
+  s.wedge_next.assign(wedges, kAbsent);
+  std::vector<uint32_t> last_wedge(position_count, kAbsent);
+  for (uint32_t w = 0; w < wedges; ++w) {
+    uint32_t p = s.wedge_position[w];
+    if (s.first_wedge[p] == kAbsent) {
+      s.first_wedge[p] = w;
+      core::Vec3 a = m.positions[w];
+      s.asset_positions[p] = a;
+      s.positions[p] = {(a.x - s.origin.x) * inverse_scale, (a.y - s.origin.y) * inverse_scale,
+                        (a.z - s.origin.z) * inverse_scale};
+    } else {
+      s.wedge_next[last_wedge[p]] = w;
+    }
+    last_wedge[p] = w;
+    s.wedge_next[w] = s.first_wedge[p];
+  }
+
+  s.corners = m.indices;
+  bool groups_valid = false;
+  s.groups = triangleGroups(m, groups_valid);
+  s.triangle_alive.assign(triangles, 1);
+  s.live_triangles = triangles;
+  s.first_corner.assign(position_count, kAbsent);
+  s.corner_next.assign(triangles * 3, kAbsent);
+  for (size_t c = triangles * 3; c-- > 0;) {
+    uint32_t p = s.wedge_position[s.corners[c]];
+    s.corner_next[c] = s.first_corner[p];
+    s.first_corner[p] = uint32_t(c);
+  }
+  s.position_alive.assign(position_count, 1);
+  s.kinds.assign(position_count, VertexKind::kLocked);
+  s.line_features.assign(position_count, 0);
+
+  stamps_.assign(position_count, 0);
+  neighbor_slot_.assign(position_count, kAbsent);
+  mark_.assign(position_count, 0);
+}
+
+// Walks p's corner list, unlinking corners of dead triangles, and fills incident_ (p's live
+// corners) and neighbors_ (one entry per adjacent position with the edge's triangles).
+void Engine::gatherNeighbors(uint32_t p) {
+  EngineState& s = state_;
+  incident_.clear();
+  neighbors_.clear();
+  uint32_t previous = kAbsent;
+  for (uint32_t c = s.first_corner[p]; c != kAbsent;) {
+    uint32_t next = s.corner_next[c];
+    uint32_t t = c / 3;
+    if (!s.triangle_alive[t]) {  // unlink
+      if (previous == kAbsent)
+        s.first_corner[p] = next;
+      else
+        s.corner_next[previous] = next;
+      c = next;
+      continue;
+    }
+    previous = c;
+    uint32_t local = uint32_t(incident_.size());
+    incident_.push_back(c);
+    uint32_t k = c - t * 3;
+    for (uint32_t step = 1; step <= 2; ++step) {
+      uint32_t other_corner = t * 3 + (k + step) % 3;
+      uint32_t n = s.wedge_position[s.corners[other_corner]];
+      if (n == p) continue;  // degenerate triangle (cannot survive preparation; defensive)
+      uint32_t slot = neighbor_slot_[n];
+      if (slot == kAbsent) {
+        slot = neighbor_slot_[n] = uint32_t(neighbors_.size());
+        neighbors_.push_back(Neighbor{n, 0, {kAbsent, kAbsent}, {kAbsent, kAbsent}, 0});
+      }
+      Neighbor& nb = neighbors_[slot];
+      if (nb.count < 2) {
+        nb.local[nb.count] = local;
+        nb.other_corner[nb.count] = other_corner;
+        if (step == 1) nb.outgoing |= uint8_t(1u << nb.count);
+      }
+      ++nb.count;
+    }
+    c = next;
+  }
+  for (const Neighbor& nb : neighbors_) neighbor_slot_[nb.vertex] = kAbsent;
+}
+
+uint8_t Engine::edgeFeatures(const Neighbor& nb) const {
+  const EngineState& s = state_;
+  if (nb.count == 1) return kFeatureBorder;
+  if (nb.count != 2) return kFeatureNonManifold;
+  // A manifold, consistently oriented edge runs one way in each triangle.
+  if (((nb.outgoing & 1) != 0) == ((nb.outgoing & 2) != 0)) return kFeatureNonManifold;
+  uint32_t c0 = incident_[nb.local[0]], c1 = incident_[nb.local[1]];
+  uint8_t features = 0;
+  if (s.corners[c0] != s.corners[c1] ||
+      s.corners[nb.other_corner[0]] != s.corners[nb.other_corner[1]])
+    features |= kFeatureSeam;
+  if (!options_.allow_material_border_collapse && s.groups[c0 / 3] != s.groups[c1 / 3])
+    features |= kFeatureMaterial;
+  return features;
+}
+
+void Engine::classifyPositions() {
+  EngineState& s = state_;
+  const uint32_t position_count = uint32_t(s.positions.size());
+  for (uint32_t p = 0; p < position_count; ++p) {
+    gatherNeighbors(p);
+    int wedge_count = 0;
+    s.forEachWedge(p, [&](uint32_t) { ++wedge_count; });
+
+    // Fans: triangles around p joined across manifold edges; more than one = non-manifold vertex.
+    const uint32_t d = uint32_t(incident_.size());
+    union_find_.resize(d);
+    for (uint32_t i = 0; i < d; ++i) union_find_[i] = i;
+    auto find = [&](uint32_t i) {
+      while (union_find_[i] != i) i = union_find_[i] = union_find_[union_find_[i]];
+      return i;
+    };
+    bool locked = !isFinite(s.positions[p]) || wedge_count > kMaxWedges || d == 0;
+    int feature_count = 0;
+    uint8_t line = 0;
+    bool line_consistent = true;
+    for (const Neighbor& nb : neighbors_) {
+      uint8_t f = edgeFeatures(nb);
+      if (f & kFeatureNonManifold) locked = true;
+      if (nb.count == 2) union_find_[find(nb.local[0])] = find(nb.local[1]);
+      if (f == 0) continue;
+      if (feature_count == 0) line = f;
+      if (f != line) line_consistent = false;
+      ++feature_count;
+      if ((f & kFeatureBorder) && options_.lock_border) locked = true;
+      if (nb.vertex > p)
+        s.feature_edges.push_back(
+            {p, nb.vertex,
+             {incident_[nb.local[0]] / 3, nb.count > 1 ? incident_[nb.local[1]] / 3 : kAbsent},
+             f});
+    }
+    uint32_t fans = 0;
+    for (uint32_t i = 0; i < d; ++i) fans += find(i) == i;
+    if (fans > 1) locked = true;
+
+    if (locked)
+      s.kinds[p] = VertexKind::kLocked;
+    else if (feature_count == 0 && wedge_count == 1)
+      s.kinds[p] = VertexKind::kFree;
+    else if (feature_count == 2 && line_consistent)
+      s.kinds[p] = VertexKind::kConstrained, s.line_features[p] = line;
+    else
+      s.kinds[p] = VertexKind::kLocked;
+  }
+}
+
+// The directed collapse from -> to over the edge `nb` (gathered around `from` when self_is_from,
+// else around `to`), or false when the rules forbid it.
+bool Engine::makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool self_is_from,
+                           uint8_t features, CandidateCollapse& out) const {
+  const EngineState& s = state_;
+  VertexKind from_kind = s.kinds[from];
+  if (from_kind == VertexKind::kLocked || (features & kFeatureNonManifold)) return false;
+  if (from_kind == VertexKind::kFree ? features != 0 : features != s.line_features[from])
+    return false;
+
+  // Wedge pairs (wedge of `from`, wedge of `to`) in the edge's triangles.
+  uint32_t pair_from[2], pair_to[2];
+  const uint32_t pairs = std::min<uint32_t>(nb.count, 2);
+  for (uint32_t i = 0; i < pairs; ++i) {
+    uint32_t self_wedge = s.corners[incident_[nb.local[i]]];
+    uint32_t other_wedge = s.corners[nb.other_corner[i]];
+    pair_from[i] = self_is_from ? self_wedge : other_wedge;
+    pair_to[i] = self_is_from ? other_wedge : self_wedge;
+  }
+  if (pairs == 2 && pair_from[0] == pair_from[1] && pair_to[0] != pair_to[1]) return false;
+
+  out.from = from;
+  out.to = to;
+  out.wedge_count = 0;
+  bool ok = true;
+  s.forEachWedge(from, [&](uint32_t w) {
+    uint32_t target = kAbsent;
+    for (uint32_t i = 0; i < pairs; ++i)
+      if (pair_from[i] == w) target = pair_to[i];
+    if (target == kAbsent || out.wedge_count >= kMaxWedges) {
+      ok = false;
+      return;
+    }
+    out.from_wedges[out.wedge_count] = w;
+    out.to_wedges[out.wedge_count] = target;
+    ++out.wedge_count;
+  });
+  if (!ok) return false;
+
+  VertexKind to_kind = s.kinds[to];
+  bool endpoint_only = options_.endpoint_only || to_kind == VertexKind::kLocked ||
+                       (to_kind == VertexKind::kFree && features != 0) ||
+                       (to_kind == VertexKind::kConstrained && features != s.line_features[to]);
+  if (!endpoint_only) {  // every wedge of the survivor must take part in the merge
+    s.forEachWedge(to, [&](uint32_t w) {
+      bool merged = false;
+      for (uint32_t i = 0; i < out.wedge_count; ++i) merged |= out.to_wedges[i] == w;
+      if (!merged) endpoint_only = true;
+    });
+  }
+  out.endpoint_only = endpoint_only;
+  out.position = s.positions[to];
+  out.cost = out.error = 0;
+  return true;
+}
+
+// Candidates for every edge of p whose other end is not marked `done_round` (assumes
+// gatherNeighbors(p) was just called).
+void Engine::emitEdgeCandidates(uint32_t p, uint32_t done_round) {
+  CandidateCollapse forward, backward;
+  for (const Neighbor& nb : neighbors_) {
+    if (mark_[nb.vertex] == done_round || !state_.position_alive[nb.vertex]) continue;
+    uint8_t features = edgeFeatures(nb);
+    bool has_forward = makeCandidate(p, nb.vertex, nb, true, features, forward);
+    bool has_backward = makeCandidate(nb.vertex, p, nb, false, features, backward);
+    // With free placement both directions are the same collapse: price it once.
+    if (has_forward && has_backward && !forward.endpoint_only && !backward.endpoint_only)
+      has_backward = false;
+    if (has_forward) batch_.push_back(forward);
+    if (has_backward) batch_.push_back(backward);
+  }
+}
+
+void Engine::flushBatch() {
+  if (batch_.empty()) return;
+  model_.evaluate(state_, batch_);
+  for (CandidateCollapse& c : batch_) {
+    HeapEntry e;
+    e.cost = std::isfinite(c.cost) ? float(c.cost) : std::numeric_limits<float>::max();
+    e.error = std::isfinite(c.error) ? float(c.error) : std::numeric_limits<float>::max();
+    e.from = c.from;
+    e.to = c.to;
+    e.stamp_from = stamps_[c.from];
+    e.stamp_to = stamps_[c.to];
+    const Vec3d& p = c.position;
+    const Vec3d& at_to = state_.positions[c.to];
+    const Vec3d& at_from = state_.positions[c.from];
+    if (c.endpoint_only || (p.x == at_to.x && p.y == at_to.y && p.z == at_to.z))
+      e.placement = kAtTo;
+    else if (p.x == at_from.x && p.y == at_from.y && p.z == at_from.z)
+      e.placement = kAtFrom;
+    else
+      e.placement = isFinite(p) ? kAtPoint : kAtTo;
+    e.x = float(p.x), e.y = float(p.y), e.z = float(p.z);
+    heap_.push_back(e);
+    std::push_heap(heap_.begin(), heap_.end(), WorseEntry{});
+  }
+  batch_.clear();
+}
+
+void Engine::fillQueue() {
+  heap_.clear();
+  uint32_t done = nextRound();
+  const uint32_t position_count = uint32_t(state_.positions.size());
+  for (uint32_t p = 0; p < position_count; ++p) {
+    if (!state_.position_alive[p]) continue;
+    gatherNeighbors(p);
+    mark_[p] = done;
+    emitEdgeCandidates(p, done);
+    if (batch_.size() >= options_.batch_size) flushBatch();
+  }
+  flushBatch();
+}
+
+// Link condition: the common neighbours of the endpoints are exactly the edge's opposite
+// vertices (one on a border edge, two inside); and no duplicate triangle may appear (a
+// tetrahedron-like configuration where (from, o1, o2) and (to, o1, o2) both exist). Fills
+// to_incident_ with the survivor's live corners.
+bool Engine::linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge) {
+  EngineState& s = state_;
+  uint32_t opposite[2] = {kAbsent, kAbsent};
+  for (uint32_t i = 0; i < edge.count; ++i) {
+    uint32_t c = incident_[edge.local[i]];
+    uint32_t t = c / 3, k = c - t * 3;
+    uint32_t other_k = edge.other_corner[i] - t * 3;
+    opposite[i] = s.cornerPosition(t * 3 + (3 - k - other_k));
+  }
+  if (edge.count == 2 && opposite[0] == opposite[1]) return false;
+
+  uint32_t near_round = nextRound();
+  for (const Neighbor& nb : neighbors_) mark_[nb.vertex] = near_round;
+  // Does `from` have a triangle (from, o1, o2)? Then `to` must not have (to, o1, o2).
+  bool from_has_opposite_pair = false;
+  if (edge.count == 2) {
+    for (uint32_t c : incident_) {
+      uint32_t t = c / 3;
+      uint32_t a = s.cornerPosition(t * 3), b = s.cornerPosition(t * 3 + 1),
+               d = s.cornerPosition(t * 3 + 2);
+      bool has0 = a == opposite[0] || b == opposite[0] || d == opposite[0];
+      bool has1 = a == opposite[1] || b == opposite[1] || d == opposite[1];
+      from_has_opposite_pair |= has0 && has1;
+    }
+  }
+  uint32_t counted_round = nextRound();
+  uint32_t common = 0;
+  bool duplicate = false;
+  to_incident_.clear();
+  uint32_t previous = kAbsent;
+  for (uint32_t c = s.first_corner[to]; c != kAbsent;) {
+    uint32_t next = s.corner_next[c];
+    uint32_t t = c / 3;
+    if (!s.triangle_alive[t]) {
+      if (previous == kAbsent)
+        s.first_corner[to] = next;
+      else
+        s.corner_next[previous] = next;
+      c = next;
+      continue;
+    }
+    previous = c;
+    to_incident_.push_back(c);
+    uint32_t k = c - t * 3;
+    uint32_t x = s.cornerPosition(t * 3 + (k + 1) % 3), y = s.cornerPosition(t * 3 + (k + 2) % 3);
+    for (uint32_t n : {x, y}) {
+      if (n == from) continue;
+      if (mark_[n] == near_round) {
+        mark_[n] = counted_round;
+        ++common;
+      }
+    }
+    if (from_has_opposite_pair && ((x == opposite[0] && y == opposite[1]) ||
+                                   (x == opposite[1] && y == opposite[0])))
+      duplicate = true;
+    c = next;
+  }
+  return common == edge.count && !duplicate;
+}
+
+// Whether moving position `moving` to `position` flips (turns by 90° or more) or flattens any of
+// its triangles that do not contain `other` (those die in the collapse).
+bool Engine::flipsOrDegenerates(uint32_t moving, uint32_t other, Vec3d position,
+                                std::span<const uint32_t> incident) const {
+  const EngineState& s = state_;
+  for (uint32_t c : incident) {
+    uint32_t t = c / 3, k = c - t * 3;
+    uint32_t b = s.cornerPosition(t * 3 + (k + 1) % 3);
+    uint32_t d = s.cornerPosition(t * 3 + (k + 2) % 3);
+    if (b == other || d == other) continue;
+    Vec3d pa = s.positions[moving], pb = s.positions[b], pd = s.positions[d];
+    Vec3d e1 = pb - pa, e2 = pd - pa;
+    Vec3d n_old = cross(e1, e2);
+    Vec3d n_new = cross(pb - position, pd - position);
+    double old_sq = dot(n_old, n_old), new_sq = dot(n_new, n_new);
+    if (old_sq <= 0) continue;  // already degenerate: it has no orientation to lose
+    // Zero area (relative to the triangle's own size) counts as degenerate.
+    double edge_scale = std::max(dot(pb - position, pb - position), dot(pd - position, pd - position));
+    if (new_sq <= 1e-24 * edge_scale * edge_scale || !(new_sq > 0)) return true;
+    if (dot(n_old, n_new) <= 0) return true;
+  }
+  return false;
+}
+
+void Engine::applyCollapse(CandidateCollapse& cand, uint8_t placement) {
+  EngineState& s = state_;
+  const uint32_t from = cand.from, to = cand.to;
+  const uint32_t stride = s.layout.stride;
+
+  // Survivor attributes, asked before the state changes.
+  placed_.resize(size_t(cand.wedge_count) * stride);
+  for (uint32_t i = 0; i < cand.wedge_count; ++i)
+    std::copy_n(s.wedgeAttributes(cand.to_wedges[i]), stride, placed_.data() + i * stride);
+  if (stride > 0) model_.placeAttributes(s, cand, placed_);
+
+  // Rewire from's triangles onto `to`; the ones on the edge die.
+  size_t removed = 0;
+  uint32_t head = kAbsent, tail = kAbsent;
+  for (uint32_t c = s.first_corner[from]; c != kAbsent;) {
+    uint32_t next = s.corner_next[c];
+    uint32_t t = c / 3;
+    if (s.triangle_alive[t]) {
+      uint32_t k = c - t * 3;
+      uint32_t b = s.cornerPosition(t * 3 + (k + 1) % 3);
+      uint32_t d = s.cornerPosition(t * 3 + (k + 2) % 3);
+      if (b == to || d == to) {
+        s.triangle_alive[t] = 0;
+        --s.live_triangles;
+        ++removed;
+      } else {
+        uint32_t w = s.corners[c];
+        for (uint32_t i = 0; i < cand.wedge_count; ++i)
+          if (cand.from_wedges[i] == w) {
+            s.corners[c] = cand.to_wedges[i];
+            break;
+          }
+        if (head == kAbsent) head = c;
+        if (tail != kAbsent) s.corner_next[tail] = c;
+        tail = c;
+      }
+    }
+    c = next;
+  }
+  if (tail != kAbsent) {
+    s.corner_next[tail] = s.first_corner[to];
+    s.first_corner[to] = head;
+  }
+  s.first_corner[from] = kAbsent;
+  s.position_alive[from] = 0;
+
+  // Survivor position.
+  if (placement == kAtFrom) {
+    s.positions[to] = s.positions[from];
+    s.asset_positions[to] = s.asset_positions[from];
+  } else if (placement == kAtPoint) {
+    s.positions[to] = cand.position;
+    Vec3d a = s.origin + cand.position * s.scale;
+    s.asset_positions[to] = {float(a.x), float(a.y), float(a.z)};
+  }
+  cand.position = s.positions[to];
+  for (uint32_t i = 0; i < cand.wedge_count; ++i)
+    std::copy_n(placed_.data() + i * stride, stride,
+                s.attributes.data() + size_t(cand.to_wedges[i]) * stride);
+
+  max_error_ = std::max(max_error_, cand.error);
+  ++stats_.collapses;
+  if (options_.record) {
+    for (uint32_t i = 0; i < cand.wedge_count; ++i) {
+      CollapseStep step;
+      step.removed = cand.from_wedges[i];
+      step.kept = cand.to_wedges[i];
+      step.kept_value = uint32_t(record_.values.positions.size());
+      step.triangles_after = uint32_t(s.live_triangles);
+      step.error = float(cand.error);
+      step.cumulative_error = float(max_error_);
+      step.continues = i + 1 < cand.wedge_count;
+      record_.steps.push_back(step);
+      appendVertex(record_.values, s.layout, s.asset_positions[to], placed_.data() + i * stride);
+    }
+  }
+  model_.onCollapse(s, AppliedCollapse{cand, removed});
+}
+
+// Re-prices every edge whose cost may have changed: the survivor's (ring 1), and its neighbours'
+// (ring 2), in one batch.
+void Engine::invalidateAround(uint32_t survivor) {
+  affected_.clear();
+  affected_.push_back(survivor);
+  if (options_.invalidation_ring >= 2) {
+    gatherNeighbors(survivor);
+    for (const Neighbor& nb : neighbors_) affected_.push_back(nb.vertex);
+  }
+  for (uint32_t v : affected_) ++stamps_[v];
+  uint32_t done = nextRound();
+  for (uint32_t v : affected_) {
+    gatherNeighbors(v);
+    mark_[v] = done;
+    emitEdgeCandidates(v, done);
+  }
+  flushBatch();
+}
+
+bool Engine::tryCollapse(const HeapEntry& entry) {
+  const EngineState& s = state_;
+  gatherNeighbors(entry.from);
+  const Neighbor* edge = nullptr;
+  for (const Neighbor& nb : neighbors_)
+    if (nb.vertex == entry.to) edge = &nb;
+  if (!edge) return false;  // no longer adjacent (cannot happen with valid stamps; defensive)
+
+  CandidateCollapse cand;
+  if (!makeCandidate(entry.from, entry.to, *edge, true, edgeFeatures(*edge), cand)) {
+    ++stats_.rejected_border;
+    ++pass_rejections_;
+    return false;
+  }
+  uint8_t placement = entry.placement;
+  if (cand.endpoint_only && placement != kAtTo) {
+    // The survivor became pinned since this was priced: price it again where it must go.
+    batch_.push_back(cand);
+    flushBatch();
+    return false;
+  }
+  cand.cost = entry.cost;
+  cand.error = entry.error;
+  if (placement == kAtTo)
+    cand.position = s.positions[entry.to];
+  else if (placement == kAtFrom)
+    cand.position = s.positions[entry.from];
+  else
+    cand.position = {entry.x, entry.y, entry.z};
+
+  if (!linkConditionHolds(entry.from, entry.to, *edge)) {
+    ++stats_.rejected_topology;
+    ++pass_rejections_;
+    return false;
+  }
+  if (flipsOrDegenerates(entry.from, entry.to, cand.position, incident_) ||
+      (placement != kAtTo &&
+       flipsOrDegenerates(entry.to, entry.from, cand.position, to_incident_))) {
+    ++stats_.rejected_flip;
+    ++pass_rejections_;
+    return false;
+  }
+  applyCollapse(cand, placement);
+  invalidateAround(entry.to);
+  return true;
+}
+
+core::Mesh Engine::buildOutput() const {
+  const EngineState& s = state_;
+  core::Mesh out;
+  const size_t wedges = base_.vertexCount();
+  std::vector<uint32_t> remap(wedges, kAbsent);
+  for (size_t t = 0; t < s.triangle_alive.size(); ++t)
+    if (s.triangle_alive[t])
+      for (int k = 0; k < 3; ++k) remap[s.corners[t * 3 + k]] = 0;
+  uint32_t next = 0;
+  for (uint32_t w = 0; w < wedges; ++w) {
+    if (remap[w] == kAbsent) continue;
+    remap[w] = next++;
+    appendVertex(out, s.layout, s.asset_positions[s.wedge_position[w]], s.wedgeAttributes(w));
+  }
+  out.indices.reserve(s.live_triangles * 3);
+  for (size_t t = 0; t < s.triangle_alive.size(); ++t)
+    if (s.triangle_alive[t])
+      for (int k = 0; k < 3; ++k) out.indices.push_back(remap[s.corners[t * 3 + k]]);
+  out.submeshes = base_.submeshes;
+  for (core::Submesh& sub : out.submeshes) {
+    uint32_t first_triangle = sub.first_index / 3;
+    uint32_t live = 0;
+    for (uint32_t t = first_triangle; t < first_triangle + sub.index_count / 3; ++t)
+      live += s.triangle_alive[t];
+    sub.index_count = live * 3;
+  }
+  uint32_t first = 0;
+  for (core::Submesh& sub : out.submeshes) {
+    sub.first_index = first;
+    first += sub.index_count;
+  }
+  return out;
+}
+
+SimplifyResult Engine::run() {
+  auto start = std::chrono::steady_clock::now();
+  buildState();
+  classifyPositions();
+  model_.begin(state_);
+  if (options_.record) {
+    record_.base = base_;
+    record_.values = base_;
+    record_.values.indices.clear();
+    record_.values.submeshes.clear();
+  }
+
+  auto reached = [&] { return state_.live_triangles <= options_.target_triangles; };
+  for (int pass = 0; pass < std::max(1, options_.max_passes) && !reached(); ++pass) {
+    pass_rejections_ = 0;
+    fillQueue();
+    while (!heap_.empty() && !reached()) {
+      std::pop_heap(heap_.begin(), heap_.end(), WorseEntry{});
+      HeapEntry entry = heap_.back();
+      heap_.pop_back();
+      if (!state_.position_alive[entry.from] || !state_.position_alive[entry.to] ||
+          stamps_[entry.from] != entry.stamp_from || stamps_[entry.to] != entry.stamp_to)
+        continue;
+      if (double(entry.error) > options_.target_error) continue;
+      tryCollapse(entry);
+    }
+    if (pass_rejections_ == 0) break;
+  }
+
+  SimplifyResult result;
+  result.mesh = buildOutput();
+  result.error = max_error_;
+  result.stats = stats_;
+  if (options_.record) result.record = std::move(record_);
+  result.stats.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace
+
+core::Mesh prepareMesh(const core::Mesh& mesh) {
+  const size_t n = mesh.vertexCount();
+  const AttributeLayout layout = attributeLayout(mesh);
+  const std::vector<float> packed = packAttributes(mesh, layout);
+  std::vector<uint32_t> position_id;
+  positionIds(mesh.positions, position_id);
+
+  // Wedges: equal position id and bitwise-equal attributes.
+  std::vector<uint32_t> representative(n);
+  {
+    IndexTable table(n);
+    const uint32_t stride = layout.stride;
+    for (uint32_t v = 0; v < n; ++v) {
+      const float* a = packed.data() + size_t(v) * stride;
+      uint64_t h = hashWords(reinterpret_cast<const uint32_t*>(a), stride, position_id[v]);
+      representative[v] = table.findOrInsert(v, h, [&](uint32_t other) {
+        return position_id[other] == position_id[v] &&
+               std::memcmp(a, packed.data() + size_t(other) * stride, stride * 4) == 0;
+      });
+    }
+  }
+
+  // Triangles: drop out-of-range, repeated-position and duplicate ones, keep order.
+  bool groups_valid = false;
+  std::vector<uint32_t> groups = triangleGroups(mesh, groups_valid);
+  const size_t triangles = mesh.indices.size() / 3;
+  std::vector<uint32_t> kept_indices;
+  std::vector<uint32_t> kept_keys;  // rotated position triples of kept triangles
+  std::vector<uint32_t> kept_groups;
+  kept_indices.reserve(triangles * 3);
+  IndexTable triangle_table(triangles);
+  for (size_t t = 0; t < triangles; ++t) {
+    uint32_t v[3], p[3];
+    bool in_range = true;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t index = mesh.indices[t * 3 + k];
+      in_range &= index < n;
+      v[k] = in_range ? representative[index] : 0;
+      p[k] = in_range ? position_id[v[k]] : 0;
+    }
+    if (!in_range || p[0] == p[1] || p[1] == p[2] || p[0] == p[2]) continue;
+    int first = p[0] < p[1] ? (p[0] < p[2] ? 0 : 2) : (p[1] < p[2] ? 1 : 2);
+    uint32_t key[3] = {p[first], p[(first + 1) % 3], p[(first + 2) % 3]};
+    uint32_t index = uint32_t(kept_groups.size());
+    kept_keys.insert(kept_keys.end(), key, key + 3);
+    uint32_t found = triangle_table.findOrInsert(index, hashWords(key, 3), [&](uint32_t other) {
+      return std::memcmp(key, &kept_keys[size_t(other) * 3], 12) == 0;
+    });
+    if (found != index) {  // duplicate of an earlier triangle
+      kept_keys.resize(kept_keys.size() - 3);
+      continue;
+    }
+    kept_indices.insert(kept_indices.end(), v, v + 3);
+    kept_groups.push_back(groups[t]);
+  }
+
+  // Referenced vertices, in their original order.
+  std::vector<uint32_t> remap(n, kAbsent);
+  for (uint32_t v : kept_indices) remap[v] = 0;
+  core::Mesh out;
+  uint32_t next = 0;
+  for (uint32_t v = 0; v < n; ++v) {
+    if (remap[v] == kAbsent) continue;
+    remap[v] = next++;
+    appendVertex(out, layout, mesh.positions[v], packed.data() + size_t(v) * layout.stride);
+  }
+  out.indices.resize(kept_indices.size());
+  for (size_t i = 0; i < kept_indices.size(); ++i) out.indices[i] = remap[kept_indices[i]];
+
+  if (groups_valid) {
+    out.submeshes = mesh.submeshes;
+    std::vector<uint32_t> counts(mesh.submeshes.size(), 0);
+    for (uint32_t g : kept_groups) ++counts[g];
+    uint32_t first = 0;
+    for (size_t s = 0; s < out.submeshes.size(); ++s) {
+      out.submeshes[s].first_index = first;
+      out.submeshes[s].index_count = counts[s] * 3;
+      first += counts[s] * 3;
+    }
+  } else {  // no usable submesh list: one submesh over everything keeps the output valid
+    uint32_t material = mesh.submeshes.empty() ? 0 : mesh.submeshes[0].material;
+    out.submeshes = {{0, uint32_t(out.indices.size()), material}};
+  }
+  return out;
+}
+
+SimplifyResult runCollapseEngine(const core::Mesh& prepared, CostModel& model,
+                                 const EngineOptions& options) {
+  Engine engine(prepared, model, options);
+  return engine.run();
+}
+
+}  // namespace duolod::mesh

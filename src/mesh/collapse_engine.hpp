@@ -1,0 +1,198 @@
+// The edge-collapse engine shared by every collapse cost (quadric now, image-driven later): the
+// greedy loop of Hoppe 1996 / Garland & Heckbert 1997 with the topology and attribute rules, and a
+// narrow CostModel interface that only prices candidates and places the survivor.
+//
+// Vocabulary. A *position* is a point of the surface; a *wedge* is a mesh vertex (Hoppe 1998,
+// "Efficient implementation of progressive meshes"): several wedges share a position where an
+// attribute is discontinuous (UV seams, hard normals, colour borders). Collapses act on positions;
+// every wedge of the removed position merges into the wedge of the survivor on the same side of
+// the seam, so discontinuities survive.
+//
+// Rules (checked by the engine, never by the model):
+//   - the link condition (Dey, Edelsbrunner et al. 1999, "Topology preserving edge contraction"):
+//     the two endpoints' common neighbours are exactly the edge's opposite vertices, plus the
+//     tetrahedron case (no duplicate triangle may appear);
+//   - feature lines: border edges (one triangle), attribute seams (the two triangles use different
+//     wedges at an endpoint) and material borders (different submeshes, unless allowed). A
+//     position on no feature line is *free*; one on exactly two feature edges of the same kind is
+//     *constrained* and only slides along them; anything else (line ends, junctions, non-manifold
+//     edges or fans, more than kMaxWedges wedges, non-finite positions) is *locked*;
+//   - no triangle normal may turn by 90° or more, or collapse to zero area;
+//   - the survivor may move away from its own position only when it is free, or constrained on
+//     the same line, and every one of its wedges takes part in the merge; otherwise the model is
+//     told `endpoint_only`.
+// Lazy invalidation: each position has a stamp bumped when its quadric/neighbourhood changes; a
+// heap entry remembers both endpoints' stamps and is skipped when either changed.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "duolod/mesh.hpp"
+#include "mesh/attributes.hpp"
+
+namespace duolod::mesh {
+
+struct Vec3d {
+  double x = 0, y = 0, z = 0;
+};
+inline Vec3d operator+(Vec3d a, Vec3d b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline Vec3d operator-(Vec3d a, Vec3d b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3d operator*(Vec3d a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+inline double dot(Vec3d a, Vec3d b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3d cross(Vec3d a, Vec3d b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+enum class VertexKind : uint8_t { kFree, kConstrained, kLocked };
+
+// Feature bits of an edge.
+enum : uint8_t {
+  kFeatureBorder = 1,
+  kFeatureSeam = 2,
+  kFeatureMaterial = 4,
+  kFeatureNonManifold = 8,  // 3+ triangles, or two triangles with the same orientation
+};
+
+// Positions with more wedges than this are locked (they are junctions of several seams anyway).
+inline constexpr int kMaxWedges = 4;
+
+// A feature edge of the input, for models that add boundary constraints (penalty planes).
+struct FeatureEdge {
+  uint32_t a = 0, b = 0;                  // positions
+  uint32_t triangles[2] = {kAbsent, kAbsent};  // the edge's triangles (second absent on borders)
+  uint8_t features = 0;
+};
+
+// What the engine knows, read-only for models. Positions are normalized so that the bounding box
+// of the input has diagonal 1 (normalized = (asset - origin) / scale): everything the engine and
+// the quadric model compare is then independent of the asset's units.
+struct EngineState {
+  Vec3d origin;
+  double scale = 1;  // asset units per normalized unit (the bounding-box diagonal)
+
+  // Positions.
+  std::vector<Vec3d> positions;                 // current, normalized
+  std::vector<core::Vec3> asset_positions;      // current, asset units (exact when unmoved)
+  std::vector<VertexKind> kinds;
+  std::vector<uint8_t> line_features;           // feature bits of a constrained position's line
+  std::vector<uint8_t> position_alive;
+  std::vector<uint32_t> first_wedge;            // one wedge of the position (ring start)
+  std::vector<uint32_t> first_corner;           // head of the position's corner list
+
+  // Wedges (the mesh's vertices).
+  std::vector<uint32_t> wedge_position;
+  std::vector<uint32_t> wedge_next;             // ring of the wedges sharing a position
+  AttributeLayout layout;
+  std::vector<float> attributes;                // current, layout.stride floats per wedge
+
+  // Triangles: corner c = 3 * triangle + k holds a wedge.
+  std::vector<uint32_t> corners;
+  std::vector<uint32_t> corner_next;            // next corner of the same position, or kAbsent
+  std::vector<uint32_t> groups;                 // submesh index per triangle
+  std::vector<uint8_t> triangle_alive;
+  size_t live_triangles = 0;
+
+  std::vector<FeatureEdge> feature_edges;       // of the input, found at start
+
+  uint32_t cornerPosition(uint32_t corner) const { return wedge_position[corners[corner]]; }
+  const float* wedgeAttributes(uint32_t wedge) const {
+    return attributes.data() + size_t(wedge) * layout.stride;
+  }
+  // Calls f(corner) for each live triangle corner at position p.
+  template <class F>
+  void forEachCorner(uint32_t p, F&& f) const {
+    for (uint32_t c = first_corner[p]; c != kAbsent; c = corner_next[c])
+      if (triangle_alive[c / 3]) f(c);
+  }
+  // Calls f(wedge) for each wedge of position p.
+  template <class F>
+  void forEachWedge(uint32_t p, F&& f) const {
+    uint32_t first = first_wedge[p];
+    if (first == kAbsent) return;
+    uint32_t w = first;
+    do {
+      f(w);
+      w = wedge_next[w];
+    } while (w != first);
+  }
+};
+
+// One direction of an edge collapse: position `from` disappears into `to`.
+struct CandidateCollapse {
+  uint32_t from = 0, to = 0;
+  // from_wedges[i] merges into to_wedges[i] (every wedge of `from`; targets may repeat where a
+  // seam ends at `to`).
+  uint8_t wedge_count = 0;
+  std::array<uint32_t, kMaxWedges> from_wedges{};
+  std::array<uint32_t, kMaxWedges> to_wedges{};
+  // Set by the engine: the survivor must stay at positions[to] (Placement::kEndpoint, or `to` is
+  // locked / on another feature line / has wedges outside the merge).
+  bool endpoint_only = true;
+  // Filled by the model.
+  double cost = 0;   // ordering key, smaller collapses first
+  double error = 0;  // reported error, in SimplifyOptions::target_error units
+  Vec3d position;    // survivor position (normalized); positions[to] when endpoint_only
+};
+
+struct AppliedCollapse {
+  CandidateCollapse candidate;  // as applied (position final)
+  size_t removed_triangles = 0;
+};
+
+// Prices collapses. The engine calls evaluate() with every candidate invalidated by the last
+// collapse in one batch (and the initial fill in large batches), so an expensive model can batch
+// its work (one draw/readback per batch for the image-driven cost).
+class CostModel {
+ public:
+  virtual ~CostModel() = default;
+  // Once, after the engine has built its state and before the first evaluate().
+  virtual void begin(const EngineState& state) { (void)state; }
+  // Fills cost, error and position of every candidate (both directions of an edge come as two
+  // candidates when both are legal).
+  virtual void evaluate(const EngineState& state, std::span<CandidateCollapse> batch) = 0;
+  // Attribute values of the survivor's wedges, before the collapse is applied: `values` holds
+  // layout.stride floats per merge i (for chosen.to_wedges[i]), prefilled with that wedge's
+  // current values (the endpoint's attributes). Keep them for endpoint placement.
+  virtual void placeAttributes(const EngineState& state, const CandidateCollapse& chosen,
+                               std::span<float> values) {
+    (void)state, (void)chosen, (void)values;
+  }
+  // After the collapse is applied (state already updated), for incremental model data.
+  virtual void onCollapse(const EngineState& state, const AppliedCollapse& applied) {
+    (void)state, (void)applied;
+  }
+};
+
+struct EngineOptions {
+  size_t target_triangles = 0;                                     // 0 = none
+  double target_error = std::numeric_limits<double>::infinity();  // skip collapses above it
+  bool endpoint_only = false;                                      // Placement::kEndpoint
+  bool lock_border = false;
+  bool allow_material_border_collapse = false;
+  bool record = true;
+  // Which edges a collapse invalidates: 1 = the survivor's edges (costs that depend on the two
+  // endpoints only, like quadrics); 2 = also the edges of the survivor's neighbours (costs that
+  // look at the surrounding surface, like rendered images).
+  int invalidation_ring = 1;
+  size_t batch_size = 4096;  // candidates per evaluate() call during the initial fill
+  // Candidates rejected by the link/flip tests are not retried until their neighbourhood changes;
+  // when the queue runs dry short of the target, the engine refills it from all edges, at most
+  // this many times.
+  int max_passes = 4;
+};
+
+// Welds wedges (equal position and attributes), drops unreferenced vertices, triangles with an
+// out-of-range index, repeated position or duplicate position triple (same orientation). Vertex
+// and triangle order are kept, so a clean mesh comes back unchanged. Submeshes that do not tile
+// the index buffer (or none) become one submesh over everything.
+core::Mesh prepareMesh(const core::Mesh& mesh);
+
+// Simplifies a mesh that prepareMesh has already cleaned (the record's base is a copy of it).
+SimplifyResult runCollapseEngine(const core::Mesh& prepared, CostModel& model,
+                                 const EngineOptions& options);
+
+}  // namespace duolod::mesh

@@ -1,0 +1,362 @@
+// Quadric collapse cost. Based on:
+//   Garland & Heckbert, "Surface simplification using quadric error metrics", SIGGRAPH 1997
+//     (plane quadrics, §5; area weighting and boundary-preserving planes, Garland's thesis §4.5);
+//   Hoppe, "New quadric metric for simplifying meshes with appearance attributes", IEEE
+//     Visualization 1999 (attribute quadrics, §4; wedges, §5);
+//   Lindstrom, "Out-of-core simplification of large polygonal models", SIGGRAPH 2000 (solving the
+//     placement by a truncated eigen-decomposition when A is ill-conditioned, §3.2).
+// All quantities are in the engine's normalized units (bounding-box diagonal 1), so the same mesh
+// at any scale simplifies the same way; errors are converted back to asset units.
+#include "mesh/quadric.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace duolod::mesh {
+namespace {
+
+// Weight of the planes that hold feature lines (open borders, seams, material borders) in place,
+// relative to the area weight of a face plane of the same size: strong enough that a border
+// vertex sliding off its line costs more than flattening a bump of the same extent.
+constexpr double kFeatureWeight = 4.0;
+
+// Attribute weights after normalization (normals are unit vectors, UVs are divided by the UV
+// bounding-box diagonal, colours are in [0, 1]). A normal deviation of 1 (60°) then weighs like a
+// deviation of kNormalWeight diagonals. Geometry leads; attributes break ties and keep seams and
+// shading sane. Multiplied by SimplifyOptions::attribute_weight.
+constexpr double kNormalWeight = 0.02;
+constexpr double kUvWeight = 0.05;
+constexpr double kColorWeight = 0.05;
+
+// Placement: A counts as well conditioned when det(A) > kDeterminantRatio * trace(A)³, which for
+// a 3x3 positive semi-definite matrix bounds its condition number by about 1 / (8 * ratio) = 1e4.
+constexpr double kDeterminantRatio = 1.25e-5;
+// Eigenvalues below this fraction of the largest are treated as zero (Lindstrom 2000 uses 1e-3).
+constexpr double kEigenCutoff = 1e-3;
+// A "well-conditioned" minimizer further than this many edge lengths from the edge's midpoint is
+// distrusted (nearly parallel planes put it far away) and the fallback decides.
+constexpr double kMaxMoveEdges = 3.0;
+
+Vec3d normalized(Vec3d v) {
+  double len = std::sqrt(dot(v, v));
+  return len > 0 ? v * (1.0 / len) : Vec3d{0, 0, 0};
+}
+
+}  // namespace
+
+Quadric planeQuadric(Vec3d n, double d, double weight, double area) {
+  Quadric q;
+  q.a00 = weight * n.x * n.x, q.a01 = weight * n.x * n.y, q.a02 = weight * n.x * n.z;
+  q.a11 = weight * n.y * n.y, q.a12 = weight * n.y * n.z, q.a22 = weight * n.z * n.z;
+  q.b0 = weight * d * n.x, q.b1 = weight * d * n.y, q.b2 = weight * d * n.z;
+  q.c = weight * d * d;
+  q.weight = area;
+  return q;
+}
+
+void addQuadric(Quadric& q, const Quadric& o) {
+  q.a00 += o.a00, q.a01 += o.a01, q.a02 += o.a02, q.a11 += o.a11, q.a12 += o.a12;
+  q.a22 += o.a22, q.b0 += o.b0, q.b1 += o.b1, q.b2 += o.b2, q.c += o.c, q.weight += o.weight;
+}
+
+double evaluateQuadric(const Quadric& q, Vec3d p) {
+  double ax = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z;
+  double ay = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z;
+  double az = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z;
+  double value = p.x * ax + p.y * ay + p.z * az + 2 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) + q.c;
+  return std::max(value, 0.0);  // rounding can leave a tiny negative
+}
+
+namespace {
+
+// Minimizer of q as an offset from `center`, accepted only within sqrt(max_move_sq) of it.
+// Returns false when A is ill-conditioned or the point is out of reach; `truncated` then holds the
+// truncated pseudo-inverse solution (Lindstrom 2000 §3.2), or `center` if that is out of reach too.
+bool solveAround(const Quadric& q, Vec3d center, double max_move_sq, Vec3d& exact,
+                 Vec3d& truncated) {
+  // Solve A x = r for the offset x: r = -(A center + b).
+  const Vec3d r = {-(q.a00 * center.x + q.a01 * center.y + q.a02 * center.z + q.b0),
+                   -(q.a01 * center.x + q.a11 * center.y + q.a12 * center.z + q.b1),
+                   -(q.a02 * center.x + q.a12 * center.y + q.a22 * center.z + q.b2)};
+  const double trace = q.a00 + q.a11 + q.a22;
+  truncated = center;
+  if (!(trace > 0)) return false;
+  // Cofactors of the symmetric A (A⁻¹ = adj(A) / det).
+  double c00 = q.a11 * q.a22 - q.a12 * q.a12;
+  double c01 = q.a02 * q.a12 - q.a01 * q.a22;
+  double c02 = q.a01 * q.a12 - q.a02 * q.a11;
+  double c11 = q.a00 * q.a22 - q.a02 * q.a02;
+  double c12 = q.a01 * q.a02 - q.a00 * q.a12;
+  double c22 = q.a00 * q.a11 - q.a01 * q.a01;
+  double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
+  if (det > kDeterminantRatio * trace * trace * trace) {
+    double inv = 1.0 / det;
+    Vec3d x = {(c00 * r.x + c01 * r.y + c02 * r.z) * inv,
+               (c01 * r.x + c11 * r.y + c12 * r.z) * inv,
+               (c02 * r.x + c12 * r.y + c22 * r.z) * inv};
+    if (dot(x, x) <= max_move_sq) {
+      exact = center + x;
+      return true;
+    }
+  }
+  // Ill-conditioned (flat or cylindrical neighbourhood): minimize only along A's significant
+  // eigenvectors, staying at `center` along the others.
+  Eigen::Matrix3d m;
+  m << q.a00, q.a01, q.a02, q.a01, q.a11, q.a12, q.a02, q.a12, q.a22;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(m);
+  const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
+  const Eigen::Matrix3d vectors = eigen.eigenvectors();
+  const Eigen::Vector3d rhs(r.x, r.y, r.z);
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i)
+    if (values(i) > kEigenCutoff * values(2))
+      x += vectors.col(i) * (vectors.col(i).dot(rhs) / values(i));
+  Vec3d candidate = center + Vec3d{x(0), x(1), x(2)};
+  if (std::isfinite(candidate.x) && std::isfinite(candidate.y) && std::isfinite(candidate.z) &&
+      x.squaredNorm() <= max_move_sq)
+    truncated = candidate;
+  return false;
+}
+
+}  // namespace
+
+Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b) {
+  const Vec3d mid = (a + b) * 0.5;
+  const double reach_sq = kMaxMoveEdges * kMaxMoveEdges * dot(b - a, b - a);
+  Vec3d exact, best;
+  const double error_a = evaluateQuadric(q, a), error_b = evaluateQuadric(q, b);
+  if (solveAround(q, mid, reach_sq, exact, best)) {
+    // An endpoint that is as good (up to rounding) wins: features such as corners then stay
+    // exactly where they were instead of moving by 1e-17.
+    const double tolerance = 1e-9 * (q.a00 + q.a11 + q.a22) * std::max(dot(b - a, b - a), 1e-30);
+    const double error_exact = evaluateQuadric(q, exact);
+    if (std::min(error_a, error_b) > error_exact + tolerance) return exact;
+    return error_b <= error_a ? b : a;
+  }
+  // Fallback: the best of the truncated solution, the endpoints and the midpoint.
+  double best_error = evaluateQuadric(q, best);
+  if (error_b < best_error) best_error = error_b, best = b;
+  if (error_a < best_error) best_error = error_a, best = a;
+  if (double e = evaluateQuadric(q, mid); e < best_error) best = mid;
+  return best;
+}
+
+Vec3d minimizeQuadricNear(const Quadric& q, Vec3d center, double max_distance) {
+  Vec3d exact, truncated;
+  if (solveAround(q, center, max_distance * max_distance, exact, truncated)) return exact;
+  return truncated;
+}
+
+void QuadricModel::begin(const EngineState& state) {
+  const AttributeLayout& layout = state.layout;
+  const size_t wedge_count = state.wedge_position.size();
+  const double w = options_.attribute_weight;
+
+  // Attribute dimensions that enter the quadric (tangents follow the normal instead).
+  source_offset_.clear();
+  source_scale_.clear();
+  auto uv_scale = [&](uint32_t offset) {  // 1 / diagonal of the UV bounding box
+    float lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (size_t v = 0; v < wedge_count; ++v)
+      for (int k = 0; k < 2; ++k) {
+        float x = state.wedgeAttributes(uint32_t(v))[offset + k];
+        if (!std::isfinite(x)) continue;
+        lo[k] = std::min(lo[k], x), hi[k] = std::max(hi[k], x);
+      }
+    double dx = hi[0] - lo[0], dy = hi[1] - lo[1];
+    double diagonal = std::sqrt(dx * dx + dy * dy);
+    return diagonal > 0 && std::isfinite(diagonal) ? 1.0 / diagonal : 1.0;
+  };
+  auto add_dims = [&](uint32_t offset, uint32_t count, double scale) {
+    if (offset == kAbsent || !(scale > 0)) return;
+    for (uint32_t k = 0; k < count; ++k) {
+      source_offset_.push_back(offset + k);
+      source_scale_.push_back(scale);
+    }
+  };
+  add_dims(layout.normal, 3, w * kNormalWeight);
+  if (layout.uv0 != kAbsent) add_dims(layout.uv0, 2, w * kUvWeight * uv_scale(layout.uv0));
+  if (layout.uv1 != kAbsent) add_dims(layout.uv1, 2, w * kUvWeight * uv_scale(layout.uv1));
+  add_dims(layout.color, 4, w * kColorWeight);
+  dims_ = uint32_t(source_offset_.size());
+  attribute_stride_ = dims_ > 0 ? 11 + 4 * dims_ : 0;
+
+  geometric_.assign(state.positions.size(), Quadric{});
+  attribute_.assign(wedge_count * attribute_stride_, 0.0);
+  scratch_.assign(attribute_stride_, 0.0);
+  std::vector<double> triangle_quadric(attribute_stride_);
+  std::vector<double> values(3 * size_t(dims_));
+
+  const size_t triangles = state.triangle_alive.size();
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!state.triangle_alive[t]) continue;
+    uint32_t wedge[3], position[3];
+    Vec3d p[3];
+    bool finite = true;
+    for (int k = 0; k < 3; ++k) {
+      wedge[k] = state.corners[t * 3 + k];
+      position[k] = state.wedge_position[wedge[k]];
+      p[k] = state.positions[position[k]];
+      finite &= std::isfinite(p[k].x) && std::isfinite(p[k].y) && std::isfinite(p[k].z);
+    }
+    if (!finite) continue;
+    const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0];
+    const Vec3d cross_product = cross(e1, e2);
+    const double double_area = std::sqrt(dot(cross_product, cross_product));
+    if (!(double_area > 0)) continue;
+    const double area = 0.5 * double_area;
+    const Vec3d n = cross_product * (1.0 / double_area);
+    const Quadric plane = planeQuadric(n, -dot(n, p[0]), area, area);  // eq. (2), area-weighted
+    for (int k = 0; k < 3; ++k) addQuadric(geometric_[position[k]], plane);
+
+    if (dims_ == 0) continue;
+    // Hoppe 1999 §4: per attribute j the linear function g_j·p + d_j that interpolates the three
+    // corner values in the triangle's plane; the quadric is area * Σ_j (g_j·p + d_j - s_j)².
+    const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
+    const double gram = g11 * g22 - g12 * g12;
+    const bool solvable = gram > 1e-30 * g11 * g22;
+    std::fill(triangle_quadric.begin(), triangle_quadric.end(), 0.0);
+    double* q = triangle_quadric.data();
+    double* column = q + 11;
+    double* bs = q + 11 + 3 * dims_;
+    q[10] = area;
+    for (uint32_t j = 0; j < dims_; ++j) {
+      double s[3];
+      for (int k = 0; k < 3; ++k) {
+        float raw = state.wedgeAttributes(wedge[k])[source_offset_[j]];
+        s[k] = std::isfinite(raw) ? raw * source_scale_[j] : 0.0;
+      }
+      Vec3d g{0, 0, 0};
+      if (solvable) {
+        double d1 = s[1] - s[0], d2 = s[2] - s[0];
+        double alpha = (g22 * d1 - g12 * d2) / gram, beta = (g11 * d2 - g12 * d1) / gram;
+        g = e1 * alpha + e2 * beta;
+      }
+      double d = solvable ? s[0] - dot(g, p[0]) : (s[0] + s[1] + s[2]) / 3.0;
+      q[0] += area * g.x * g.x, q[1] += area * g.x * g.y, q[2] += area * g.x * g.z;
+      q[3] += area * g.y * g.y, q[4] += area * g.y * g.z, q[5] += area * g.z * g.z;
+      q[6] += area * d * g.x, q[7] += area * d * g.y, q[8] += area * d * g.z;
+      q[9] += area * d * d;
+      column[3 * j] = -area * g.x, column[3 * j + 1] = -area * g.y, column[3 * j + 2] = -area * g.z;
+      bs[j] = -area * d;
+    }
+    for (int k = 0; k < 3; ++k) {
+      double* target = attribute_.data() + size_t(wedge[k]) * attribute_stride_;
+      for (uint32_t i = 0; i < attribute_stride_; ++i) target[i] += q[i];
+    }
+  }
+
+  // Penalty planes through feature edges, perpendicular to the surface (Garland & Heckbert 1997
+  // §6.1): sliding a border vertex inwards or outwards costs, sliding along the line does not.
+  for (const FeatureEdge& edge : state.feature_edges) {
+    Vec3d pa = state.positions[edge.a], pb = state.positions[edge.b];
+    Vec3d e = pb - pa;
+    Vec3d face_normal{0, 0, 0};
+    for (uint32_t t : edge.triangles) {
+      if (t == kAbsent) continue;
+      Vec3d p0 = state.positions[state.cornerPosition(t * 3)];
+      Vec3d p1 = state.positions[state.cornerPosition(t * 3 + 1)];
+      Vec3d p2 = state.positions[state.cornerPosition(t * 3 + 2)];
+      face_normal = face_normal + normalized(cross(p1 - p0, p2 - p0));
+    }
+    Vec3d n = normalized(cross(e, face_normal));
+    if (dot(n, n) == 0 || !std::isfinite(n.x)) continue;
+    Quadric plane = planeQuadric(n, -dot(n, pa), kFeatureWeight * dot(e, e), 0.0);
+    addQuadric(geometric_[edge.a], plane);
+    addQuadric(geometric_[edge.b], plane);
+  }
+}
+
+const double* QuadricModel::mergedAttributeQuadric(const CandidateCollapse& candidate,
+                                                   uint32_t target) {
+  const double* own = attribute_.data() + size_t(target) * attribute_stride_;
+  std::copy_n(own, attribute_stride_, scratch_.data());
+  for (uint32_t i = 0; i < candidate.wedge_count; ++i) {
+    if (candidate.to_wedges[i] != target) continue;
+    const double* q = attribute_.data() + size_t(candidate.from_wedges[i]) * attribute_stride_;
+    for (uint32_t k = 0; k < attribute_stride_; ++k) scratch_[k] += q[k];
+  }
+  return scratch_.data();
+}
+
+// Hoppe 1999 §4: minimizing over the attributes s = -(Bᵀp + b_s) / area leaves a quadric in p
+// alone: A - B Bᵀ / area, b_p - B b_s / area, c - |b_s|² / area.
+Quadric QuadricModel::reducedAttributeQuadric(const double* q) const {
+  Quadric r;
+  r.a00 = q[0], r.a01 = q[1], r.a02 = q[2], r.a11 = q[3], r.a12 = q[4], r.a22 = q[5];
+  r.b0 = q[6], r.b1 = q[7], r.b2 = q[8], r.c = q[9];
+  const double area = q[10];
+  if (!(area > 0)) return r;
+  const double inv = 1.0 / area;
+  const double* column = q + 11;
+  const double* bs = q + 11 + 3 * dims_;
+  for (uint32_t j = 0; j < dims_; ++j) {
+    double x = column[3 * j], y = column[3 * j + 1], z = column[3 * j + 2], s = bs[j];
+    r.a00 -= x * x * inv, r.a01 -= x * y * inv, r.a02 -= x * z * inv;
+    r.a11 -= y * y * inv, r.a12 -= y * z * inv, r.a22 -= z * z * inv;
+    r.b0 -= x * s * inv, r.b1 -= y * s * inv, r.b2 -= z * s * inv;
+    r.c -= s * s * inv;
+  }
+  return r;
+}
+
+void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
+  for (CandidateCollapse& cand : batch) {
+    Quadric geometric = geometric_[cand.from];
+    addQuadric(geometric, geometric_[cand.to]);
+    Quadric total = geometric;
+    if (dims_ > 0) {
+      // Every wedge of the survivor: merged ones with their sources, the others as they are.
+      state.forEachWedge(cand.to, [&](uint32_t w) {
+        addQuadric(total, reducedAttributeQuadric(mergedAttributeQuadric(cand, w)));
+      });
+    }
+    const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
+    cand.position = cand.endpoint_only ? b : minimizeQuadric(total, a, b);
+    const double area = geometric.weight > 0 ? geometric.weight : 1.0;
+    // Order by the mean squared distance (quadric / accumulated area), so large flat regions
+    // and small detailed ones are compared in the same unit.
+    cand.cost = evaluateQuadric(total, cand.position) / area;
+    cand.error = std::sqrt(evaluateQuadric(geometric, cand.position) / area) * state.scale;
+  }
+}
+
+void QuadricModel::placeAttributes(const EngineState& state, const CandidateCollapse& chosen,
+                                   std::span<float> values) {
+  // Attributes change only when the position does; a pinned survivor keeps its own.
+  if (dims_ == 0 || chosen.endpoint_only) return;
+  const uint32_t stride = state.layout.stride;
+  const Vec3d p = chosen.position;
+  for (uint32_t i = 0; i < chosen.wedge_count; ++i) {
+    const double* q = mergedAttributeQuadric(chosen, chosen.to_wedges[i]);
+    const double area = q[10];
+    if (!(area > 0)) continue;
+    const double* column = q + 11;
+    const double* bs = q + 11 + 3 * dims_;
+    float* out = values.data() + size_t(i) * stride;
+    for (uint32_t j = 0; j < dims_; ++j) {
+      // Hoppe 1999: the optimal attribute at p, s = -(B_jᵀ p + b_s[j]) / area.
+      double s = -(column[3 * j] * p.x + column[3 * j + 1] * p.y + column[3 * j + 2] * p.z + bs[j]) /
+                 area;
+      double value = s / source_scale_[j];
+      if (std::isfinite(value)) out[source_offset_[j]] = float(value);
+    }
+    renormalizeAttributes(state.layout, out);
+  }
+}
+
+void QuadricModel::onCollapse(const EngineState& state, const AppliedCollapse& applied) {
+  (void)state;
+  const CandidateCollapse& c = applied.candidate;
+  addQuadric(geometric_[c.to], geometric_[c.from]);
+  if (dims_ == 0) return;
+  for (uint32_t i = 0; i < c.wedge_count; ++i) {
+    double* target = attribute_.data() + size_t(c.to_wedges[i]) * attribute_stride_;
+    const double* source = attribute_.data() + size_t(c.from_wedges[i]) * attribute_stride_;
+    for (uint32_t k = 0; k < attribute_stride_; ++k) target[k] += source[k];
+  }
+}
+
+}  // namespace duolod::mesh

@@ -1,0 +1,31 @@
+// simplifyQuadric: the collapse engine driven by the quadric cost (quadric.hpp). The fast mode and
+// the geometric baseline of the paper's mesh simplification (§4.2 uses the same engine with an
+// image-driven cost).
+#include <chrono>
+
+#include "duolod/mesh.hpp"
+#include "mesh/collapse_engine.hpp"
+#include "mesh/quadric.hpp"
+
+namespace duolod::mesh {
+
+SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& options) {
+  auto start = std::chrono::steady_clock::now();
+  core::Mesh prepared = prepareMesh(mesh);
+  QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
+                      .attribute_weight = options.attribute_weight});
+  EngineOptions engine_options{
+      .target_triangles = options.target_triangles,
+      .target_error = options.target_error,
+      .endpoint_only = options.placement == Placement::kEndpoint,
+      .lock_border = options.lock_border,
+      .allow_material_border_collapse = options.allow_material_border_collapse,
+      .record = options.record,
+  };
+  SimplifyResult result = runCollapseEngine(prepared, model, engine_options);
+  result.stats.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace duolod::mesh

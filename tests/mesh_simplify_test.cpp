@@ -1,0 +1,361 @@
+// Quadric simplification (simplifyQuadric over the collapse engine) on meshes whose answer is
+// known: a flat grid collapses to its two corner triangles at zero error; a cube has no free
+// collapse; a UV seam keeps its discontinuity; a closed surface stays closed; no triangle turns
+// over; the same mesh at 1000x scale simplifies the same way; bad input never crashes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "duolod/mesh.hpp"
+#include "mesh_test_meshes.hpp"
+
+namespace duolod {
+namespace {
+using core::Mesh;
+using core::Vec3;
+using mesh::SimplifyOptions;
+
+std::set<std::array<float, 3>> positionSet(const Mesh& m) {
+  std::set<std::array<float, 3>> s;
+  for (Vec3 p : m.positions) s.insert({p.x, p.y, p.z});
+  return s;
+}
+
+float bumps(float x, float y) {
+  return 0.05f * std::sin(6.0f * x + 0.3f) * std::cos(5.0f * y - 0.2f) + 0.02f * std::sin(13.0f * x * y);
+}
+
+// A flat grid has zero quadric error everywhere except where a corner would move; the interior
+// and the sides go first, and the last two triangles span the four corners.
+TEST(SimplifyQuadric, FlatGridCollapsesToTwoTrianglesAtZeroError) {
+  Mesh grid = test::gridMesh(10);
+  ASSERT_EQ(grid.triangleCount(), 200u);
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 2});
+  EXPECT_EQ(result.mesh.triangleCount(), 2u);
+  EXPECT_LT(result.error, 1e-6);
+  std::set<std::array<float, 3>> corners = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  EXPECT_EQ(positionSet(result.mesh), corners);
+  for (size_t t = 0; t < result.mesh.triangleCount(); ++t)
+    EXPECT_GT(test::triangleNormal(result.mesh, t).z, 0) << "triangle " << t << " turned over";
+  EXPECT_TRUE(core::validateMesh(result.mesh).ok());
+}
+
+// Every cube edge joins two faces at 90°: any collapse moves a corner off a face plane, so with a
+// tiny error budget nothing happens, and with a target equal to the input nothing happens either.
+TEST(SimplifyQuadric, CubeKeepsItsEightCorners) {
+  Mesh cube = test::cubeMesh();
+  auto bounded = mesh::simplifyQuadric(cube, {.target_triangles = 4, .target_error = 1e-4});
+  EXPECT_EQ(bounded.mesh.triangleCount(), 12u);
+  EXPECT_EQ(positionSet(bounded.mesh), positionSet(cube));
+  EXPECT_EQ(bounded.stats.collapses, 0u);
+
+  auto same = mesh::simplifyQuadric(cube, {.target_triangles = 12});
+  EXPECT_EQ(same.stats.collapses, 0u);
+  EXPECT_EQ(same.mesh.indices, cube.indices);
+  EXPECT_EQ(positionSet(same.mesh), positionSet(cube));
+
+  // Without an error bound it does collapse, and the error is reported (> 0, asset units).
+  auto forced = mesh::simplifyQuadric(cube, {.target_triangles = 4});
+  EXPECT_LT(forced.mesh.triangleCount(), 12u);
+  EXPECT_GT(forced.error, 0.01);
+}
+
+// The seam at x = 0.5 has two wedges per position (u = 0.2 on the left, u = 0.8 on the right).
+// After a 90% reduction every position still on the seam keeps two different UVs, every triangle
+// takes its UVs from one side only, and seam positions stay on the seam line.
+TEST(SimplifyQuadric, UvSeamKeepsItsDiscontinuity) {
+  Mesh seamed = test::seamGrid(20, bumps);
+  auto result = mesh::simplifyQuadric(seamed, {.target_triangles = seamed.triangleCount() / 10});
+  const Mesh& out = result.mesh;
+  EXPECT_LE(out.triangleCount(), seamed.triangleCount() / 10 + 1);
+  ASSERT_EQ(out.uv0.size(), out.vertexCount());
+
+  for (size_t t = 0; t < out.triangleCount(); ++t) {
+    int left = 0, right = 0;
+    for (int k = 0; k < 3; ++k) {
+      float u = out.uv0[out.indices[t * 3 + k]].x;
+      left += u < 0.5f;
+      right += u > 0.5f;
+    }
+    EXPECT_TRUE(left == 3 || right == 3) << "triangle " << t << " spans both charts";
+  }
+  std::map<std::array<float, 3>, std::vector<float>> us;
+  for (size_t v = 0; v < out.vertexCount(); ++v)
+    us[{out.positions[v].x, out.positions[v].y, out.positions[v].z}].push_back(out.uv0[v].x);
+  int seam_positions = 0;
+  for (const auto& [p, u] : us) {
+    if (u.size() < 2) continue;
+    ++seam_positions;
+    EXPECT_EQ(u.size(), 2u);
+    EXPECT_NEAR(p[0], 0.5f, 1e-3f) << "a seam position left the seam line";
+    EXPECT_GT(std::abs(u[0] - u[1]), 0.4f) << "the two sides' UVs merged";
+  }
+  EXPECT_GE(seam_positions, 2);  // at least the seam's two ends (locked: seam meets border)
+  for (size_t v = 0; v < out.vertexCount(); ++v) {
+    float u = out.uv0[v].x;
+    EXPECT_TRUE((u > -0.05f && u < 0.25f) || (u > 0.75f && u < 1.05f)) << "u " << u;
+  }
+}
+
+TEST(SimplifyQuadric, ClosedMeshStaysClosed) {
+  Mesh sphere = test::icosphere(3, 1.0f, test::lumps);  // 1280 triangles
+  auto result = mesh::simplifyQuadric(sphere, {.target_triangles = 128});
+  const Mesh& out = result.mesh;
+  EXPECT_EQ(out.triangleCount(), 128u);
+  for (const auto& [edge, count] : test::edgeTriangleCounts(out)) EXPECT_EQ(count, 2);
+  // Euler characteristic of a sphere: V - E + F = 2.
+  size_t edges = test::edgeTriangleCounts(out).size();
+  EXPECT_EQ(int64_t(out.vertexCount()) - int64_t(edges) + int64_t(out.triangleCount()), 2);
+}
+
+// Each output triangle faces the same way as the nearest input triangle (by centroid distance).
+TEST(SimplifyQuadric, NoTriangleTurnsOver) {
+  Mesh sphere = test::icosphere(4, 1.0f, test::lumps);  // 5120 triangles
+  for (auto placement : {mesh::Placement::kOptimal, mesh::Placement::kEndpoint}) {
+    auto result = mesh::simplifyQuadric(
+        sphere, {.target_triangles = sphere.triangleCount() / 20, .placement = placement});
+    const Mesh& out = result.mesh;
+    ASSERT_GT(out.triangleCount(), 0u);
+    for (size_t t = 0; t < out.triangleCount(); ++t) {
+      Vec3 c = (out.positions[out.indices[t * 3]] + out.positions[out.indices[t * 3 + 1]] +
+                out.positions[out.indices[t * 3 + 2]]) / 3.0f;
+      size_t nearest = 0;
+      float best = INFINITY;
+      for (size_t s = 0; s < sphere.triangleCount(); ++s) {
+        Vec3 d = (sphere.positions[sphere.indices[s * 3]] +
+                  sphere.positions[sphere.indices[s * 3 + 1]] +
+                  sphere.positions[sphere.indices[s * 3 + 2]]) / 3.0f - c;
+        if (core::dot(d, d) < best) best = core::dot(d, d), nearest = s;
+      }
+      EXPECT_GT(core::dot(core::normalize(test::triangleNormal(out, t)),
+                          core::normalize(test::triangleNormal(sphere, nearest))), 0.0f)
+          << "triangle " << t;
+    }
+  }
+}
+
+// Positions are normalized by the bounding-box diagonal inside, so scaling the asset scales the
+// error and the positions and changes nothing else.
+TEST(SimplifyQuadric, ScaleInvariant) {
+  Mesh small = test::gridMesh(24, 1.0f, bumps);
+  Mesh large = test::scaledMesh(small, 1000.0f);
+  SimplifyOptions options{.target_triangles = 60};
+  auto a = mesh::simplifyQuadric(small, options);
+  auto b = mesh::simplifyQuadric(large, options);
+  ASSERT_EQ(a.record.steps.size(), b.record.steps.size());
+  for (size_t i = 0; i < a.record.steps.size(); ++i) {
+    ASSERT_EQ(a.record.steps[i].triangles_after, b.record.steps[i].triangles_after) << "step " << i;
+    EXPECT_EQ(a.record.steps[i].removed, b.record.steps[i].removed) << "step " << i;
+  }
+  EXPECT_NEAR(b.error / a.error, 1000.0, 1e-2);
+  ASSERT_EQ(a.mesh.vertexCount(), b.mesh.vertexCount());
+  for (size_t v = 0; v < a.mesh.vertexCount(); ++v) {
+    Vec3 d = b.mesh.positions[v] / 1000.0f - a.mesh.positions[v];
+    EXPECT_LT(core::length(d), 1e-4f);
+  }
+}
+
+TEST(SimplifyQuadric, EndpointPlacementOnlyUsesInputPositions) {
+  Mesh sphere = test::icosphere(3, 1.0f, test::lumps);
+  auto result = mesh::simplifyQuadric(
+      sphere, {.target_triangles = 200, .placement = mesh::Placement::kEndpoint});
+  EXPECT_EQ(result.mesh.triangleCount(), 200u);
+  auto input = positionSet(sphere);
+  for (Vec3 p : result.mesh.positions) EXPECT_TRUE(input.count({p.x, p.y, p.z}));
+}
+
+TEST(SimplifyQuadric, LockedBorderNeverMoves) {
+  Mesh grid = test::gridMesh(12, 1.0f, bumps);
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 20, .lock_border = true});
+  auto out = positionSet(result.mesh);
+  for (Vec3 p : grid.positions)
+    if (p.x == 0 || p.y == 0 || p.x == 1 || p.y == 1) {
+      EXPECT_TRUE(out.count({p.x, p.y, p.z}));
+    }
+  // Border edges still have one triangle each: 48 border edges of the 12x12 grid.
+  int border = 0;
+  for (const auto& [edge, count] : test::edgeTriangleCounts(result.mesh)) border += count == 1;
+  EXPECT_EQ(border, 48);
+}
+
+// Open borders may slide along themselves: border vertices stay on the square's sides (the
+// penalty planes stand on the bumpy faces, so a curved side can bow out by a fraction of a
+// percent), and the four corners stay exactly.
+TEST(SimplifyQuadric, OpenBorderCollapsesOnlyAlongItself) {
+  Mesh grid = test::gridMesh(12, 1.0f, bumps);
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 30});
+  int border_edges = 0;
+  for (const auto& [edge, count] : test::edgeTriangleCounts(result.mesh)) {
+    if (count != 1) continue;
+    ++border_edges;
+    for (const auto& p : {edge.first, edge.second}) {
+      float to_side = std::min({std::abs(p[0]), std::abs(p[0] - 1), std::abs(p[1]),
+                                std::abs(p[1] - 1)});
+      EXPECT_LT(to_side, 2e-3f) << p[0] << " " << p[1];
+    }
+  }
+  EXPECT_GE(border_edges, 4);
+  for (Vec3 corner : {grid.positions[0], grid.positions[12], grid.positions[13 * 12],
+                      grid.positions[13 * 13 - 1]}) {
+    float nearest = INFINITY;
+    for (Vec3 p : result.mesh.positions) nearest = std::min(nearest, core::length(p - corner));
+    EXPECT_LT(nearest, 2e-3f) << "corner " << corner.x << " " << corner.y << " moved";
+  }
+}
+
+// Two submeshes meeting along y = 0.5: with material borders kept, no triangle changes submesh
+// and the border stays on y = 0.5.
+TEST(SimplifyQuadric, MaterialBorderIsKept) {
+  Mesh grid = test::gridMesh(16, 1.0f, bumps);
+  // Triangles are row-major: the first 8 rows (y < 0.5) are submesh 0, the rest submesh 1.
+  uint32_t half = uint32_t(grid.indices.size() / 2);
+  grid.submeshes = {{0, half, 0}, {half, half, 1}};
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 40});
+  const Mesh& out = result.mesh;
+  ASSERT_TRUE(core::validateMesh(out).ok());
+  ASSERT_EQ(out.submeshes.size(), 2u);
+  for (int s = 0; s < 2; ++s) {
+    const auto& sub = out.submeshes[s];
+    EXPECT_GT(sub.index_count, 0u);
+    for (uint32_t i = sub.first_index; i < sub.first_index + sub.index_count; ++i) {
+      float y = out.positions[out.indices[i]].y;
+      if (s == 0) {
+        EXPECT_LE(y, 0.5f + 1e-4f);
+      } else {
+        EXPECT_GE(y, 0.5f - 1e-4f);
+      }
+    }
+  }
+}
+
+TEST(SimplifyQuadric, ErrorTargetBoundsTheReportedError) {
+  Mesh sphere = test::icosphere(4, 1.0f, test::lumps);
+  auto result = mesh::simplifyQuadric(sphere, {.target_error = 0.01});
+  EXPECT_LE(result.error, 0.01);
+  EXPECT_LT(result.mesh.triangleCount(), sphere.triangleCount());
+  auto looser = mesh::simplifyQuadric(sphere, {.target_error = 0.05});
+  EXPECT_LT(looser.mesh.triangleCount(), result.mesh.triangleCount());
+}
+
+// Attributes stay sane: normals unit length, the output is a valid mesh.
+TEST(SimplifyQuadric, AttributesStaySane) {
+  Mesh sphere = test::icosphere(3, 1.0f, test::lumps);
+  core::computeNormals(sphere);
+  for (Vec3 p : sphere.positions) sphere.colors.push_back({p.x * 0.5f + 0.5f, 0.5f, 0.5f, 1.0f});
+  auto result = mesh::simplifyQuadric(sphere, {.target_triangles = 300});
+  ASSERT_TRUE(core::validateMesh(result.mesh).ok());
+  ASSERT_EQ(result.mesh.normals.size(), result.mesh.vertexCount());
+  for (size_t v = 0; v < result.mesh.vertexCount(); ++v) {
+    EXPECT_NEAR(core::length(result.mesh.normals[v]), 1.0f, 1e-4f);
+    // The normal of a (lumpy) sphere points roughly outwards.
+    EXPECT_GT(core::dot(result.mesh.normals[v], core::normalize(result.mesh.positions[v])), 0.3f);
+    // Colour follows x.
+    EXPECT_NEAR(result.mesh.colors[v].x, result.mesh.positions[v].x * 0.5f + 0.5f, 0.15f);
+  }
+}
+
+// --- Bad input: never crashes, output stays a valid mesh. ---
+
+TEST(SimplifyQuadricBadInput, EmptyMesh) {
+  auto result = mesh::simplifyQuadric(Mesh{}, {.target_triangles = 1});
+  EXPECT_EQ(result.mesh.triangleCount(), 0u);
+  EXPECT_EQ(result.mesh.vertexCount(), 0u);
+  Mesh no_triangles;
+  no_triangles.positions = {{0, 0, 0}, {1, 0, 0}};
+  EXPECT_EQ(mesh::simplifyQuadric(no_triangles, {}).mesh.vertexCount(), 0u);
+}
+
+// Three triangles on one edge (a "book" of pages on a grid): that edge is locked, everything
+// else simplifies, and the output is valid.
+TEST(SimplifyQuadricBadInput, NonManifoldEdgeIsLocked) {
+  Mesh grid = test::gridMesh(8, 1.0f, bumps);
+  // A fin standing on the grid edge between (4,4) and (5,4).
+  uint32_t a = 4 * 9 + 4, b = 4 * 9 + 5;
+  grid.positions.push_back({0.55f, 0.5f, 0.5f});
+  uint32_t apex = uint32_t(grid.positions.size() - 1);
+  grid.indices.insert(grid.indices.end(), {a, b, apex});
+  grid.submeshes = {{0, uint32_t(grid.indices.size()), 0}};
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 10});
+  ASSERT_TRUE(core::validateMesh(result.mesh).ok());
+  auto out = positionSet(result.mesh);
+  EXPECT_TRUE(out.count({grid.positions[a].x, grid.positions[a].y, grid.positions[a].z}));
+  EXPECT_TRUE(out.count({grid.positions[b].x, grid.positions[b].y, grid.positions[b].z}));
+  // The fin's apex may fold onto the edge (removing the dangling triangle is a valid collapse);
+  // no edge other than the locked one ever carries three triangles.
+  auto pa = grid.positions[a], pb = grid.positions[b];
+  std::pair<std::array<float, 3>, std::array<float, 3>> locked =
+      std::minmax(std::array<float, 3>{pa.x, pa.y, pa.z}, std::array<float, 3>{pb.x, pb.y, pb.z});
+  for (const auto& [edge, count] : test::edgeTriangleCounts(result.mesh)) {
+    if (edge != locked) {
+      EXPECT_LE(count, 2);
+    }
+  }
+}
+
+TEST(SimplifyQuadricBadInput, DegenerateDuplicateAndIsolated) {
+  Mesh grid = test::gridMesh(6, 1.0f, bumps);
+  size_t clean_triangles = grid.triangleCount();
+  grid.indices.insert(grid.indices.end(), {0, 0, 1});           // repeated index
+  grid.indices.insert(grid.indices.end(), {0, 1, 2});           // zero area (collinear)
+  grid.indices.insert(grid.indices.end(), grid.indices.begin(), grid.indices.begin() + 3);  // dup
+  grid.positions.push_back({5, 5, 5});                          // isolated vertex
+  grid.positions.push_back(grid.positions[3]);                  // duplicate vertex, unused
+  grid.submeshes = {{0, uint32_t(grid.indices.size()), 0}};
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 8});
+  ASSERT_TRUE(core::validateMesh(result.mesh).ok());
+  EXPECT_LE(result.mesh.triangleCount(), clean_triangles);
+  for (Vec3 p : result.mesh.positions) EXPECT_NE(p.x, 5.0f) << "isolated vertex kept";
+  // Nothing crashes on the cleaned-up base either, and it has no repeated-index triangles.
+  for (size_t t = 0; t < result.record.base.triangleCount(); ++t) {
+    const uint32_t* i = &result.record.base.indices[t * 3];
+    EXPECT_TRUE(i[0] != i[1] && i[1] != i[2] && i[0] != i[2]);
+  }
+}
+
+TEST(SimplifyQuadricBadInput, NonFiniteAndOutOfRange) {
+  Mesh grid = test::gridMesh(6, 1.0f, bumps);
+  grid.positions[10].x = std::numeric_limits<float>::quiet_NaN();
+  grid.positions[20].y = std::numeric_limits<float>::infinity();
+  grid.indices.insert(grid.indices.end(), {0, 1, 999});  // out of range
+  grid.submeshes = {{0, uint32_t(grid.indices.size()), 0}};
+  for (auto placement : {mesh::Placement::kOptimal, mesh::Placement::kEndpoint}) {
+    auto result =
+        mesh::simplifyQuadric(grid, {.target_triangles = 10, .placement = placement});
+    for (uint32_t i : result.mesh.indices) EXPECT_LT(i, result.mesh.vertexCount());
+    EXPECT_FALSE(std::isnan(result.error));
+  }
+}
+
+TEST(SimplifyQuadricBadInput, BrokenSubmeshesAndSingleTriangle) {
+  Mesh grid = test::gridMesh(4);
+  grid.submeshes = {{3, 9, 0}};  // does not tile the index buffer
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 2});
+  EXPECT_TRUE(core::validateMesh(result.mesh).ok());
+  // No submeshes at all (not a valid core::Mesh, but it must not matter): one triangle, whose
+  // every collapse moves a corner, so a small error bound keeps it; without a bound it may go.
+  Mesh one;
+  one.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  one.indices = {0, 1, 2};
+  auto single = mesh::simplifyQuadric(one, {.target_error = 1e-3});
+  EXPECT_EQ(single.mesh.triangleCount(), 1u);
+  EXPECT_TRUE(core::validateMesh(single.mesh).ok());
+  auto unbounded = mesh::simplifyQuadric(one, {});
+  EXPECT_TRUE(core::validateMesh(unbounded.mesh).ok());
+  // Two triangles back to back (same vertices, opposite orientation): a closed "pillow".
+  Mesh pillow = one;
+  pillow.indices = {0, 1, 2, 0, 2, 1};
+  auto flat = mesh::simplifyQuadric(pillow, {});
+  EXPECT_TRUE(core::validateMesh(flat.mesh).ok());
+  // A tetrahedron cannot lose an edge without producing duplicate triangles.
+  Mesh tetra;
+  tetra.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tetra.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  auto tet = mesh::simplifyQuadric(tetra, {.target_triangles = 2});
+  EXPECT_EQ(tet.mesh.triangleCount(), 4u);
+}
+
+}  // namespace
+}  // namespace duolod
