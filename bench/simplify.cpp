@@ -81,14 +81,17 @@ int main(int argc, char** argv) {
   int repeats = 3;
   size_t samples = 100000;
   bool endpoint = false;
+  float attribute_weight = 1.0f;
   app.add_option("meshes", meshes, "mesh files (.off .obj .ply .gltf .glb); default: CGAL + shared");
   app.add_option("--data-dir", data_dir, "folder given to scripts/fetch-bench-data.sh")
       ->capture_default_str();
   app.add_option("--ratios", ratios, "target triangle ratios")->capture_default_str();
   app.add_option("--repeats", repeats, "timed repeats per cell (median)")->capture_default_str();
-  app.add_option("--samples", samples, "surface samples per mesh and direction")
+  app.add_option("--samples", samples, "surface samples per mesh and direction (0: no distances)")
       ->capture_default_str();
   app.add_flag("--endpoint", endpoint, "duolod with Placement::kEndpoint (like meshopt 0.18)");
+  app.add_option("--attribute-weight", attribute_weight, "duolod SimplifyOptions::attribute_weight")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   if (meshes.empty()) {
@@ -141,6 +144,7 @@ int main(int argc, char** argv) {
       mesh::SimplifyOptions options{
           .target_triangles = target,
           .placement = endpoint ? mesh::Placement::kEndpoint : mesh::Placement::kOptimal,
+          .attribute_weight = attribute_weight,
           .record = false};
       mesh::SimplifyResult ours;
       double ours_s = medianSeconds(repeats, [&] { ours = mesh::simplifyQuadric(input, options); });
@@ -158,8 +162,11 @@ int main(int argc, char** argv) {
       theirs.positions = input.positions;
       theirs.indices.assign(destination.begin(), destination.begin() + index_count);
 
-      auto d_ours = mesh::surfaceDistance(input, ours.mesh, samples);
-      auto d_theirs = mesh::surfaceDistance(input, theirs, samples);
+      mesh::SurfaceDistance d_ours, d_theirs;  // --samples 0 skips them (for profiling)
+      if (samples > 0) {
+        d_ours = mesh::surfaceDistance(input, ours.mesh, samples);
+        d_theirs = mesh::surfaceDistance(input, theirs, samples);
+      }
       double time_ratio = ratio(ours_s, meshopt_s);
       double hausdorff_ratio = ratio(d_ours.hausdorff, d_theirs.hausdorff);
       double mean_ratio = ratio(d_ours.mean, d_theirs.mean);

@@ -14,6 +14,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <cstdio>
+#include <cstdlib>
 
 namespace duolod::mesh {
 namespace {
@@ -112,8 +114,7 @@ bool isFinite(Vec3d p) { return std::isfinite(p.x) && std::isfinite(p.y) && std:
 
 // A queued directed collapse. The survivor's position is kept so the collapse can be applied
 // without asking the model again: exactly one endpoint (kAtTo / kAtFrom) or a free point in float.
-struct HeapEntry {
-  float cost;
+struct QueuedCollapse {
   float error;
   uint32_t from, to;
   uint32_t stamp_from, stamp_to;
@@ -122,13 +123,94 @@ struct HeapEntry {
 };
 enum : uint8_t { kAtTo, kAtFrom, kAtPoint };
 
-// Heap order: a max-heap on "worse", so the top is the cheapest; ties by ids, for determinism.
-struct WorseEntry {
-  bool operator()(const HeapEntry& a, const HeapEntry& b) const {
-    if (a.cost != b.cost) return a.cost > b.cost;
-    if (a.from != b.from) return a.from > b.from;
-    return a.to > b.to;
+// The priority queue: a 4-ary min-heap of 64-bit keys (cost bits << 32 | slot). A non-negative
+// float's bits order like the float, so one integer compare orders by cost, then by slot (which
+// is deterministic). The collapse itself lives in a slot of a pool, so sifting moves 8 bytes and
+// a cache line holds a node's four children. Stale entries stay until popped (lazy invalidation).
+class CollapseQueue {
+ public:
+  void clear() {
+    keys_.clear();
+    slots_.clear();
+    free_.clear();
   }
+  bool empty() const { return keys_.empty(); }
+  // Adds without restoring the heap order; call heapify() before popping.
+  void append(float cost, const QueuedCollapse& collapse) {
+    uint32_t slot;
+    if (!free_.empty()) {
+      slot = free_.back();
+      free_.pop_back();
+      slots_[slot] = collapse;
+    } else {
+      slot = uint32_t(slots_.size());
+      slots_.push_back(collapse);
+    }
+    keys_.push_back(uint64_t(costBits(cost)) << 32 | slot);
+  }
+  void push(float cost, const QueuedCollapse& collapse) {
+    append(cost, collapse);
+    siftUp(keys_.size() - 1);
+  }
+  void heapify() {
+    if (keys_.size() < 2) return;
+    for (size_t i = (keys_.size() - 2) / 4 + 1; i-- > 0;) siftDown(i);
+  }
+  // Removes the cheapest; returns its cost and collapse.
+  QueuedCollapse pop(float& cost) {
+    uint64_t top = keys_.front();
+    keys_.front() = keys_.back();
+    keys_.pop_back();
+    if (!keys_.empty()) siftDown(0);
+    uint32_t slot = uint32_t(top);
+    uint32_t bits = uint32_t(top >> 32);
+    std::memcpy(&cost, &bits, 4);
+    free_.push_back(slot);
+    return slots_[slot];
+  }
+
+ private:
+  static uint32_t costBits(float cost) {
+    if (!(cost >= 0)) cost = cost < 0 ? 0.0f : std::numeric_limits<float>::max();  // NaN: last
+    uint32_t bits;
+    std::memcpy(&bits, &cost, 4);
+    return bits;
+  }
+  void siftUp(size_t i) {
+    uint64_t key = keys_[i];
+    while (i > 0) {
+      size_t parent = (i - 1) / 4;
+      if (keys_[parent] <= key) break;
+      keys_[i] = keys_[parent];
+      i = parent;
+    }
+    keys_[i] = key;
+  }
+  void siftDown(size_t i) {
+    const size_t n = keys_.size();
+    uint64_t key = keys_[i];
+    for (;;) {
+      size_t first = i * 4 + 1;
+      if (first >= n) break;
+      size_t best = first;
+      if (first + 4 <= n) {  // full node: branch-free minimum of four
+        const uint64_t* k = &keys_[first];
+        size_t lo = k[1] < k[0] ? 1 : 0, hi = k[3] < k[2] ? 3 : 2;
+        best = first + (k[hi] < k[lo] ? hi : lo);
+      } else {
+        for (size_t c = first + 1; c < n; ++c)
+          if (keys_[c] < keys_[best]) best = c;
+      }
+      if (keys_[best] >= key) break;
+      keys_[i] = keys_[best];
+      i = best;
+    }
+    keys_[i] = key;
+  }
+
+  std::vector<uint64_t> keys_;
+  std::vector<QueuedCollapse> slots_;
+  std::vector<uint32_t> free_;
 };
 
 // One neighbour of the position being examined, with the (first two) triangles on the edge.
@@ -155,9 +237,9 @@ class Engine {
   bool makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool self_is_from,
                      uint8_t features, CandidateCollapse& out) const;
   void emitEdgeCandidates(uint32_t p, uint32_t done_round);
-  void flushBatch();
+  void flushBatch(bool heapify_later = false);
   void fillQueue();
-  bool tryCollapse(const HeapEntry& entry);
+  bool tryCollapse(const QueuedCollapse& entry, float cost);
   bool linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge);
   bool flipsOrDegenerates(uint32_t moving, uint32_t other, Vec3d position,
                           std::span<const uint32_t> incident) const;
@@ -189,9 +271,10 @@ class Engine {
   std::vector<uint32_t> affected_;
   std::vector<CandidateCollapse> batch_;
   std::vector<float> placed_;
-  std::vector<HeapEntry> heap_;
+  CollapseQueue queue_;
 
   SimplifyStats stats_;
+  size_t debug_pops_ = 0, debug_evals_ = 0;
   size_t pass_rejections_ = 0;
   double max_error_ = 0;
   ProgressiveRecord record_;
@@ -218,6 +301,41 @@ void Engine::buildState() {
     s.scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
   }
   const double inverse_scale = 1.0 / s.scale;
+
+  // Number positions along a Morton curve: neighbours on the surface get nearby ids, so the
+  // per-position arrays (positions, quadrics, list heads, stamps) are walked with few cache misses
+  // whatever order the file had. (Wedges and triangles keep the input order.)
+  {
+    std::vector<uint32_t> representative(position_count, kAbsent);
+    for (uint32_t w = 0; w < wedges; ++w)
+      if (representative[s.wedge_position[w]] == kAbsent) representative[s.wedge_position[w]] = w;
+    auto spread = [](uint64_t v) {  // 10 bits -> every third bit
+      v &= 0x3ff;
+      v = (v | v << 16) & 0x30000ff;
+      v = (v | v << 8) & 0x300f00f;
+      v = (v | v << 4) & 0x30c30c3;
+      v = (v | v << 2) & 0x9249249;
+      return v;
+    };
+    std::vector<uint64_t> keyed(position_count);
+    for (uint32_t p = 0; p < position_count; ++p) {
+      core::Vec3 a = m.positions[representative[p]];
+      uint64_t code = 0x3fffffff;  // non-finite positions last
+      if (core::isFinite(a)) {
+        uint64_t q[3];
+        for (int k = 0; k < 3; ++k) {
+          double t = (a[k] - (&s.origin.x)[k]) * inverse_scale;
+          q[k] = uint64_t(std::clamp(t, 0.0, 1.0) * 1023.0);
+        }
+        code = spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2;
+      }
+      keyed[p] = code << 32 | p;
+    }
+    std::sort(keyed.begin(), keyed.end());
+    std::vector<uint32_t> new_id(position_count);
+    for (uint32_t rank = 0; rank < position_count; ++rank) new_id[uint32_t(keyed[rank])] = rank;
+    for (uint32_t w = 0; w < wedges; ++w) s.wedge_position[w] = new_id[s.wedge_position[w]];
+  }
 
   s.positions.assign(position_count, Vec3d{});
   s.asset_positions.assign(position_count, core::Vec3{});
@@ -393,6 +511,17 @@ bool Engine::makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool 
 
   out.from = from;
   out.to = to;
+  const VertexKind to_kind = s.kinds[to];
+  if (from_kind == VertexKind::kFree) {
+    // Fast path (most candidates): one wedge, merging into the wedge across the edge.
+    if (pairs == 2 && pair_to[0] != pair_to[1]) return false;
+    out.wedge_count = 1;
+    out.from_wedges[0] = pair_from[0];
+    out.to_wedges[0] = pair_to[0];
+    out.endpoint_only = options_.endpoint_only || to_kind != VertexKind::kFree;
+    out.position = s.positions[to];
+    return true;
+  }
   out.wedge_count = 0;
   bool ok = true;
   s.forEachWedge(from, [&](uint32_t w) {
@@ -409,7 +538,6 @@ bool Engine::makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool 
   });
   if (!ok) return false;
 
-  VertexKind to_kind = s.kinds[to];
   bool endpoint_only = options_.endpoint_only || to_kind == VertexKind::kLocked ||
                        (to_kind == VertexKind::kFree && features != 0) ||
                        (to_kind == VertexKind::kConstrained && features != s.line_features[to]);
@@ -422,7 +550,6 @@ bool Engine::makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool 
   }
   out.endpoint_only = endpoint_only;
   out.position = s.positions[to];
-  out.cost = out.error = 0;
   return true;
 }
 
@@ -443,12 +570,12 @@ void Engine::emitEdgeCandidates(uint32_t p, uint32_t done_round) {
   }
 }
 
-void Engine::flushBatch() {
+void Engine::flushBatch(bool heapify_later) {
   if (batch_.empty()) return;
   model_.evaluate(state_, batch_);
+  debug_evals_ += batch_.size();
   for (CandidateCollapse& c : batch_) {
-    HeapEntry e;
-    e.cost = std::isfinite(c.cost) ? float(c.cost) : std::numeric_limits<float>::max();
+    QueuedCollapse e;
     e.error = std::isfinite(c.error) ? float(c.error) : std::numeric_limits<float>::max();
     e.from = c.from;
     e.to = c.to;
@@ -464,14 +591,17 @@ void Engine::flushBatch() {
     else
       e.placement = isFinite(p) ? kAtPoint : kAtTo;
     e.x = float(p.x), e.y = float(p.y), e.z = float(p.z);
-    heap_.push_back(e);
-    std::push_heap(heap_.begin(), heap_.end(), WorseEntry{});
+    float cost = std::isfinite(c.cost) ? float(c.cost) : std::numeric_limits<float>::max();
+    if (heapify_later)
+      queue_.append(cost, e);
+    else
+      queue_.push(cost, e);
   }
   batch_.clear();
 }
 
 void Engine::fillQueue() {
-  heap_.clear();
+  queue_.clear();
   uint32_t done = nextRound();
   const uint32_t position_count = uint32_t(state_.positions.size());
   for (uint32_t p = 0; p < position_count; ++p) {
@@ -479,9 +609,10 @@ void Engine::fillQueue() {
     gatherNeighbors(p);
     mark_[p] = done;
     emitEdgeCandidates(p, done);
-    if (batch_.size() >= options_.batch_size) flushBatch();
+    if (batch_.size() >= options_.batch_size) flushBatch(true);
   }
-  flushBatch();
+  flushBatch(true);
+  queue_.heapify();
 }
 
 // Link condition: the common neighbours of the endpoints are exactly the edge's opposite
@@ -670,7 +801,7 @@ void Engine::invalidateAround(uint32_t survivor) {
   flushBatch();
 }
 
-bool Engine::tryCollapse(const HeapEntry& entry) {
+bool Engine::tryCollapse(const QueuedCollapse& entry, float cost) {
   const EngineState& s = state_;
   gatherNeighbors(entry.from);
   const Neighbor* edge = nullptr;
@@ -691,7 +822,7 @@ bool Engine::tryCollapse(const HeapEntry& entry) {
     flushBatch();
     return false;
   }
-  cand.cost = entry.cost;
+  cand.cost = cost;
   cand.error = entry.error;
   if (placement == kAtTo)
     cand.position = s.positions[entry.to];
@@ -753,9 +884,18 @@ core::Mesh Engine::buildOutput() const {
 
 SimplifyResult Engine::run() {
   auto start = std::chrono::steady_clock::now();
+  auto lap = [&, last = start](const char* what) mutable {
+    auto now = std::chrono::steady_clock::now();
+    if (getenv("DUOLOD_DEBUG"))
+      fprintf(stderr, "  %s %.2f ms\n", what, std::chrono::duration<double>(now - last).count() * 1e3);
+    last = now;
+  };
   buildState();
+  lap("build");
   classifyPositions();
+  lap("classify");
   model_.begin(state_);
+  lap("begin");
   if (options_.record) {
     record_.base = base_;
     record_.values = base_;
@@ -767,21 +907,25 @@ SimplifyResult Engine::run() {
   for (int pass = 0; pass < std::max(1, options_.max_passes) && !reached(); ++pass) {
     pass_rejections_ = 0;
     fillQueue();
-    while (!heap_.empty() && !reached()) {
-      std::pop_heap(heap_.begin(), heap_.end(), WorseEntry{});
-      HeapEntry entry = heap_.back();
-      heap_.pop_back();
+    lap("fill");
+    while (!queue_.empty() && !reached()) {
+      float cost = 0;
+      QueuedCollapse entry = queue_.pop(cost);
+      ++debug_pops_;
       if (!state_.position_alive[entry.from] || !state_.position_alive[entry.to] ||
           stamps_[entry.from] != entry.stamp_from || stamps_[entry.to] != entry.stamp_to)
         continue;
       if (double(entry.error) > options_.target_error) continue;
-      tryCollapse(entry);
+      tryCollapse(entry, cost);
     }
+    lap("loop");
     if (pass_rejections_ == 0) break;
   }
 
+  if (getenv("DUOLOD_DEBUG")) fprintf(stderr, "pops %zu evals %zu collapses %zu\n", debug_pops_, debug_evals_, stats_.collapses);
   SimplifyResult result;
   result.mesh = buildOutput();
+  lap("output");
   result.error = max_error_;
   result.stats = stats_;
   if (options_.record) result.record = std::move(record_);

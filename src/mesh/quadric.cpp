@@ -23,17 +23,25 @@ constexpr double kFeatureWeight = 4.0;
 
 // Attribute weights after normalization (normals are unit vectors, UVs are divided by the UV
 // bounding-box diagonal, colours are in [0, 1]). A normal deviation of 1 (60°) then weighs like a
-// deviation of kNormalWeight diagonals. Geometry leads; attributes break ties and keep seams and
-// shading sane. Multiplied by SimplifyOptions::attribute_weight.
-constexpr double kNormalWeight = 0.02;
-constexpr double kUvWeight = 0.05;
-constexpr double kColorWeight = 0.05;
+// deviation of kNormalWeight diagonals. On a surface of curvature radius R, collapsing an edge of
+// length h moves it by ~h²/R but turns normals by ~h/R, so the normal term outweighs geometry by
+// (w/h)²: with h ~ 0.5-2% of the diagonal (typical assets), w = 0.005 keeps geometry leading
+// (bench/simplify: 0.02 made WaterBottle's mean distance 6x worse than without attributes, 0.005
+// costs ~1.5x there) while attributes still steer placement and break ties. The optimal
+// attribute values (Hoppe's s*) do not depend on these weights. Multiplied by
+// SimplifyOptions::attribute_weight.
+constexpr double kNormalWeight = 0.005;
+constexpr double kUvWeight = 0.01;
+constexpr double kColorWeight = 0.01;
 
 // Placement: A counts as well conditioned when det(A) > kDeterminantRatio * trace(A)³, which for
 // a 3x3 positive semi-definite matrix bounds its condition number by about 1 / (8 * ratio) = 1e4.
 constexpr double kDeterminantRatio = 1.25e-5;
 // Eigenvalues below this fraction of the largest are treated as zero (Lindstrom 2000 uses 1e-3).
 constexpr double kEigenCutoff = 1e-3;
+// The damped solve's shift as a fraction of trace(A) (about kEigenCutoff of the largest
+// eigenvalue, which is between trace / 3 and trace).
+constexpr double kDamping = 5e-4;
 // A "well-conditioned" minimizer further than this many edge lengths from the edge's midpoint is
 // distrusted (nearly parallel planes put it far away) and the fallback decides.
 constexpr double kMaxMoveEdges = 3.0;
@@ -70,83 +78,103 @@ double evaluateQuadric(const Quadric& q, Vec3d p) {
 
 namespace {
 
-// Minimizer of q as an offset from `center`, accepted only within sqrt(max_move_sq) of it.
-// Returns false when A is ill-conditioned or the point is out of reach; `truncated` then holds the
-// truncated pseudo-inverse solution (Lindstrom 2000 §3.2), or `center` if that is out of reach too.
+// The right-hand side r = -(A center + b) of A x = r, for the offset x from `center`.
+Vec3d residual(const Quadric& q, Vec3d center) {
+  return {-(q.a00 * center.x + q.a01 * center.y + q.a02 * center.z + q.b0),
+          -(q.a01 * center.x + q.a11 * center.y + q.a12 * center.z + q.b1),
+          -(q.a02 * center.x + q.a12 * center.y + q.a22 * center.z + q.b2)};
+}
+
+// Solves (A + mu I) x = r by cofactors. With `min_det` > 0 it gives up (false) as soon as the
+// determinant shows the system is not well conditioned, before the rest of the work.
+bool solveShifted(const Quadric& q, double mu, Vec3d r, double min_det, Vec3d& x) {
+  const double a00 = q.a00 + mu, a11 = q.a11 + mu, a22 = q.a22 + mu;
+  const double c00 = a11 * a22 - q.a12 * q.a12;
+  const double c01 = q.a02 * q.a12 - q.a01 * a22;
+  const double c02 = q.a01 * q.a12 - q.a02 * a11;
+  const double det = a00 * c00 + q.a01 * c01 + q.a02 * c02;
+  if (!(det > min_det) || !(det > 0)) return false;
+  const double c11 = a00 * a22 - q.a02 * q.a02;
+  const double c12 = q.a01 * q.a02 - a00 * q.a12;
+  const double c22 = a00 * a11 - q.a01 * q.a01;
+  const double inv = 1.0 / det;
+  x = {(c00 * r.x + c01 * r.y + c02 * r.z) * inv, (c01 * r.x + c11 * r.y + c12 * r.z) * inv,
+       (c02 * r.x + c12 * r.y + c22 * r.z) * inv};
+  return true;
+}
+
+// Minimizer of q as an offset from `center`, accepted within sqrt(max_move_sq) of it. Returns
+// true with `exact` when A is well conditioned. Otherwise returns false and `damped` holds the
+// minimizer of q + mu |p - center|² with mu a small fraction of A's trace: along A's strong
+// directions that is the minimizer, along the weak ones (flat or cylindrical neighbourhoods) it
+// stays at `center`. This is Tikhonov's smooth version of Lindstrom's truncated pseudo-inverse,
+// at the price of one 3x3 solve instead of an eigen-decomposition (this runs for every candidate).
 bool solveAround(const Quadric& q, Vec3d center, double max_move_sq, Vec3d& exact,
-                 Vec3d& truncated) {
-  // Solve A x = r for the offset x: r = -(A center + b).
-  const Vec3d r = {-(q.a00 * center.x + q.a01 * center.y + q.a02 * center.z + q.b0),
-                   -(q.a01 * center.x + q.a11 * center.y + q.a12 * center.z + q.b1),
-                   -(q.a02 * center.x + q.a12 * center.y + q.a22 * center.z + q.b2)};
+                 Vec3d& damped) {
+  const Vec3d r = residual(q, center);
   const double trace = q.a00 + q.a11 + q.a22;
-  truncated = center;
+  damped = center;
   if (!(trace > 0)) return false;
-  // Cofactors of the symmetric A (A⁻¹ = adj(A) / det).
-  double c00 = q.a11 * q.a22 - q.a12 * q.a12;
-  double c01 = q.a02 * q.a12 - q.a01 * q.a22;
-  double c02 = q.a01 * q.a12 - q.a02 * q.a11;
-  double c11 = q.a00 * q.a22 - q.a02 * q.a02;
-  double c12 = q.a01 * q.a02 - q.a00 * q.a12;
-  double c22 = q.a00 * q.a11 - q.a01 * q.a01;
-  double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
-  if (det > kDeterminantRatio * trace * trace * trace) {
-    double inv = 1.0 / det;
-    Vec3d x = {(c00 * r.x + c01 * r.y + c02 * r.z) * inv,
-               (c01 * r.x + c11 * r.y + c12 * r.z) * inv,
-               (c02 * r.x + c12 * r.y + c22 * r.z) * inv};
-    if (dot(x, x) <= max_move_sq) {
-      exact = center + x;
-      return true;
-    }
+  Vec3d x;
+  if (solveShifted(q, 0.0, r, kDeterminantRatio * trace * trace * trace, x) &&
+      dot(x, x) <= max_move_sq) {
+    exact = center + x;
+    return true;
   }
-  // Ill-conditioned (flat or cylindrical neighbourhood): minimize only along A's significant
-  // eigenvectors, staying at `center` along the others.
-  Eigen::Matrix3d m;
-  m << q.a00, q.a01, q.a02, q.a01, q.a11, q.a12, q.a02, q.a12, q.a22;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-  eigen.computeDirect(m);
-  const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
-  const Eigen::Matrix3d vectors = eigen.eigenvectors();
-  const Eigen::Vector3d rhs(r.x, r.y, r.z);
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();
-  for (int i = 0; i < 3; ++i)
-    if (values(i) > kEigenCutoff * values(2))
-      x += vectors.col(i) * (vectors.col(i).dot(rhs) / values(i));
-  Vec3d candidate = center + Vec3d{x(0), x(1), x(2)};
-  if (std::isfinite(candidate.x) && std::isfinite(candidate.y) && std::isfinite(candidate.z) &&
-      x.squaredNorm() <= max_move_sq)
-    truncated = candidate;
+  if (solveShifted(q, kDamping * trace, r, 0.0, x) && dot(x, x) <= max_move_sq &&
+      std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z))
+    damped = center + x;
   return false;
 }
 
 }  // namespace
 
-Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b) {
+Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
   const Vec3d mid = (a + b) * 0.5;
-  const double reach_sq = kMaxMoveEdges * kMaxMoveEdges * dot(b - a, b - a);
-  Vec3d exact, best;
-  const double error_a = evaluateQuadric(q, a), error_b = evaluateQuadric(q, b);
-  if (solveAround(q, mid, reach_sq, exact, best)) {
-    // An endpoint that is as good (up to rounding) wins: features such as corners then stay
-    // exactly where they were instead of moving by 1e-17.
-    const double tolerance = 1e-9 * (q.a00 + q.a11 + q.a22) * std::max(dot(b - a, b - a), 1e-30);
-    const double error_exact = evaluateQuadric(q, exact);
-    if (std::min(error_a, error_b) > error_exact + tolerance) return exact;
-    return error_b <= error_a ? b : a;
+  const double edge_sq = dot(b - a, b - a);
+  Vec3d exact, damped;
+  if (solveAround(q, mid, kMaxMoveEdges * kMaxMoveEdges * edge_sq, exact, damped)) {
+    // The minimizer on an endpoint up to rounding is that endpoint: features such as corners
+    // then stay exactly where they were instead of moving by 1e-17.
+    const double snap_sq = 1e-20 * edge_sq;
+    if (dot(exact - b, exact - b) <= snap_sq) exact = b;
+    if (dot(exact - a, exact - a) <= snap_sq) exact = a;
+    if (error) *error = evaluateQuadric(q, exact);
+    return exact;
   }
-  // Fallback: the best of the truncated solution, the endpoints and the midpoint.
-  double best_error = evaluateQuadric(q, best);
-  if (error_b < best_error) best_error = error_b, best = b;
-  if (error_a < best_error) best_error = error_a, best = a;
-  if (double e = evaluateQuadric(q, mid); e < best_error) best = mid;
+  // Ill-conditioned: the best of the endpoints, the midpoint and the damped solution; ties go to
+  // the earlier (an endpoint keeps an input position exactly).
+  Vec3d best = b;
+  double best_error = evaluateQuadric(q, b);
+  for (Vec3d p : {a, mid, damped}) {
+    double e = evaluateQuadric(q, p);
+    if (e < best_error) best_error = e, best = p;
+  }
+  if (error) *error = best_error;
   return best;
 }
 
 Vec3d minimizeQuadricNear(const Quadric& q, Vec3d center, double max_distance) {
-  Vec3d exact, truncated;
-  if (solveAround(q, center, max_distance * max_distance, exact, truncated)) return exact;
-  return truncated;
+  Vec3d exact, damped;
+  const double max_move_sq = max_distance * max_distance;
+  if (solveAround(q, center, max_move_sq, exact, damped)) return exact;
+  // Ill-conditioned: here (once per cell, not per candidate) the exact truncated pseudo-inverse
+  // of Lindstrom 2000 §3.2 is affordable: minimize along A's significant eigenvectors only.
+  Eigen::Matrix3d m;
+  m << q.a00, q.a01, q.a02, q.a01, q.a11, q.a12, q.a02, q.a12, q.a22;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(m);
+  const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
+  if (!(values(2) > 0)) return center;
+  const Eigen::Matrix3d vectors = eigen.eigenvectors();
+  const Vec3d r = residual(q, center);
+  const Eigen::Vector3d rhs(r.x, r.y, r.z);
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i)
+    if (values(i) > kEigenCutoff * values(2))
+      x += vectors.col(i) * (vectors.col(i).dot(rhs) / values(i));
+  if (!x.allFinite() || x.squaredNorm() > max_move_sq) return damped;
+  return center + Vec3d{x(0), x(1), x(2)};
 }
 
 void QuadricModel::begin(const EngineState& state) {
@@ -306,19 +334,35 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
   for (CandidateCollapse& cand : batch) {
     Quadric geometric = geometric_[cand.from];
     addQuadric(geometric, geometric_[cand.to]);
-    Quadric total = geometric;
-    if (dims_ > 0) {
-      // Every wedge of the survivor: merged ones with their sources, the others as they are.
-      state.forEachWedge(cand.to, [&](uint32_t w) {
-        addQuadric(total, reducedAttributeQuadric(mergedAttributeQuadric(cand, w)));
-      });
-    }
     const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
-    cand.position = cand.endpoint_only ? b : minimizeQuadric(total, a, b);
     const double area = geometric.weight > 0 ? geometric.weight : 1.0;
-    // Order by the mean squared distance (quadric / accumulated area), so large flat regions
-    // and small detailed ones are compared in the same unit.
-    cand.cost = evaluateQuadric(total, cand.position) / area;
+    // Costs are mean squared distances (quadric / accumulated area), so large flat regions and
+    // small detailed ones are compared in the same unit.
+    if (dims_ == 0) {
+      double value = 0;
+      if (cand.endpoint_only) {
+        cand.position = b;
+        value = evaluateQuadric(geometric, b);
+      } else {
+        cand.position = minimizeQuadric(geometric, a, b, &value);
+      }
+      cand.cost = value / area;
+      cand.error = std::sqrt(cand.cost) * state.scale;
+      continue;
+    }
+    // Every wedge of the survivor: merged ones with their sources, the others as they are.
+    Quadric total = geometric;
+    state.forEachWedge(cand.to, [&](uint32_t w) {
+      addQuadric(total, reducedAttributeQuadric(mergedAttributeQuadric(cand, w)));
+    });
+    double value = 0;
+    if (cand.endpoint_only) {
+      cand.position = b;
+      value = evaluateQuadric(total, b);
+    } else {
+      cand.position = minimizeQuadric(total, a, b, &value);
+    }
+    cand.cost = value / area;
     cand.error = std::sqrt(evaluateQuadric(geometric, cand.position) / area) * state.scale;
   }
 }

@@ -26,13 +26,14 @@ void addQuadric(Quadric& q, const Quadric& other);
 double evaluateQuadric(const Quadric& q, Vec3d p);
 
 // The minimizer of q near the segment [a, b]: the exact solution when A is well conditioned and
-// the point stays near the edge; otherwise the truncated pseudo-inverse around the midpoint
-// (small eigenvalues of A dropped; Lindstrom 2000) compared with the endpoints and the midpoint,
-// the best of the four.
-Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b);
-// The minimizer of q within `max_distance` of `center` by the same two-stage solve (exact when
-// well conditioned, else truncated pseudo-inverse around `center`); `center` when neither stays
-// within reach. For vertex clustering, where there is no edge.
+// the point stays near the edge (snapped to an endpoint it equals up to rounding, so corners stay
+// put exactly); otherwise the best of the endpoints, the midpoint and a damped solve around the
+// midpoint (weak directions of A stay at the midpoint), ties to the endpoints. `error`, when
+// given, receives q at the returned point.
+Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error = nullptr);
+// The minimizer of q within `max_distance` of `center`: exact when well conditioned, else the
+// truncated pseudo-inverse around `center` (Lindstrom 2000, Eigen's 3x3 eigen-decomposition);
+// `center` when neither stays within reach. For vertex clustering, where there is no edge.
 Vec3d minimizeQuadricNear(const Quadric& q, Vec3d center, double max_distance);
 
 struct QuadricModelOptions {
