@@ -80,7 +80,14 @@ struct SimplifyResult {
 
 // Quadric error simplification with attribute quadrics. Attribute seams (vertices with equal
 // positions but different normals/UVs/colours) are collapsed only along the seam; submesh borders
-// are kept unless allowed. The result is compacted (no unreferenced vertices).
+// are kept unless allowed. The result is compacted (no unreferenced vertices). Collapses never
+// create non-manifold edges or vertices, never turn a triangle over, and never open a closed
+// surface. Any input is accepted without crashing: vertices are welded first (equal position and
+// attributes), unreferenced vertices and triangles with a repeated position, an out-of-range
+// index or a duplicate of an earlier triangle are dropped (record.base is this cleaned mesh),
+// vertices on non-manifold edges or fans and vertices with non-finite positions never move, and a
+// submesh list that does not tile the index buffer becomes one submesh. The same mesh at any
+// scale simplifies the same way (positions are normalized by the bounding-box diagonal).
 SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& options);
 
 // The mesh after the first `step_count` collapses of `record`, compacted: collapsed and degenerate
@@ -107,9 +114,14 @@ std::vector<size_t> chooseCandidates(const ProgressiveRecord& record, size_t k);
 // representatives): the fast, coarse mode.
 
 struct ClusterOptions {
-  int grid_resolution = 32;  // cells along the bounding box's longest side
+  int grid_resolution = 32;  // cells along the bounding box's longest side (clamped to 1..65536)
   bool keep_attribute_seams = true;
 };
+// One vertex per occupied cell (per cell and attribute region with keep_attribute_seams), placed
+// at the minimizer of the cell's quadric clamped into the cell; triangles whose corners share a
+// cell, and repeats of a cell triple, are dropped. result.error is the largest distance from an
+// input vertex to its representative (asset units); no record. Triangles touching non-finite
+// positions are dropped.
 SimplifyResult simplifyCluster(const core::Mesh& mesh, const ClusterOptions& options);
 
 // ---------------------------------------------------------------------------------------------
@@ -118,9 +130,12 @@ SimplifyResult simplifyCluster(const core::Mesh& mesh, const ClusterOptions& opt
 struct SurfaceDistance {
   double hausdorff = 0;  // max of the two one-sided maxima
   double mean = 0;       // mean of the two one-sided means
-  double rms = 0;
+  double rms = 0;        // root of the mean of the two one-sided mean squares
 };
-// `samples_per_mesh` points are sampled (area-weighted, deterministic for a seed) on each mesh.
+// `samples_per_mesh` points are sampled (area-weighted, deterministic for a seed) on each mesh;
+// every vertex is measured too, for the maximum only. Distances are to the other surface (closest
+// point on any triangle, via a BVH). Two empty meshes are at distance 0; one empty mesh is at
+// infinity.
 SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
                                 size_t samples_per_mesh = 100000, uint64_t seed = 1);
 

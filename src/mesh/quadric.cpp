@@ -132,7 +132,7 @@ bool solveAround(const Quadric& q, Vec3d center, double max_move_sq, Vec3d& exac
 Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
   const Vec3d mid = (a + b) * 0.5;
   const double edge_sq = dot(b - a, b - a);
-  Vec3d exact, damped;
+  Vec3d exact, damped;  // damped = mid when no damped solution is found
   if (solveAround(q, mid, kMaxMoveEdges * kMaxMoveEdges * edge_sq, exact, damped)) {
     // The minimizer on an endpoint up to rounding is that endpoint: features such as corners
     // then stay exactly where they were instead of moving by 1e-17.
@@ -143,13 +143,13 @@ Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
     return exact;
   }
   // Ill-conditioned: the best of the endpoints, the midpoint and the damped solution; ties go to
-  // the earlier (an endpoint keeps an input position exactly).
+  // the earlier (an endpoint keeps an input position exactly). The damped point minimizes
+  // q(p) + mu |p - mid|², so q(damped) <= q(mid) whenever it was found: mid needs no evaluation
+  // then.
   Vec3d best = b;
   double best_error = evaluateQuadric(q, b);
-  for (Vec3d p : {a, mid, damped}) {
-    double e = evaluateQuadric(q, p);
-    if (e < best_error) best_error = e, best = p;
-  }
+  if (double e = evaluateQuadric(q, a); e < best_error) best_error = e, best = a;
+  if (double e = evaluateQuadric(q, damped); e < best_error) best_error = e, best = damped;
   if (error) *error = best_error;
   return best;
 }
