@@ -336,8 +336,12 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     addQuadric(geometric, geometric_[cand.to]);
     const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
     const double area = geometric.weight > 0 ? geometric.weight : 1.0;
-    // Costs are mean squared distances (quadric / accumulated area), so large flat regions and
-    // small detailed ones are compared in the same unit.
+    // The cost is the area-weighted quadric itself (Garland & Heckbert's Q(v)): squared distance
+    // times the area it applies to, so a collapse that moves a large region a little and one that
+    // moves a small region a lot are compared by how much surface they displace. (Dividing by the
+    // area, i.e. ordering by mean squared distance, was measured worse: bench/simplify's mean
+    // distance 10-40% higher, Hausdorff worse on 6 of 21 cells instead of 3.) The reported error
+    // is the root mean squared distance in asset units.
     if (dims_ == 0) {
       double value = 0;
       if (cand.endpoint_only) {
@@ -346,8 +350,8 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
       } else {
         cand.position = minimizeQuadric(geometric, a, b, &value);
       }
-      cand.cost = value / area;
-      cand.error = std::sqrt(cand.cost) * state.scale;
+      cand.cost = value;
+      cand.error = std::sqrt(value / area) * state.scale;
       continue;
     }
     // Every wedge of the survivor: merged ones with their sources, the others as they are.
@@ -362,7 +366,7 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     } else {
       cand.position = minimizeQuadric(total, a, b, &value);
     }
-    cand.cost = value / area;
+    cand.cost = value;
     cand.error = std::sqrt(evaluateQuadric(geometric, cand.position) / area) * state.scale;
   }
 }
