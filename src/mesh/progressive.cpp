@@ -56,6 +56,11 @@ class Replay {
     }
     vertex_mark_.assign(wedges, kAbsent);
     remap_.assign(wedges, kAbsent);
+    wedge_removed_.assign(wedges, 0);
+    for (uint32_t t = 0; t < triangle_alive_.size(); ++t)
+      if (triangle_alive_[t]) live_list_.push_back(t);
+    wedge_list_.resize(wedges);
+    for (uint32_t w = 0; w < wedges; ++w) wedge_list_[w] = w;
   }
 
   void apply(const CollapseStep& step) {
@@ -63,6 +68,7 @@ class Replay {
     if (step.removed >= wedges || step.kept >= wedges) return;
     if (step.kept_value < record_.values.positions.size()) value_of_[step.kept] = step.kept_value;
     if (step.removed == step.kept) return;  // value update only
+    wedge_removed_[step.removed] = 1;
     uint32_t head = kAbsent, tail = kAbsent;
     for (uint32_t c = first_corner_[step.removed]; c != kAbsent;) {
       uint32_t next = corner_next_[c];
@@ -89,36 +95,40 @@ class Replay {
   }
 
   core::Mesh snapshot() {
-    const core::Mesh& base = record_.base;
     const core::Mesh& values = record_.values;
-    const size_t wedges = first_corner_.size();
+    // Drop the triangles and wedges that died since the last snapshot (the lists only shrink, so
+    // late, small snapshots cost little).
+    compactLive();
     core::Mesh out;
     // Referenced wedges in their original order: mark, then number.
-    for (size_t t = 0; t < triangle_alive_.size(); ++t)
-      if (triangle_alive_[t])
-        for (int k = 0; k < 3; ++k) vertex_mark_[corner_wedge_[t * 3 + k]] = 0;
+    for (uint32_t t : live_list_) {
+      const uint32_t* w = &corner_wedge_[size_t(t) * 3];
+      vertex_mark_[w[0]] = vertex_mark_[w[1]] = vertex_mark_[w[2]] = 0;
+    }
     size_t vertex_count = 0;
-    for (uint32_t w = 0; w < wedges; ++w) vertex_count += vertex_mark_[w] == 0;
+    for (uint32_t w : wedge_list_) vertex_count += vertex_mark_[w] == 0;
     reserveStreams(out, values, vertex_count);
     uint32_t next = 0;
-    for (uint32_t w = 0; w < wedges; ++w) {
+    for (uint32_t w : wedge_list_) {
       if (vertex_mark_[w] != 0) continue;
       vertex_mark_[w] = kAbsent;  // leave the marks clean for the next snapshot
       remap_[w] = next++;
       appendValue(out, values, value_of_[w]);
     }
-    out.indices.reserve(live_triangles_ * 3);
-    for (size_t t = 0; t < triangle_alive_.size(); ++t)
-      if (triangle_alive_[t])
-        for (int k = 0; k < 3; ++k) out.indices.push_back(remap_[corner_wedge_[t * 3 + k]]);
-    out.submeshes = base.submeshes;
+    out.indices.resize(live_list_.size() * 3);
+    uint32_t* index = out.indices.data();
+    for (uint32_t t : live_list_) {
+      const uint32_t* w = &corner_wedge_[size_t(t) * 3];
+      index[0] = remap_[w[0]], index[1] = remap_[w[1]], index[2] = remap_[w[2]];
+      index += 3;
+    }
+    out.submeshes = record_.base.submeshes;
+    size_t cursor = 0;  // live_list_ is in triangle order, so each submesh is one run of it
     uint32_t first = 0;
     for (core::Submesh& sub : out.submeshes) {
+      const size_t end = size_t(sub.first_index / 3) + sub.index_count / 3;
       uint32_t live = 0;
-      uint32_t begin = sub.first_index / 3;
-      uint32_t end = std::min<uint32_t>(begin + sub.index_count / 3,
-                                        uint32_t(triangle_alive_.size()));
-      for (uint32_t t = begin; t < end; ++t) live += triangle_alive_[t];
+      while (cursor < live_list_.size() && live_list_[cursor] < end) ++cursor, ++live;
       sub.first_index = first;
       sub.index_count = live * 3;
       first += live * 3;
@@ -127,6 +137,17 @@ class Replay {
   }
 
  private:
+  void compactLive() {
+    size_t kept = 0;
+    for (uint32_t t : live_list_)
+      if (triangle_alive_[t]) live_list_[kept++] = t;
+    live_list_.resize(kept);
+    kept = 0;
+    for (uint32_t w : wedge_list_)
+      if (!wedge_removed_[w]) wedge_list_[kept++] = w;
+    wedge_list_.resize(kept);
+  }
+
   static void reserveStreams(core::Mesh& out, const core::Mesh& values, size_t n) {
     out.positions.reserve(n);
     if (!values.normals.empty()) out.normals.reserve(n);
@@ -145,6 +166,9 @@ class Replay {
   std::vector<uint32_t> corner_next_;
   std::vector<uint32_t> vertex_mark_;
   std::vector<uint32_t> remap_;
+  std::vector<uint8_t> wedge_removed_;
+  std::vector<uint32_t> live_list_;   // live triangles, ascending (compacted at snapshots)
+  std::vector<uint32_t> wedge_list_;  // wedges not merged away, ascending (idem)
 };
 
 }  // namespace
