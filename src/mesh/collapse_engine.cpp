@@ -117,6 +117,9 @@ std::vector<uint32_t> triangleGroups(const core::Mesh& mesh, bool& valid) {
 
 bool isFinite(Vec3d p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
+// A feature line turning by more than 60° at a vertex makes it a corner (locked).
+constexpr double kCornerTurnCos = 0.5;
+
 // Corner k's successor in its triangle (k + 1) mod 3, without the division.
 constexpr uint32_t kNextCorner[3] = {1, 2, 0};
 
@@ -240,6 +243,7 @@ class Engine {
  private:
   void buildState();
   void classifyPositions();
+  bool isLineCorner(uint32_t p, const uint32_t neighbors[2]) const;
   void gatherNeighbors(uint32_t p);
   uint8_t edgeFeatures(const Neighbor& nb) const;
   bool makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool self_is_from,
@@ -452,6 +456,16 @@ uint8_t Engine::edgeFeatures(const Neighbor& nb) const {
   return features;
 }
 
+// Whether the feature line through p (from neighbour n0 to n1) turns by more than
+// kCornerTurn there: the corner of a border, a UV chart or a material region is a feature point,
+// so it is locked rather than left to the balance of penalty and face planes.
+bool Engine::isLineCorner(uint32_t p, const uint32_t neighbors[2]) const {
+  const Vec3d in = state_.positions[p] - state_.positions[neighbors[0]];
+  const Vec3d out = state_.positions[neighbors[1]] - state_.positions[p];
+  const double lengths = std::sqrt(dot(in, in) * dot(out, out));
+  return !(lengths > 0) || dot(in, out) < kCornerTurnCos * lengths;
+}
+
 void Engine::classifyPositions() {
   EngineState& s = state_;
   const uint32_t position_count = uint32_t(s.positions.size());
@@ -470,6 +484,7 @@ void Engine::classifyPositions() {
     };
     bool locked = !isFinite(s.positions[p]) || wedge_count > kMaxWedges || d == 0;
     int feature_count = 0;
+    uint32_t line_neighbors[2] = {kAbsent, kAbsent};
     uint8_t line = 0;
     bool line_consistent = true;
     for (const Neighbor& nb : neighbors_) {
@@ -479,6 +494,7 @@ void Engine::classifyPositions() {
       if (f == 0) continue;
       if (feature_count == 0) line = f;
       if (f != line) line_consistent = false;
+      if (feature_count < 2) line_neighbors[feature_count] = nb.vertex;
       ++feature_count;
       if ((f & kFeatureBorder) && options_.lock_border) locked = true;
       if (nb.vertex > p)
@@ -495,7 +511,7 @@ void Engine::classifyPositions() {
       s.kinds[p] = VertexKind::kLocked;
     else if (feature_count == 0 && wedge_count == 1)
       s.kinds[p] = VertexKind::kFree;
-    else if (feature_count == 2 && line_consistent)
+    else if (feature_count == 2 && line_consistent && !isLineCorner(p, line_neighbors))
       s.kinds[p] = VertexKind::kConstrained, s.line_features[p] = line;
     else
       s.kinds[p] = VertexKind::kLocked;
@@ -952,11 +968,13 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
     IndexTable table(n);
     const uint32_t stride = layout.stride;
     for (uint32_t v = 0; v < n; ++v) {
-      const float* a = packed.data() + size_t(v) * stride;
-      uint64_t h = hashWords(reinterpret_cast<const uint32_t*>(a), stride, position_id[v]);
+      const float* a = packed.data() + size_t(v) * stride;  // (no attributes: stride 0)
+      uint64_t h = stride ? hashWords(reinterpret_cast<const uint32_t*>(a), stride, position_id[v])
+                          : mixHash(position_id[v]);
       representative[v] = table.findOrInsert(v, h, [&](uint32_t other) {
         return position_id[other] == position_id[v] &&
-               std::memcmp(a, packed.data() + size_t(other) * stride, stride * 4) == 0;
+               (stride == 0 ||
+                std::memcmp(a, packed.data() + size_t(other) * stride, stride * 4) == 0);
       });
     }
   }

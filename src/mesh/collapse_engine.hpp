@@ -15,8 +15,9 @@
 //   - feature lines: border edges (one triangle), attribute seams (the two triangles use different
 //     wedges at an endpoint) and material borders (different submeshes, unless allowed). A
 //     position on no feature line is *free*; one on exactly two feature edges of the same kind is
-//     *constrained* and only slides along them; anything else (line ends, junctions, non-manifold
-//     edges or fans, more than kMaxWedges wedges, non-finite positions) is *locked*;
+//     *constrained* and only slides along them; anything else (line ends, junctions, corners
+//     where the line turns by more than 60°, non-manifold edges or fans, more than kMaxWedges
+//     wedges, non-finite positions) is *locked*;
 //   - no triangle normal may turn by 90° or more, or collapse to zero area;
 //   - the survivor may move away from its own position only when it is free, or constrained on
 //     the same line, and every one of its wedges takes part in the merge; otherwise the model is
