@@ -25,6 +25,7 @@ using core::Vec4;
 
 struct ImageLoaderContext {
   bool decode = true;
+  const tinygltf::Model* model = nullptr;  // being filled; its buffers are parsed before images
 };
 
 // tinygltf hands us the encoded bytes of each image (embedded or from a file it read).
@@ -33,6 +34,20 @@ bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* e
   auto* context = static_cast<ImageLoaderContext*>(user);
   if (!context->decode) return true;
   std::string name = image->uri.empty() ? "image " + std::to_string(index) : image->uri;
+  // tinygltf 2.7 passes an embedded image's bufferView without checking that it lies inside its
+  // buffer; reading it would run past the buffer's end.
+  if (image->bufferView >= 0 && context->model) {
+    // tinygltf has checked both indices before calling.
+    const tinygltf::Model& model = *context->model;
+    const tinygltf::BufferView& view = model.bufferViews[image->bufferView];
+    const size_t buffer_size = model.buffers[view.buffer].data.size();
+    if (view.byteOffset > buffer_size || view.byteLength > buffer_size - view.byteOffset) {
+      if (err)
+        *err += name + ": bufferView " + std::to_string(image->bufferView) +
+                " runs past the end of its buffer\n";
+      return false;
+    }
+  }
   auto decoded = decodeImage(std::span<const uint8_t>(bytes, static_cast<size_t>(size)), name);
   if (!decoded) {
     if (err) *err += decoded.error().message + "\n";
@@ -47,9 +62,23 @@ bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* e
   return true;
 }
 
+// tinygltf's own ReadWholeFile sizes its buffer with tellg(), which on a folder is a huge value: a
+// buffer or image uri naming a folder aborted with bad_alloc. Read through readFileBytes instead.
+bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                   void*) {
+  auto bytes = readFileBytes(path);
+  if (bytes && bytes->empty()) bytes = Error{path + ": file is empty"};
+  if (!bytes) {
+    if (err) *err += bytes.error().message + "\n";
+    return false;
+  }
+  *out = std::move(bytes.value());
+  return true;
+}
+
 // A validated view of an accessor's bytes: every element lies inside its buffer.
 struct AccessorBytes {
-  const unsigned char* first = nullptr;  // null when the accessor has no bufferView (all zeros)
+  const unsigned char* first = nullptr;
   size_t stride = 0;
   size_t count = 0;
   int component_type = 0;
@@ -74,7 +103,13 @@ core::Result<AccessorBytes> viewAccessor(const tinygltf::Model& model, int index
   bytes.count = accessor.count;
   bytes.normalized = accessor.normalized;
   if (bytes.component_size <= 0) return Error{where + ": invalid componentType"};
-  if (accessor.bufferView < 0) return bytes;  // all zeros per the specification
+  // Without a bufferView an accessor is all zeros unless sparse data or a compression extension
+  // fills it, and neither is supported: zero positions or indices are only degenerate triangles,
+  // and the count, bounded by no data in the file, could make a tiny file allocate any amount.
+  if (accessor.bufferView < 0)
+    return Error{where +
+                 ": has no bufferView (data from sparse accessors or compression "
+                 "extensions is not supported)"};
   if (accessor.bufferView >= static_cast<int>(model.bufferViews.size()))
     return Error{where + ": bufferView " + std::to_string(accessor.bufferView) + " does not exist"};
   const tinygltf::BufferView& view = model.bufferViews[accessor.bufferView];
@@ -84,13 +119,17 @@ core::Result<AccessorBytes> viewAccessor(const tinygltf::Model& model, int index
   size_t element_size = static_cast<size_t>(bytes.component_size) * components;
   bytes.stride = view.byteStride ? view.byteStride : element_size;
   if (bytes.stride < element_size) return Error{where + ": byteStride smaller than the element"};
-  if (view.byteOffset + view.byteLength > data.size())
-    return Error{where + ": bufferView runs past the end of its buffer (" +
-                 std::to_string(view.byteOffset + view.byteLength) + " > " +
-                 std::to_string(data.size()) + " bytes)"};
-  if (accessor.count > view.byteLength ||
-      (accessor.count > 0 && accessor.byteOffset + (accessor.count - 1) * bytes.stride +
-                                     element_size > view.byteLength))
+  // Offsets and lengths come from the file and may be near 2^64: compare by subtraction so that
+  // no sum can wrap around.
+  if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+    return Error{where + ": bufferView runs past the end of its buffer (offset " +
+                 std::to_string(view.byteOffset) + " + length " + std::to_string(view.byteLength) +
+                 " > " + std::to_string(data.size()) + " bytes)"};
+  const size_t available =
+      accessor.byteOffset <= view.byteLength ? view.byteLength - accessor.byteOffset : 0;
+  if (accessor.byteOffset > view.byteLength ||
+      (accessor.count > 0 && ((accessor.count - 1) > available / bytes.stride ||
+                              (accessor.count - 1) * bytes.stride + element_size > available)))
     return Error{where + ": " + std::to_string(accessor.count) +
                  " elements do not fit in the bufferView"};
   bytes.first = data.data() + view.byteOffset + accessor.byteOffset;
@@ -105,7 +144,6 @@ core::Result<std::vector<float>> readFloats(const tinygltf::Model& model, int in
   if (!view) return view.error();
   const AccessorBytes& a = *view;
   std::vector<float> out(a.count * components, 0.0f);
-  if (!a.first) return out;
   for (size_t e = 0; e < a.count; ++e) {
     for (int c = 0; c < components; ++c) {
       const unsigned char* p = a.first + e * a.stride + c * a.component_size;
@@ -152,7 +190,6 @@ core::Result<std::vector<uint32_t>> readIndices(const tinygltf::Model& model, in
   if (!view) return view.error();
   const AccessorBytes& a = *view;
   std::vector<uint32_t> out(a.count, 0);
-  if (!a.first) return out;
   for (size_t e = 0; e < a.count; ++e) {
     const unsigned char* p = a.first + e * a.stride;
     switch (a.component_type) {
@@ -202,12 +239,19 @@ float determinant3(const Mat4& m) {
 class GltfFlattener {
  public:
   GltfFlattener(const tinygltf::Model& model, const std::string& path, core::Asset& asset)
-      : model_(model), path_(path), asset_(asset) {}
+      : model_(model), path_(path), asset_(asset), visited_(model.nodes.size(), false) {}
 
   core::Status visit(int node_index, const Mat4& parent, int depth) {
     if (node_index < 0 || node_index >= static_cast<int>(model_.nodes.size()))
       return Error{path_ + ": node " + std::to_string(node_index) + " does not exist"};
     if (depth > 256) return Error{path_ + ": node hierarchy deeper than 256 (a cycle?)"};
+    // glTF 2.0 (Nodes and Hierarchy): the node hierarchy is a set of disjoint trees. A node
+    // reached twice (a cycle, or two parents) would otherwise be flattened once per path, which
+    // is exponentially many times in a chain of nodes that list their child twice.
+    if (visited_[node_index])
+      return Error{path_ + ": node " + std::to_string(node_index) +
+                   " is reached twice (a cycle, or a node with two parents)"};
+    visited_[node_index] = true;
     const tinygltf::Node& node = model_.nodes[node_index];
     Mat4 world = parent * nodeMatrix(node);
     if (node.mesh >= 0) {
@@ -319,7 +363,7 @@ class GltfFlattener {
                                colors[v * 4 + 3]};
                  });
     int material = prim.material;
-    if (material >= static_cast<int>(model_.materials.size()))
+    if (material < -1 || material >= static_cast<int>(model_.materials.size()))
       return Error{what + ": refers to missing material " + std::to_string(material)};
     std::vector<uint32_t>& bucket = triangles_by_material_[material];
     for (size_t i = 0; i < indices.size(); i += 3) {
@@ -362,6 +406,7 @@ class GltfFlattener {
   const std::string& path_;
   core::Asset& asset_;
   std::map<int, std::vector<uint32_t>> triangles_by_material_;
+  std::vector<bool> visited_;  // nodes already flattened
   bool has_normals_ = false, has_tangents_ = false, has_uv0_ = false, has_uv1_ = false,
        has_colors_ = false;
 };
@@ -457,12 +502,37 @@ core::Status readMaterials(const tinygltf::Model& model, const std::string& path
   return core::okStatus();
 }
 
+// GLB layout (glTF 2.0 §4.4): 12-byte header, JSON chunk, optional BIN chunk, each chunk with an
+// 8-byte header. tinygltf 2.7 checks the BIN chunk's length without its header, so a crafted
+// length makes it copy up to 8 bytes past the end of the file; check the layout here first.
+core::Status checkGlbLayout(const std::vector<uint8_t>& bytes, const std::string& path) {
+  auto read32 = [&](size_t offset) {
+    uint32_t v;
+    std::memcpy(&v, bytes.data() + offset, 4);
+    return uint64_t(v);
+  };
+  if (bytes.size() < 20) return Error{path + ": GLB file too short for its header"};
+  const uint64_t length = read32(8);
+  if (length > bytes.size())
+    return Error{path + ": GLB header claims " + std::to_string(length) + " bytes, the file has " +
+                 std::to_string(bytes.size())};
+  const uint64_t json_end = 20 + read32(12);
+  if (json_end > length) return Error{path + ": GLB JSON chunk runs past the end of the file"};
+  if (json_end < length) {
+    if (json_end + 8 > length || json_end + 8 + read32(json_end) > length)
+      return Error{path + ": GLB BIN chunk runs past the end of the file"};
+  }
+  return core::okStatus();
+}
+
 }  // namespace
 
 core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& options) {
   tinygltf::TinyGLTF loader;
   ImageLoaderContext context{options.load_textures};
   loader.SetImageLoader(loadImageThroughStb, &context);
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readWholeFile,
+                         &tinygltf::WriteWholeFile, nullptr});
   tinygltf::Model model;
   std::string error, warning;
   bool binary = false;
@@ -470,7 +540,11 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
     auto head = readFileBytes(path);
     if (!head) return head.error();
     binary = head->size() >= 4 && std::memcmp(head->data(), "glTF", 4) == 0;
+    if (binary) {
+      if (auto layout = checkGlbLayout(*head, path); !layout) return layout.error();
+    }
   }
+  context.model = &model;
   bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
                    : loader.LoadASCIIFromFile(&model, &error, &warning, path);
   if (!ok) {
