@@ -1,0 +1,337 @@
+// Core mesh and math tests with hand-checkable answers: angle-weighted normals (independent of the
+// triangulation), MikkTSpace-convention tangents and their handedness, welding, degenerate-triangle
+// removal, validateMesh's messages, the 4x4 helpers (inverse, lookAt, perspective) and the
+// bounding sphere.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "duolod/core.hpp"
+
+namespace duolod {
+namespace {
+using core::Mat4;
+using core::Mesh;
+using core::Vec2;
+using core::Vec3;
+using core::Vec4;
+
+void expectVecNear(Vec3 actual, Vec3 expected, float tolerance) {
+  EXPECT_NEAR(actual.x, expected.x, tolerance);
+  EXPECT_NEAR(actual.y, expected.y, tolerance);
+  EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+// The unit square in z = 0, counter-clockwise seen from +z, as two triangles.
+Mesh flatQuad() {
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  mesh.submeshes = {{0, 6, 0}};
+  return mesh;
+}
+
+TEST(ComputeNormals, FlatQuadIsPlusZEverywhere) {
+  Mesh mesh = flatQuad();
+  core::computeNormals(mesh);
+  ASSERT_EQ(mesh.normals.size(), 4u);
+  for (Vec3 n : mesh.normals) expectVecNear(n, {0, 0, 1}, 1e-6f);
+}
+
+// Builds the three faces of the cube [-1,1]^3 around its corner C = (1,1,1), with C shared, each
+// face triangulated differently:
+//   +z: 2 triangles whose diagonal passes through C (C is in both, corner angles 45° + 45°);
+//   +y: 2 triangles whose diagonal avoids C (C in one triangle, corner angle 90°);
+//   +x: a fan of 4 triangles from C over the face with two edge midpoints added (angles sum 90°).
+// Each face subtends 90° at C, so the angle-weighted normal at C is (1,1,1)/√3. Weighting by
+// triangle count or by area would tilt it towards +x or +z.
+TEST(ComputeNormals, CubeCornerIsAngleWeightedRegardlessOfTriangulation) {
+  Mesh mesh;
+  auto vertex = [&](Vec3 p) {
+    mesh.positions.push_back(p);
+    return static_cast<uint32_t>(mesh.positions.size() - 1);
+  };
+  // Adds triangle (a, b, c), flipped if needed so that its normal points along `outward`.
+  auto triangle = [&](uint32_t a, uint32_t b, uint32_t c, Vec3 outward) {
+    Vec3 n =
+        core::cross(mesh.positions[b] - mesh.positions[a], mesh.positions[c] - mesh.positions[a]);
+    if (core::dot(n, outward) < 0) std::swap(b, c);
+    mesh.indices.insert(mesh.indices.end(), {a, b, c});
+  };
+  uint32_t corner = vertex({1, 1, 1});
+  // +z face: corners (-1,-1,1) (1,-1,1) C (-1,1,1); diagonal from C to (-1,-1,1).
+  {
+    uint32_t a = vertex({-1, -1, 1}), b = vertex({1, -1, 1}), d = vertex({-1, 1, 1});
+    triangle(a, b, corner, {0, 0, 1});
+    triangle(a, corner, d, {0, 0, 1});
+  }
+  // +y face: corners (-1,1,-1) (1,1,-1) C (-1,1,1); diagonal from (1,1,-1) to (-1,1,1).
+  {
+    uint32_t a = vertex({-1, 1, -1}), b = vertex({1, 1, -1}), d = vertex({-1, 1, 1});
+    triangle(a, b, d, {0, 1, 0});
+    triangle(b, corner, d, {0, 1, 0});
+  }
+  // +x face: polygon C, (1,-1,1), (1,-1,0), (1,-1,-1), (1,0,-1), (1,1,-1), fanned from C.
+  {
+    uint32_t ring[] = {vertex({1, -1, 1}), vertex({1, -1, 0}), vertex({1, -1, -1}),
+                       vertex({1, 0, -1}), vertex({1, 1, -1})};
+    for (int i = 0; i < 4; ++i) triangle(corner, ring[i], ring[i + 1], {1, 0, 0});
+  }
+  ASSERT_EQ(mesh.triangleCount(), 8u);
+  core::computeNormals(mesh);
+  float k = 1.0f / std::sqrt(3.0f);
+  expectVecNear(mesh.normals[corner], {k, k, k}, 1e-5f);
+}
+
+// Positions = uv on a flat quad: +u is +x, +v is +y, so the tangent is (1,0,0) and the bitangent
+// cross(n, t) = (0,1,0) already points along +v: w = +1.
+TEST(ComputeTangents, QuadWithUvEqualXyHasTangentPlusX) {
+  Mesh mesh = flatQuad();
+  mesh.normals.assign(4, Vec3{0, 0, 1});
+  for (Vec3 p : mesh.positions) mesh.uv0.push_back({p.x, p.y});
+  core::computeTangents(mesh);
+  ASSERT_EQ(mesh.tangents.size(), 4u);
+  for (Vec4 t : mesh.tangents) {
+    expectVecNear({t.x, t.y, t.z}, {1, 0, 0}, 1e-6f);
+    EXPECT_EQ(t.w, 1.0f);
+  }
+}
+
+// u = 1 - x mirrors the texture: +u is -x, so the tangent is (-1,0,0); +v is still +y, but
+// cross(n, t) = (0,-1,0), so the handedness w must be -1.
+TEST(ComputeTangents, MirroredUHasNegativeHandedness) {
+  Mesh mesh = flatQuad();
+  mesh.normals.assign(4, Vec3{0, 0, 1});
+  for (Vec3 p : mesh.positions) mesh.uv0.push_back({1 - p.x, p.y});
+  core::computeTangents(mesh);
+  ASSERT_EQ(mesh.tangents.size(), 4u);
+  for (Vec4 t : mesh.tangents) {
+    expectVecNear({t.x, t.y, t.z}, {-1, 0, 0}, 1e-6f);
+    EXPECT_EQ(t.w, -1.0f);
+  }
+}
+
+// The quad as two triangles with their own three vertices each (6 vertices, 2 shared positions).
+Mesh unsharedQuad() {
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.indices = {0, 1, 2, 3, 4, 5};
+  mesh.submeshes = {{0, 6, 0}};
+  return mesh;
+}
+
+TEST(WeldVertices, MergesExactDuplicatesAndRemapsIndices) {
+  Mesh mesh = unsharedQuad();
+  EXPECT_EQ(core::weldVertices(mesh), 2u);
+  ASSERT_EQ(mesh.vertexCount(), 4u);
+  // First occurrences keep their order: v3 -> v0, v4 -> v2, v5 becomes vertex 3.
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_EQ(mesh.positions[3], (Vec3{0, 1, 0}));
+  EXPECT_TRUE(core::validateMesh(mesh));
+}
+
+TEST(WeldVertices, KeepsVerticesThatDifferOnlyInUv) {
+  Mesh mesh = unsharedQuad();
+  // v0 and v3 agree in uv too (weld); v2 and v4 share a position but not a uv (a UV seam).
+  mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 0}, {0.5f, 0.5f}, {0, 1}};
+  EXPECT_EQ(core::weldVertices(mesh), 1u);
+  ASSERT_EQ(mesh.vertexCount(), 5u);
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 3, 4}));
+  ASSERT_EQ(mesh.uv0.size(), 5u);
+  EXPECT_EQ(mesh.uv0[2].x, 1.0f);
+  EXPECT_EQ(mesh.uv0[3].x, 0.5f);
+}
+
+TEST(WeldVertices, NothingToWeldLeavesMeshAlone) {
+  Mesh mesh = flatQuad();
+  Mesh before = mesh;
+  EXPECT_EQ(core::weldVertices(mesh), 0u);
+  EXPECT_EQ(mesh.indices, before.indices);
+  EXPECT_EQ(mesh.vertexCount(), before.vertexCount());
+}
+
+// Two submeshes; each loses one triangle: (0,0,1) repeats an index, (0,1,4) has three collinear
+// corners (zero area), and the third submesh has only a degenerate triangle and becomes empty.
+TEST(RemoveDegenerateTriangles, DropsRepeatedIndexAndZeroAreaAndKeepsSubmeshesConsistent) {
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}};
+  mesh.indices = {0, 1, 2, 0, 0, 1,  // submesh 0: good, repeated index
+                  0, 1, 4, 0, 2, 3,  // submesh 1: collinear, good
+                  1, 1, 1};          // submesh 2: repeated index only
+  mesh.submeshes = {{0, 6, 0}, {6, 6, 1}, {12, 3, 2}};
+  ASSERT_TRUE(core::validateMesh(mesh));
+  EXPECT_EQ(core::removeDegenerateTriangles(mesh), 3u);
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  ASSERT_EQ(mesh.submeshes.size(), 3u);
+  EXPECT_EQ(mesh.submeshes[0].first_index, 0u);
+  EXPECT_EQ(mesh.submeshes[0].index_count, 3u);
+  EXPECT_EQ(mesh.submeshes[0].material, 0u);
+  EXPECT_EQ(mesh.submeshes[1].first_index, 3u);
+  EXPECT_EQ(mesh.submeshes[1].index_count, 3u);
+  EXPECT_EQ(mesh.submeshes[1].material, 1u);
+  EXPECT_EQ(mesh.submeshes[2].first_index, 6u);
+  EXPECT_EQ(mesh.submeshes[2].index_count, 0u);
+  auto valid = core::validateMesh(mesh);
+  EXPECT_TRUE(valid) << valid.error().message;
+}
+
+TEST(RemoveDegenerateTriangles, MeshWithoutSubmeshesStaysWithout) {
+  Mesh mesh = flatQuad();
+  mesh.submeshes.clear();
+  mesh.indices.insert(mesh.indices.end(), {3, 3, 0});
+  EXPECT_EQ(core::removeDegenerateTriangles(mesh), 1u);
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_TRUE(mesh.submeshes.empty());
+}
+
+// validateMesh must name each broken invariant.
+void expectInvalid(const Mesh& mesh, const std::string& fragment) {
+  auto valid = core::validateMesh(mesh);
+  ASSERT_FALSE(valid) << "expected an error containing '" << fragment << "'";
+  EXPECT_NE(valid.error().message.find(fragment), std::string::npos) << valid.error().message;
+}
+
+TEST(ValidateMesh, AcceptsAGoodMesh) {
+  EXPECT_TRUE(core::validateMesh(flatQuad()));
+}
+
+TEST(ValidateMesh, CatchesNanPosition) {
+  Mesh mesh = flatQuad();
+  mesh.positions[2].y = std::nanf("");
+  expectInvalid(mesh, "vertex 2 has a non-finite position");
+}
+
+TEST(ValidateMesh, CatchesInfiniteNormal) {
+  Mesh mesh = flatQuad();
+  mesh.normals.assign(4, Vec3{0, 0, 1});
+  mesh.normals[1].z = INFINITY;
+  expectInvalid(mesh, "vertex 1 has a non-finite normal");
+}
+
+TEST(ValidateMesh, CatchesIndexOutOfRange) {
+  Mesh mesh = flatQuad();
+  mesh.indices[4] = 4;
+  expectInvalid(mesh, "index 4 = 4 is out of range (4 vertices)");
+}
+
+TEST(ValidateMesh, CatchesStreamSizeMismatch) {
+  Mesh mesh = flatQuad();
+  mesh.normals.assign(3, Vec3{0, 0, 1});
+  expectInvalid(mesh, "normal count differs from position count");
+  mesh = flatQuad();
+  mesh.uv0.assign(5, Vec2{});
+  expectInvalid(mesh, "uv0 count differs from position count");
+}
+
+TEST(ValidateMesh, CatchesIndexCountNotMultipleOfThree) {
+  Mesh mesh = flatQuad();
+  mesh.indices.push_back(0);
+  expectInvalid(mesh, "not a multiple of 3");
+}
+
+TEST(ValidateMesh, CatchesSubmeshGapAndShortCoverage) {
+  Mesh mesh = flatQuad();
+  mesh.submeshes = {{0, 3, 0}, {6, 0, 1}};  // indices 3..5 belong to no submesh
+  expectInvalid(mesh, "submesh 1 does not continue the index buffer");
+  mesh.submeshes = {{0, 3, 0}};
+  expectInvalid(mesh, "submeshes cover 3 of 6 indices");
+}
+
+// A translation-rotation-scale matrix from a seeded generator.
+Mat4 randomTrs(std::mt19937& random) {
+  std::uniform_real_distribution<float> unit(-1, 1), scale(0.25f, 4.0f);
+  Mat4 t = Mat4::identity(), r = Mat4::identity(), s = Mat4::identity();
+  for (int i = 0; i < 3; ++i) t.at(i, 3) = 10 * unit(random);
+  float x = unit(random), y = unit(random), z = unit(random), w = unit(random);
+  float norm = std::sqrt(x * x + y * y + z * z + w * w);
+  x /= norm;
+  y /= norm;
+  z /= norm;
+  w /= norm;
+  const float rotation[3][3] = {
+      {1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+      {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+      {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+  for (int row = 0; row < 3; ++row)
+    for (int column = 0; column < 3; ++column) r.at(row, column) = rotation[row][column];
+  for (int i = 0; i < 3; ++i) s.at(i, i) = scale(random);
+  return t * r * s;
+}
+
+TEST(Math, InverseTimesMatrixIsIdentity) {
+  std::mt19937 random(1234);
+  for (int trial = 0; trial < 50; ++trial) {
+    Mat4 m = randomTrs(random);
+    Mat4 product = core::inverse(m) * m;
+    for (int row = 0; row < 4; ++row)
+      for (int column = 0; column < 4; ++column)
+        EXPECT_NEAR(product.at(row, column), row == column ? 1.0f : 0.0f, 1e-5f)
+            << "trial " << trial << " at (" << row << ", " << column << ")";
+  }
+}
+
+TEST(Math, InverseOfSingularMatrixIsIdentity) {
+  Mat4 zero;
+  Mat4 inv = core::inverse(zero);
+  EXPECT_EQ(inv.m, Mat4::identity().m);
+}
+
+TEST(Math, LookAtMapsEyeToOriginAndTargetOntoMinusZ) {
+  Vec3 eye{3, 4, 5}, target{1, -2, 0.5f};
+  Mat4 view = core::lookAt(eye, target, {0, 1, 0});
+  expectVecNear(core::transformPoint(view, eye), {0, 0, 0}, 1e-5f);
+  float distance = core::length(target - eye);
+  expectVecNear(core::transformPoint(view, target), {0, 0, -distance}, 1e-5f);
+  // The up vector stays in the upper half of the image.
+  EXPECT_GT(core::transformPoint(view, eye + Vec3{0, 1, 0}).y, 0.0f);
+}
+
+TEST(Math, LookAtAlongUpStillWorks) {
+  Vec3 eye{0, 5, 0}, target{0, 0, 0};
+  Mat4 view = core::lookAt(eye, target, {0, 1, 0});
+  expectVecNear(core::transformPoint(view, target), {0, 0, -5}, 1e-5f);
+}
+
+TEST(Math, PerspectiveMapsNearAndFarToMinusOneAndOne) {
+  float z_near = 0.5f, z_far = 20.0f;
+  Mat4 projection = core::perspective(1.0f, 1.5f, z_near, z_far);
+  auto ndc_depth = [&](float eye_z) {
+    Vec4 clip = core::transform(projection, {0.3f, -0.2f, eye_z, 1});
+    return clip.z / clip.w;
+  };
+  EXPECT_NEAR(ndc_depth(-z_near), -1.0f, 1e-5f);
+  EXPECT_NEAR(ndc_depth(-z_far), 1.0f, 1e-5f);
+  // tan(fov/2) * near is the top edge of the near plane: y_ndc = 1 there.
+  Vec4 top = core::transform(projection, {0, z_near * std::tan(0.5f), -z_near, 1});
+  EXPECT_NEAR(top.y / top.w, 1.0f, 1e-5f);
+}
+
+TEST(BoundingSphere, UnitCubeCornersHaveRadiusHalfRootThree) {
+  Mesh mesh;
+  for (int i = 0; i < 8; ++i)
+    mesh.positions.push_back({float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
+  core::Sphere sphere = core::computeBoundingSphere(mesh);
+  float expected = std::sqrt(3.0f) / 2;
+  EXPECT_NEAR(sphere.radius, expected, 0.01f * expected);
+  for (Vec3 p : mesh.positions)
+    EXPECT_LE(core::length(p - sphere.center), sphere.radius * (1 + 1e-6f));
+}
+
+TEST(BoundingSphere, ContainsEveryPointOfARandomCloud) {
+  std::mt19937 random(99);
+  std::normal_distribution<float> gauss(0, 1);
+  Mesh mesh;
+  for (int i = 0; i < 1000; ++i)
+    mesh.positions.push_back({gauss(random) * 3 + 1, gauss(random), gauss(random) * 0.5f - 2});
+  core::Sphere sphere = core::computeBoundingSphere(mesh);
+  for (Vec3 p : mesh.positions)
+    EXPECT_LE(core::length(p - sphere.center), sphere.radius * (1 + 1e-6f));
+}
+
+TEST(BoundingSphere, EmptyMeshHasZeroRadius) {
+  EXPECT_EQ(core::computeBoundingSphere(Mesh{}).radius, 0.0f);
+}
+
+}  // namespace
+}  // namespace duolod

@@ -1,0 +1,790 @@
+// glTF reader/writer tests: the real Khronos samples (counts, materials, textures, colour spaces),
+// a write → read round trip through .gltf and .glb, small hand-made files with known answers
+// (node transforms, mirroring, submeshes, index types, normalized colours), and malformed files,
+// each of which must come back as an Error naming the file, never a crash.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "duolod/io.hpp"
+#include "test_support.hpp"
+
+namespace duolod {
+namespace {
+namespace fs = std::filesystem;
+using core::Vec3;
+using nlohmann::json;
+
+constexpr int kUnsignedByte = 5121;
+constexpr int kUnsignedShort = 5123;
+constexpr int kUnsignedInt = 5125;
+constexpr int kFloat = 5126;
+
+std::string base64(const std::vector<uint8_t>& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t chunk = uint32_t(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) chunk |= uint32_t(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) chunk |= bytes[i + 2];
+    out += kAlphabet[(chunk >> 18) & 63];
+    out += kAlphabet[(chunk >> 12) & 63];
+    out += i + 1 < bytes.size() ? kAlphabet[(chunk >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kAlphabet[chunk & 63] : '=';
+  }
+  return out;
+}
+
+std::vector<uint8_t> fileBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+// A hand-made glTF: one binary buffer built view by view, and the JSON document around it.
+struct HandGltf {
+  json doc = {{"asset", {{"version", "2.0"}}}};
+  std::vector<uint8_t> bin;
+
+  // Appends bytes as a new bufferView, 4-byte aligned; returns its index.
+  int addView(const void* data, size_t size, size_t byte_stride = 0) {
+    while (bin.size() % 4) bin.push_back(0);
+    json view = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", size}};
+    if (byte_stride) view["byteStride"] = byte_stride;
+    const auto* bytes = static_cast<const uint8_t*>(data);
+    bin.insert(bin.end(), bytes, bytes + size);
+    doc["bufferViews"].push_back(view);
+    return int(doc["bufferViews"].size()) - 1;
+  }
+  template <class T>
+  int addView(const std::vector<T>& values, size_t byte_stride = 0) {
+    return addView(values.data(), values.size() * sizeof(T), byte_stride);
+  }
+  int addAccessor(int view, int component_type, size_t count, const std::string& type,
+                  json extra = json::object()) {
+    json accessor = {
+        {"bufferView", view}, {"componentType", component_type}, {"count", count}, {"type", type}};
+    accessor.update(extra);
+    doc["accessors"].push_back(accessor);
+    return int(doc["accessors"].size()) - 1;
+  }
+  // Float data as a view plus an accessor over all of it.
+  int addFloats(const std::vector<float>& values, const std::string& type) {
+    size_t components = type == "SCALAR" ? 1 : type == "VEC2" ? 2 : type == "VEC3" ? 3 : 4;
+    return addAccessor(addView(values), kFloat, values.size() / components, type);
+  }
+  template <class T>
+  int addIndices(const std::vector<T>& indices, int component_type) {
+    return addAccessor(addView(indices), component_type, indices.size(), "SCALAR");
+  }
+  // Adds a mesh with the given primitives; returns its index.
+  int addMesh(json primitives) {
+    doc["meshes"].push_back({{"primitives", primitives}});
+    return int(doc["meshes"].size()) - 1;
+  }
+  int addNode(json node) {
+    doc["nodes"].push_back(node);
+    return int(doc["nodes"].size()) - 1;
+  }
+  void setScene(json root_nodes) {
+    doc["scene"] = 0;
+    doc["scenes"] = json::array({{{"nodes", root_nodes}}});
+  }
+
+  // Writes NAME.gltf into `dir` with the buffer as NAME.bin beside it, or embedded as a base64
+  // data: URI. A "buffers" entry already in the document is kept as it is.
+  std::string write(const fs::path& dir, const std::string& name, bool embed = false) const {
+    json out = doc;
+    if (!out.contains("buffers") && !bin.empty()) {
+      std::string uri =
+          embed ? "data:application/octet-stream;base64," + base64(bin) : name + ".bin";
+      out["buffers"] = json::array({{{"byteLength", bin.size()}, {"uri", uri}}});
+    }
+    if (!embed && !bin.empty()) writeBytes(dir / (name + ".bin"), bin);
+    fs::path path = dir / (name + ".gltf");
+    std::ofstream(path) << out.dump(2);
+    return path.string();
+  }
+};
+
+json primitive(int positions, int indices = -1, int material = -1,
+               json other_attributes = json::object()) {
+  json attributes = {{"POSITION", positions}};
+  attributes.update(other_attributes);
+  json prim = {{"attributes", attributes}};
+  if (indices >= 0) prim["indices"] = indices;
+  if (material >= 0) prim["material"] = material;
+  return prim;
+}
+
+// One triangle (0,0,0) (1,0,0) (0,1,0), counter-clockwise seen from +z, on node 0 of scene 0.
+HandGltf oneTriangle() {
+  HandGltf g;
+  int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
+  int indices = g.addIndices(std::vector<uint32_t>{0, 1, 2}, kUnsignedInt);
+  g.addNode({{"mesh", g.addMesh({primitive(positions, indices)})}});
+  g.setScene({0});
+  return g;
+}
+
+// A small asset built in memory (a unit quad with one red material), for writer tests.
+core::Asset quadAsset() {
+  core::Asset asset;
+  asset.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  asset.mesh.normals.assign(4, Vec3{0, 0, 1});
+  asset.mesh.indices = {0, 1, 2, 0, 2, 3};
+  asset.mesh.submeshes = {{0, 6, 0}};
+  core::Material red;
+  red.name = "red";
+  red.base_color_factor = {1, 0, 0, 1};
+  asset.materials = {red};
+  return asset;
+}
+
+// Loading `path` must fail with a message that names the file (and contains `fragment`).
+void expectLoadError(const std::string& path, const std::string& fragment = "") {
+  auto loaded = io::loadAsset(path);
+  ASSERT_FALSE(loaded) << path << " loaded although it is malformed";
+  const std::string& message = loaded.error().message;
+  EXPECT_NE(message.find(fs::path(path).filename().string()), std::string::npos)
+      << "message does not name the file: " << message;
+  if (!fragment.empty()) {
+    EXPECT_NE(message.find(fragment), std::string::npos)
+        << "expected '" << fragment << "' in: " << message;
+  }
+}
+
+bool hasWarningContaining(const core::Asset& asset, const std::string& fragment) {
+  for (const std::string& warning : asset.warnings)
+    if (warning.find(fragment) != std::string::npos) return true;
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Real assets.
+
+TEST(GltfSamples, WaterBottleCountsMaterialAndTextures) {
+  DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset) << asset.error().message;
+  const core::Mesh& mesh = asset->mesh;
+  EXPECT_EQ(mesh.triangleCount(), 4510u);
+  EXPECT_TRUE(core::validateMesh(mesh));
+  EXPECT_EQ(mesh.tangents.size(), mesh.vertexCount());  // from the file
+  EXPECT_EQ(mesh.normals.size(), mesh.vertexCount());
+  EXPECT_EQ(mesh.uv0.size(), mesh.vertexCount());
+  ASSERT_EQ(asset->materials.size(), 1u);
+  const core::Material& m = asset->materials[0];
+  EXPECT_EQ(m.name, "BottleMat");
+  // Five texture slots are used; occlusion and metallic-roughness share one packed ORM image, so
+  // the file has four distinct textures.
+  EXPECT_GE(m.base_color_texture, 0);
+  EXPECT_GE(m.metallic_roughness_texture, 0);
+  EXPECT_GE(m.normal_texture, 0);
+  EXPECT_GE(m.occlusion_texture, 0);
+  EXPECT_GE(m.emissive_texture, 0);
+  EXPECT_EQ(m.occlusion_texture, m.metallic_roughness_texture);
+  ASSERT_EQ(asset->textures.size(), 4u);
+  for (const core::Texture& t : asset->textures) {
+    EXPECT_EQ(t.image.width, 2048) << t.name;
+    EXPECT_EQ(t.image.height, 2048) << t.name;
+    EXPECT_EQ(t.image.pixels.size(), 2048u * 2048u * 4u) << t.name;
+  }
+  EXPECT_TRUE(asset->textures[m.base_color_texture].srgb);
+  EXPECT_TRUE(asset->textures[m.emissive_texture].srgb);
+  EXPECT_FALSE(asset->textures[m.metallic_roughness_texture].srgb);
+  EXPECT_FALSE(asset->textures[m.normal_texture].srgb);
+  EXPECT_EQ(m.emissive_factor, (Vec3{1, 1, 1}));
+}
+
+TEST(GltfSamples, AvocadoTriangleCount) {
+  DUOLOD_REQUIRE_ASSET(path, "gltf/Avocado/Avocado.gltf");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset) << asset.error().message;
+  EXPECT_EQ(asset->mesh.triangleCount(), 682u);
+  EXPECT_EQ(asset->textures.size(), 3u);
+  EXPECT_TRUE(core::validateMesh(asset->mesh));
+}
+
+void expectSameMaterial(const core::Material& a, const core::Material& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.base_color_factor.x, b.base_color_factor.x);
+  EXPECT_EQ(a.base_color_factor.y, b.base_color_factor.y);
+  EXPECT_EQ(a.base_color_factor.z, b.base_color_factor.z);
+  EXPECT_EQ(a.base_color_factor.w, b.base_color_factor.w);
+  EXPECT_EQ(a.metallic_factor, b.metallic_factor);
+  EXPECT_EQ(a.roughness_factor, b.roughness_factor);
+  EXPECT_EQ(a.emissive_factor, b.emissive_factor);
+  EXPECT_EQ(a.normal_scale, b.normal_scale);
+  EXPECT_EQ(a.occlusion_strength, b.occlusion_strength);
+  EXPECT_EQ(a.alpha_mode, b.alpha_mode);
+  EXPECT_EQ(a.double_sided, b.double_sided);
+  EXPECT_EQ(a.base_color_texture, b.base_color_texture);
+  EXPECT_EQ(a.metallic_roughness_texture, b.metallic_roughness_texture);
+  EXPECT_EQ(a.normal_texture, b.normal_texture);
+  EXPECT_EQ(a.occlusion_texture, b.occlusion_texture);
+  EXPECT_EQ(a.emissive_texture, b.emissive_texture);
+}
+
+std::vector<std::string> temporaryFilesIn(const fs::path& dir) {
+  std::vector<std::string> found;
+  for (const auto& entry : fs::directory_iterator(dir))
+    if (entry.path().filename().string().find(".tmp-") != std::string::npos)
+      found.push_back(entry.path().filename().string());
+  return found;
+}
+
+// Works on a scratch copy of the sample so that a writer bug can never damage the shared asset.
+TEST(GltfRoundTrip, WaterBottleThroughGltfAndGlb) {
+  DUOLOD_REQUIRE_ASSET(source, "gltf/WaterBottle/WaterBottle.gltf");
+  fs::path copy = test::scratchDir("copy");
+  fs::copy(fs::path(source).parent_path(), copy);
+  std::string input = (copy / "WaterBottle.gltf").string();
+  auto original = io::loadAsset(input);
+  ASSERT_TRUE(original) << original.error().message;
+
+  // The writer refuses the file the asset came from, however it is spelled, and leaves it alone.
+  std::vector<uint8_t> input_bytes = fileBytes(input);
+  auto over_source = io::writeGltf(*original, original->source_path);
+  EXPECT_FALSE(over_source);
+  auto over_alias = io::writeGltf(*original, (copy / ".." / "copy" / "WaterBottle.gltf").string());
+  EXPECT_FALSE(over_alias);
+  EXPECT_EQ(fileBytes(input), input_bytes);
+
+  fs::path out = test::scratchDir("out");
+  for (const char* name : {"bottle.gltf", "bottle.glb"}) {
+    SCOPED_TRACE(name);
+    std::string path = (out / name).string();
+    auto written = io::writeGltf(*original, path);
+    ASSERT_TRUE(written) << written.error().message;
+    auto reloaded = io::loadAsset(path);
+    ASSERT_TRUE(reloaded) << reloaded.error().message;
+    const core::Mesh& a = original->mesh;
+    const core::Mesh& b = reloaded->mesh;
+    EXPECT_EQ(b.triangleCount(), a.triangleCount());
+    ASSERT_EQ(b.vertexCount(), a.vertexCount());
+    size_t differing = 0;
+    for (size_t v = 0; v < a.vertexCount(); ++v)
+      if (std::memcmp(&a.positions[v], &b.positions[v], sizeof(Vec3)) != 0) ++differing;
+    EXPECT_EQ(differing, 0u) << "positions are not bitwise equal after the round trip";
+    EXPECT_EQ(b.indices, a.indices);
+    EXPECT_EQ(b.tangents.size(), b.vertexCount());
+    ASSERT_EQ(reloaded->materials.size(), original->materials.size());
+    expectSameMaterial(reloaded->materials[0], original->materials[0]);
+    ASSERT_EQ(reloaded->textures.size(), original->textures.size());
+    for (size_t t = 0; t < original->textures.size(); ++t) {
+      EXPECT_EQ(reloaded->textures[t].image.width, original->textures[t].image.width);
+      EXPECT_EQ(reloaded->textures[t].image.height, original->textures[t].image.height);
+      EXPECT_EQ(reloaded->textures[t].srgb, original->textures[t].srgb);
+      EXPECT_TRUE(reloaded->textures[t].image.pixels == original->textures[t].image.pixels)
+          << "texture " << t << " changed (PNG is lossless)";
+    }
+    // Writing over the reloaded file's own path is refused too.
+    EXPECT_FALSE(io::writeGltf(*reloaded, path));
+  }
+  EXPECT_TRUE(fs::exists(out / "bottle.bin"));
+  EXPECT_EQ(temporaryFilesIn(out), std::vector<std::string>{});
+  EXPECT_EQ(temporaryFilesIn(copy), std::vector<std::string>{});
+}
+
+TEST(GltfWriter, RefusesSourcePathOfHandMadeFileAndBadExtension) {
+  fs::path dir = test::scratchDir("w");
+  std::string path = oneTriangle().write(dir, "tri");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset) << asset.error().message;
+  std::vector<uint8_t> before = fileBytes(path);
+  auto refused = io::writeGltf(*asset, path);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("tri.gltf"), std::string::npos) << refused.error().message;
+  EXPECT_EQ(fileBytes(path), before);
+  EXPECT_FALSE(io::writeGltf(*asset, (dir / "tri.obj").string()));
+  auto no_folder = io::writeGltf(*asset, (dir / "missing" / "x.glb").string());
+  EXPECT_FALSE(no_folder);
+  EXPECT_FALSE(fs::exists(dir / "missing"));
+  EXPECT_EQ(temporaryFilesIn(dir), std::vector<std::string>{});
+}
+
+TEST(GltfWriter, OverwritesAnEarlierOutputAtomically) {
+  fs::path dir = test::scratchDir("w");
+  std::string path = (dir / "quad.glb").string();
+  core::Asset asset = quadAsset();
+  ASSERT_TRUE(io::writeGltf(asset, path));
+  asset.materials[0].base_color_factor = {0, 1, 0, 1};
+  ASSERT_TRUE(io::writeGltf(asset, path));
+  auto reloaded = io::loadAsset(path);
+  ASSERT_TRUE(reloaded) << reloaded.error().message;
+  EXPECT_EQ(reloaded->materials[0].base_color_factor.y, 1.0f);
+  EXPECT_EQ(temporaryFilesIn(dir), std::vector<std::string>{});
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hand-made files with known answers.
+
+TEST(GltfReader, EmbeddedDataUriBuffer) {
+  std::string path = oneTriangle().write(test::scratchDir("g"), "tri", /*embed=*/true);
+  auto asset = io::readGltf(path, {});
+  ASSERT_TRUE(asset) << asset.error().message;
+  ASSERT_EQ(asset->mesh.vertexCount(), 3u);
+  EXPECT_EQ(asset->mesh.positions[1], (Vec3{1, 0, 0}));
+  EXPECT_EQ(asset->mesh.indices, (std::vector<uint32_t>{0, 1, 2}));
+}
+
+// parent: T = (1,2,3), R = 90° about +z; child: T = (0,0,1), S = (2,3,4).
+// (1,1,1) → S (2,3,4) → T_child (2,3,5) → R: (x,y) → (−y,x) gives (−3,2,5) → T (−2,4,8).
+TEST(GltfReader, NodeHierarchyTrsIsFlattened) {
+  HandGltf g;
+  int positions = g.addFloats({1, 1, 1, 0, 0, 0, 1, 0, 0}, "VEC3");
+  int mesh = g.addMesh({primitive(positions)});
+  float h = std::sqrt(0.5f);
+  g.addNode({{"children", {1}}, {"translation", {1, 2, 3}}, {"rotation", {0, 0, h, h}}});
+  g.addNode({{"mesh", mesh}, {"translation", {0, 0, 1}}, {"scale", {2, 3, 4}}});
+  g.setScene({0});
+  auto asset = io::readGltf(g.write(test::scratchDir("g"), "trs"), {});
+  ASSERT_TRUE(asset) << asset.error().message;
+  ASSERT_EQ(asset->mesh.vertexCount(), 3u);
+  const auto& p = asset->mesh.positions;
+  EXPECT_NEAR(p[0].x, -2, 1e-6);
+  EXPECT_NEAR(p[0].y, 4, 1e-6);
+  EXPECT_NEAR(p[0].z, 8, 1e-6);
+  // (0,0,0) → (0,0,1) → (0,0,1) → (1,2,4).
+  EXPECT_NEAR(p[1].x, 1, 1e-6);
+  EXPECT_NEAR(p[1].y, 2, 1e-6);
+  EXPECT_NEAR(p[1].z, 4, 1e-6);
+}
+
+// A column-major matrix node: scale 2 and translate (5,0,0).
+TEST(GltfReader, NodeMatrixIsApplied) {
+  HandGltf g;
+  int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
+  int mesh = g.addMesh({primitive(positions)});
+  g.addNode({{"mesh", mesh}, {"matrix", {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 5, 0, 0, 1}}});
+  g.setScene({0});
+  auto asset = io::readGltf(g.write(test::scratchDir("g"), "matrix"), {});
+  ASSERT_TRUE(asset) << asset.error().message;
+  EXPECT_EQ(asset->mesh.positions[1], (Vec3{7, 0, 0}));
+  EXPECT_EQ(asset->mesh.positions[2], (Vec3{5, 2, 0}));
+}
+
+// Mirroring x turns the triangle's winding clockwise; the reader must swap two corners so that the
+// front face (counter-clockwise) still faces +z, where the transformed normal points, and flip
+// the tangent's handedness (the bitangent +y stays +y while cross(n, t) flips).
+TEST(GltfReader, MirroredNodeKeepsCounterClockwiseWinding) {
+  HandGltf g;
+  int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
+  int normals = g.addFloats({0, 0, 1, 0, 0, 1, 0, 0, 1}, "VEC3");
+  int tangents = g.addFloats({1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1}, "VEC4");
+  int indices = g.addIndices(std::vector<uint16_t>{0, 1, 2, 0}, kUnsignedShort);
+  g.doc["accessors"][indices]["count"] = 3;  // the 4th short is padding
+  int mesh =
+      g.addMesh({primitive(positions, indices, -1, {{"NORMAL", normals}, {"TANGENT", tangents}})});
+  g.addNode({{"mesh", mesh}, {"scale", {-1, 1, 1}}});
+  g.setScene({0});
+  auto asset = io::loadAsset(g.write(test::scratchDir("g"), "mirror"));
+  ASSERT_TRUE(asset) << asset.error().message;
+  const core::Mesh& m = asset->mesh;
+  ASSERT_EQ(m.triangleCount(), 1u);
+  Vec3 a = m.positions[m.indices[0]], b = m.positions[m.indices[1]], c = m.positions[m.indices[2]];
+  Vec3 geometric = core::normalize(core::cross(b - a, c - a));
+  EXPECT_NEAR(geometric.z, 1.0f, 1e-6f) << "winding flipped by the mirror";
+  EXPECT_EQ(m.normals[m.indices[0]], (Vec3{0, 0, 1}));
+  EXPECT_EQ(m.tangents[0].x, -1.0f);
+  EXPECT_EQ(m.tangents[0].w, -1.0f);
+  // The mirrored corner really is at x = -1.
+  bool found = false;
+  for (Vec3 p : m.positions) found |= p == Vec3{-1, 0, 0};
+  EXPECT_TRUE(found);
+}
+
+// Primitive 0 uses material 1, primitive 1 material 0; submeshes come out in material order.
+TEST(GltfReader, TwoPrimitivesWithDifferentMaterialsGiveTwoSubmeshes) {
+  HandGltf g;
+  int first = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
+  int second = g.addFloats({0, 0, 5, 1, 0, 5, 0, 1, 5}, "VEC3");
+  int mesh = g.addMesh({primitive(first, -1, 1), primitive(second, -1, 0)});
+  g.doc["materials"] = {
+      {{"name", "red"}, {"pbrMetallicRoughness", {{"baseColorFactor", {1, 0, 0, 1}}}}},
+      {{"name", "green"},
+       {"pbrMetallicRoughness", {{"baseColorFactor", {0, 1, 0, 1}}, {"metallicFactor", 0.25}}}}};
+  g.addNode({{"mesh", mesh}});
+  g.setScene({0});
+  auto asset = io::loadAsset(g.write(test::scratchDir("g"), "two"));
+  ASSERT_TRUE(asset) << asset.error().message;
+  const core::Mesh& m = asset->mesh;
+  ASSERT_EQ(m.submeshes.size(), 2u);
+  ASSERT_EQ(asset->materials.size(), 2u);
+  EXPECT_EQ(asset->materials[1].name, "green");
+  EXPECT_EQ(asset->materials[1].metallic_factor, 0.25f);
+  for (const core::Submesh& sub : m.submeshes) {
+    ASSERT_EQ(sub.index_count, 3u);
+    float z = m.positions[m.indices[sub.first_index]].z;
+    // material 0 (red) was on the z = 5 primitive, material 1 (green) on z = 0.
+    EXPECT_EQ(z, sub.material == 0 ? 5.0f : 0.0f) << "submesh of material " << sub.material;
+  }
+  EXPECT_NE(m.submeshes[0].material, m.submeshes[1].material);
+}
+
+TEST(GltfReader, PrimitiveWithoutIndicesIsATriangleList) {
+  HandGltf g;
+  int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0, 3, 0, 0, 2, 1, 0}, "VEC3");
+  g.addNode({{"mesh", g.addMesh({primitive(positions)})}});
+  g.setScene({0});
+  auto asset = io::readGltf(g.write(test::scratchDir("g"), "noindex"), {});
+  ASSERT_TRUE(asset) << asset.error().message;
+  EXPECT_EQ(asset->mesh.indices, (std::vector<uint32_t>{0, 1, 2, 3, 4, 5}));
+  // A default material is added for the primitive without one.
+  ASSERT_EQ(asset->materials.size(), 1u);
+  EXPECT_EQ(asset->mesh.submeshes[0].material, 0u);
+}
+
+TEST(GltfReader, UnsignedByteAndUnsignedShortIndices) {
+  HandGltf g;
+  int positions = g.addFloats({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}, "VEC3");
+  int byte_indices = g.addIndices(std::vector<uint8_t>{0, 1, 2, 0, 2, 3}, kUnsignedByte);
+  int short_indices = g.addIndices(std::vector<uint16_t>{3, 2, 1, 3, 1, 0}, kUnsignedShort);
+  g.doc["materials"] = {{{"name", "a"}}, {{"name", "b"}}};
+  int mesh =
+      g.addMesh({primitive(positions, byte_indices, 0), primitive(positions, short_indices, 1)});
+  g.addNode({{"mesh", mesh}});
+  g.setScene({0});
+  auto asset = io::readGltf(g.write(test::scratchDir("g"), "indices"), {});
+  ASSERT_TRUE(asset) << asset.error().message;
+  // Each primitive brings its own 4 vertices: the second one's are 4..7.
+  EXPECT_EQ(asset->mesh.vertexCount(), 8u);
+  EXPECT_EQ(asset->mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 7, 6, 5, 7, 5, 4}));
+}
+
+TEST(GltfReader, NormalizedUnsignedByteColorsAreInZeroOne) {
+  HandGltf g;
+  int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
+  std::vector<uint8_t> rgba = {255, 0, 128, 255, 0, 255, 64, 255, 51, 102, 153, 204};
+  int colors = g.addAccessor(g.addView(rgba), kUnsignedByte, 3, "VEC4", {{"normalized", true}});
+  g.addNode({{"mesh", g.addMesh({primitive(positions, -1, -1, {{"COLOR_0", colors}})})}});
+  g.setScene({0});
+  auto asset = io::readGltf(g.write(test::scratchDir("g"), "colors"), {});
+  ASSERT_TRUE(asset) << asset.error().message;
+  const auto& c = asset->mesh.colors;
+  ASSERT_EQ(c.size(), 3u);
+  for (size_t v = 0; v < 3; ++v) {
+    const float* channel = &c[v].x;
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_FLOAT_EQ(channel[k], rgba[v * 4 + k] / 255.0f) << "vertex " << v << " channel " << k;
+      EXPECT_GE(channel[k], 0.0f);
+      EXPECT_LE(channel[k], 1.0f);
+    }
+  }
+}
+
+// A material whose base colour texture (a 2×2 PNG beside the file) carries KHR_texture_transform.
+HandGltf texturedTriangle(bool with_transform) {
+  HandGltf g = oneTriangle();
+  json texture_ref = {{"index", 0}};
+  if (with_transform) texture_ref["extensions"] = {{"KHR_texture_transform", {{"scale", {2, 2}}}}};
+  g.doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", texture_ref}}}}};
+  g.doc["meshes"][0]["primitives"][0]["material"] = 0;
+  g.doc["textures"] = {{{"source", 0}}};
+  g.doc["images"] = {{{"uri", "checker.png"}}};
+  if (with_transform) g.doc["extensionsUsed"] = {"KHR_texture_transform"};
+  return g;
+}
+
+TEST(GltfReader, TextureTransformIsAWarning) {
+  fs::path dir = test::scratchDir("g");
+  core::ImageRGBA8 checker{
+      2, 2, {0, 0, 0, 255, 255, 255, 255, 255, 255, 255, 255, 255, 0, 0, 0, 255}};
+  ASSERT_TRUE(io::writePng(checker, (dir / "checker.png").string()));
+  auto asset = io::loadAsset(texturedTriangle(true).write(dir, "transform"));
+  ASSERT_TRUE(asset) << asset.error().message;
+  EXPECT_TRUE(hasWarningContaining(*asset, "KHR_texture_transform"));
+  ASSERT_EQ(asset->textures.size(), 1u);
+  EXPECT_EQ(asset->textures[0].image.width, 2);
+  EXPECT_TRUE(asset->textures[0].srgb);
+  auto plain = io::loadAsset(texturedTriangle(false).write(dir, "plain"));
+  ASSERT_TRUE(plain) << plain.error().message;
+  EXPECT_FALSE(hasWarningContaining(*plain, "KHR_texture_transform"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Malformed files: an Error naming the file, never a crash.
+
+TEST(GltfMalformed, TruncatedJson) {
+  fs::path dir = test::scratchDir("m");
+  std::string path = oneTriangle().write(dir, "cut");
+  std::vector<uint8_t> bytes = fileBytes(path);
+  bytes.resize(bytes.size() / 2);
+  writeBytes(path, bytes);
+  expectLoadError(path);
+}
+
+TEST(GltfMalformed, IndexOutOfRange) {
+  HandGltf g = oneTriangle();
+  // Replace the index data: 5 does not exist among 3 vertices.
+  uint32_t bad[3] = {0, 1, 5};
+  size_t offset = g.doc["bufferViews"][1]["byteOffset"];
+  std::memcpy(g.bin.data() + offset, bad, sizeof(bad));
+  expectLoadError(g.write(test::scratchDir("m"), "range"), "out of range");
+}
+
+TEST(GltfMalformed, AccessorCountLargerThanItsBufferView) {
+  HandGltf g = oneTriangle();
+  g.doc["accessors"][0]["count"] = 4;  // 4 × 12 bytes in a 36-byte view
+  expectLoadError(g.write(test::scratchDir("m"), "count"), "do not fit");
+}
+
+TEST(GltfMalformed, BufferViewPastTheEndOfTheBuffer) {
+  HandGltf g = oneTriangle();
+  g.doc["bufferViews"][1]["byteLength"] = 400;
+  expectLoadError(g.write(test::scratchDir("m"), "view"));
+}
+
+// Offsets near 2^64 must not wrap around in the bounds checks (offset + length → small).
+TEST(GltfMalformed, OffsetsNearTwoToThe64DoNotWrapAround) {
+  fs::path dir = test::scratchDir("m");
+  const uint64_t kTop = UINT64_MAX;
+  HandGltf g = oneTriangle();
+  g.doc["bufferViews"][0]["byteOffset"] = uint64_t(1) << 63;
+  g.doc["bufferViews"][0]["byteLength"] = uint64_t(1) << 63;
+  expectLoadError(g.write(dir, "view_halves"), "past the end");
+
+  g = oneTriangle();
+  g.doc["bufferViews"][0]["byteOffset"] = kTop - 3;  // wraps to 36 with byteLength 40
+  g.doc["bufferViews"][0]["byteLength"] = 40;
+  expectLoadError(g.write(dir, "view_wrap"), "past the end");
+
+  g = oneTriangle();
+  g.doc["accessors"][0]["byteOffset"] = kTop - 7;  // would start 8 bytes before the view
+  expectLoadError(g.write(dir, "accessor_wrap"), "do not fit");
+}
+
+// An accessor without a bufferView (zeros, by the specification) cannot be read: its count is
+// bounded by nothing in the file, and 2^40 elements must not be allocated.
+TEST(GltfMalformed, AccessorWithoutBufferView) {
+  HandGltf g = oneTriangle();
+  g.doc["accessors"][0].erase("bufferView");
+  g.doc["accessors"][0]["count"] = uint64_t(1) << 40;
+  expectLoadError(g.write(test::scratchDir("m"), "noview"), "no bufferView");
+}
+
+TEST(GltfMalformed, ByteStrideSmallerThanTheElement) {
+  HandGltf g = oneTriangle();
+  g.doc["bufferViews"][0]["byteStride"] = 4;  // VEC3 float needs 12
+  expectLoadError(g.write(test::scratchDir("m"), "stride"), "byteStride");
+}
+
+TEST(GltfMalformed, MissingBinFile) {
+  fs::path dir = test::scratchDir("m");
+  std::string path = oneTriangle().write(dir, "nobin");
+  fs::remove(dir / "nobin.bin");
+  expectLoadError(path);
+}
+
+// A buffer or image uri that names a folder (tinygltf sized its read buffer with tellg()).
+TEST(GltfMalformed, UriNamingAFolder) {
+  fs::path dir = test::scratchDir("m");
+  fs::create_directories(dir / "sub");
+  HandGltf g = oneTriangle();
+  g.doc["buffers"] = {{{"byteLength", g.bin.size()}, {"uri", "sub"}}};
+  expectLoadError(g.write(dir, "folder_buffer"), "sub");
+  fs::create_directories(dir / "checker.png");
+  expectLoadError(texturedTriangle(false).write(dir, "folder_image"), "checker.png");
+}
+
+TEST(GltfMalformed, MissingTextureImageFile) {
+  std::string path = texturedTriangle(false).write(test::scratchDir("m"), "noimage");
+  expectLoadError(path, "checker.png");
+}
+
+TEST(GltfMalformed, NonFiniteFloatInTheBin) {
+  HandGltf g = oneTriangle();
+  float nan = std::nanf("");
+  std::memcpy(g.bin.data() + 4 * sizeof(float), &nan, sizeof(nan));  // vertex 1, y
+  expectLoadError(g.write(test::scratchDir("m"), "nan"), "not a finite number");
+}
+
+TEST(GltfMalformed, NodeCycle) {
+  HandGltf g = oneTriangle();
+  g.doc["nodes"][0]["children"] = {1};
+  g.addNode({{"children", {0}}});
+  expectLoadError(g.write(test::scratchDir("m"), "cycle"));
+}
+
+// glTF requires the node hierarchy to be disjoint trees (each node has at most one parent). Here
+// node k lists node k+1 twice, 40 levels deep, with the triangle on the last node: flattening the
+// graph as if it were a tree would create 2^39 copies. It must be refused at once.
+TEST(GltfMalformed, NodeWithTwoParentsIsRefusedQuickly) {
+  HandGltf g = oneTriangle();
+  json mesh = g.doc["nodes"][0]["mesh"];
+  g.doc["nodes"] = json::array();
+  for (int k = 0; k < 40; ++k) g.addNode({{"children", {k + 1, k + 1}}});
+  g.addNode({{"mesh", mesh}});
+  auto start = std::chrono::steady_clock::now();
+  // Depth first, the first node met twice is the last one, listed twice by node 39.
+  expectLoadError(g.write(test::scratchDir("m"), "dag"), "node 40");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+}
+
+TEST(GltfMalformed, NegativeMaterialIndex) {
+  HandGltf g = oneTriangle();
+  g.doc["materials"] = {{{"name", "only"}}};
+  g.doc["meshes"][0]["primitives"][0]["material"] = -5;
+  expectLoadError(g.write(test::scratchDir("m"), "negative"), "material -5");
+}
+
+TEST(GltfMalformed, SceneReferencesAMissingNode) {
+  HandGltf g = oneTriangle();
+  g.setScene({0, 7});
+  expectLoadError(g.write(test::scratchDir("m"), "scene"), "node 7");
+}
+
+TEST(GltfMalformed, SparseAccessorIsUnsupported) {
+  HandGltf g = oneTriangle();
+  int sparse_indices = g.addView(std::vector<uint32_t>{1});
+  int sparse_values = g.addView(std::vector<float>{0, 0, 1});
+  g.doc["accessors"][0]["sparse"] = {
+      {"count", 1},
+      {"indices", {{"bufferView", sparse_indices}, {"componentType", kUnsignedInt}}},
+      {"values", {{"bufferView", sparse_values}}}};
+  expectLoadError(g.write(test::scratchDir("m"), "sparse"), "sparse");
+}
+
+TEST(GltfMalformed, EmptyFiles) {
+  fs::path dir = test::scratchDir("m");
+  writeBytes(dir / "empty.gltf", {});
+  writeBytes(dir / "empty.glb", {});
+  expectLoadError((dir / "empty.gltf").string());
+  expectLoadError((dir / "empty.glb").string());
+}
+
+TEST(GltfMalformed, UnknownExtensionAndFolder) {
+  fs::path dir = test::scratchDir("m");
+  writeBytes(dir / "model.xyz", {'h', 'i'});
+  expectLoadError((dir / "model.xyz").string(), "unsupported");
+  fs::create_directories(dir / "folder.gltf");
+  expectLoadError((dir / "folder.gltf").string(), "folder");
+  fs::create_directories(dir / "plainfolder");
+  expectLoadError((dir / "plainfolder").string());
+  expectLoadError((dir / "does_not_exist.gltf").string(), "not found");
+}
+
+// A valid GLB of the quad (12-byte header, JSON chunk, BIN chunk) to corrupt.
+std::vector<uint8_t> quadGlb(const fs::path& dir) {
+  std::string path = (dir / "quad_source.glb").string();
+  EXPECT_TRUE(io::writeGltf(quadAsset(), path));
+  return fileBytes(path);
+}
+
+uint32_t read32(const std::vector<uint8_t>& bytes, size_t offset) {
+  uint32_t v;
+  std::memcpy(&v, bytes.data() + offset, 4);
+  return v;
+}
+
+void write32(std::vector<uint8_t>& bytes, size_t offset, uint32_t v) {
+  std::memcpy(bytes.data() + offset, &v, 4);
+}
+
+// Re-packs a GLB with its JSON chunk edited and its BIN chunk (header included) kept as it was.
+template <class Edit>
+std::vector<uint8_t> rebuildGlb(const std::vector<uint8_t>& glb, Edit edit) {
+  uint32_t json_length = read32(glb, 12);
+  json doc = json::parse(glb.begin() + 20, glb.begin() + 20 + json_length);
+  edit(doc);
+  std::string text = doc.dump();
+  while (text.size() % 4) text.push_back(' ');
+  std::vector<uint8_t> out(glb.begin(), glb.begin() + 12);
+  out.resize(20);
+  write32(out, 12, uint32_t(text.size()));
+  write32(out, 16, 0x4E4F534A);  // "JSON"
+  out.insert(out.end(), text.begin(), text.end());
+  out.insert(out.end(), glb.begin() + 20 + json_length, glb.end());
+  write32(out, 8, uint32_t(out.size()));
+  return out;
+}
+
+TEST(GltfMalformed, GlbBadHeader) {
+  fs::path dir = test::scratchDir("m");
+  std::vector<uint8_t> good = quadGlb(dir);
+  ASSERT_GT(good.size(), 28u);
+  ASSERT_TRUE(io::loadAsset((dir / "quad_source.glb").string()));
+
+  std::vector<uint8_t> bytes = good;
+  write32(bytes, 8, uint32_t(good.size() + 100));  // total length longer than the file
+  writeBytes(dir / "length.glb", bytes);
+  expectLoadError((dir / "length.glb").string());
+
+  bytes = good;
+  write32(bytes, 16, 0x12345678);  // first chunk is not JSON
+  writeBytes(dir / "chunktype.glb", bytes);
+  expectLoadError((dir / "chunktype.glb").string());
+
+  bytes = good;
+  bytes[0] = 'x';  // not "glTF": read as JSON text, which it is not
+  writeBytes(dir / "magic.glb", bytes);
+  expectLoadError((dir / "magic.glb").string());
+
+  writeBytes(dir / "short.glb", {'g', 'l', 'T', 'F', 2, 0, 0, 0});
+  expectLoadError((dir / "short.glb").string());
+}
+
+TEST(GltfMalformed, GlbTruncatedChunk) {
+  fs::path dir = test::scratchDir("m");
+  std::vector<uint8_t> good = quadGlb(dir);
+  // Cut inside the BIN chunk; the header still claims the full length.
+  std::vector<uint8_t> bytes(good.begin(), good.end() - 16);
+  writeBytes(dir / "cut.glb", bytes);
+  expectLoadError((dir / "cut.glb").string());
+
+  // The same cut with the total length patched to match the file: now only the BIN chunk's
+  // declared length runs past the end.
+  write32(bytes, 8, uint32_t(bytes.size()));
+  writeBytes(dir / "cut_patched.glb", bytes);
+  expectLoadError((dir / "cut_patched.glb").string());
+
+  // BIN chunk and buffer both 8 bytes longer than the data in the file, while the total length
+  // matches the file: only a check that counts the BIN chunk's 8-byte header sees the overrun.
+  bytes = rebuildGlb(good, [](json& doc) {
+    doc["buffers"][0]["byteLength"] = doc["buffers"][0]["byteLength"].get<size_t>() + 8;
+  });
+  size_t bin_chunk = 20 + read32(bytes, 12);
+  write32(bytes, bin_chunk, read32(bytes, bin_chunk) + 8);
+  writeBytes(dir / "chunk_header.glb", bytes);
+  expectLoadError((dir / "chunk_header.glb").string());
+
+  // JSON chunk length past the end of the file.
+  bytes = good;
+  write32(bytes, 12, uint32_t(good.size()));
+  writeBytes(dir / "json_len.glb", bytes);
+  expectLoadError((dir / "json_len.glb").string());
+}
+
+// An embedded image whose bufferView runs past the end of the GLB's binary buffer.
+TEST(GltfMalformed, GlbImageBufferViewPastTheEnd) {
+  fs::path dir = test::scratchDir("m");
+  core::Asset asset = quadAsset();
+  asset.mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  core::Texture texture;
+  texture.image = {2, 2, std::vector<uint8_t>(16, 200)};
+  asset.textures = {texture};
+  asset.materials[0].base_color_texture = 0;
+  std::string source = (dir / "textured.glb").string();
+  ASSERT_TRUE(io::writeGltf(asset, source));
+  ASSERT_TRUE(io::loadAsset(source));
+  std::vector<uint8_t> out = rebuildGlb(fileBytes(source), [](json& doc) {
+    int image_view = doc["images"][0]["bufferView"];
+    doc["bufferViews"][image_view]["byteLength"] = 100000;
+  });
+  writeBytes(dir / "image_view.glb", out);
+  expectLoadError((dir / "image_view.glb").string());
+}
+
+}  // namespace
+}  // namespace duolod
