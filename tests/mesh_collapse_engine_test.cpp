@@ -1,0 +1,148 @@
+// The collapse engine's contract with cost models (what an image-driven cost relies on): the
+// initial fill comes in large batches, every later batch holds exactly the edges the last
+// collapse invalidated (all touching the survivor, or its ring with invalidation_ring = 2), both
+// directions of an edge are priced under endpoint placement, the survivor stays put when
+// endpoint_only, and placeAttributes/onCollapse run once per applied collapse.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "mesh/collapse_engine.hpp"
+#include "mesh_test_meshes.hpp"
+
+namespace duolod {
+namespace {
+
+// Prices a collapse by the length of its edge; remembers every call.
+class RecordingModel : public mesh::CostModel {
+ public:
+  void begin(const mesh::EngineState& state) override { begun = state.positions.size(); }
+  void evaluate(const mesh::EngineState& state, std::span<mesh::CandidateCollapse> batch) override {
+    batches.emplace_back(batch.begin(), batch.end());
+    for (auto& c : batch) {
+      mesh::Vec3d d = state.positions[c.to] - state.positions[c.from];
+      c.cost = c.error = std::sqrt(mesh::dot(d, d));
+      c.position = state.positions[c.to];
+    }
+  }
+  void placeAttributes(const mesh::EngineState&, const mesh::CandidateCollapse&,
+                       std::span<float>) override {
+    ++placed;
+  }
+  void onCollapse(const mesh::EngineState& state, const mesh::AppliedCollapse& applied) override {
+    applied_collapses.push_back(applied);
+    live_after.push_back(state.live_triangles);
+    EXPECT_FALSE(state.position_alive[applied.candidate.from]);
+    EXPECT_TRUE(state.position_alive[applied.candidate.to]);
+  }
+
+  size_t begun = 0;
+  size_t placed = 0;
+  std::vector<std::vector<mesh::CandidateCollapse>> batches;
+  std::vector<mesh::AppliedCollapse> applied_collapses;
+  std::vector<size_t> live_after;
+};
+
+// The positions adjacent to p in the current state.
+std::set<uint32_t> neighbours(const mesh::EngineState& state, uint32_t p) {
+  std::set<uint32_t> out;
+  state.forEachCorner(p, [&](uint32_t c) {
+    uint32_t t = c / 3;
+    for (int k = 0; k < 3; ++k)
+      if (state.cornerPosition(t * 3 + k) != p) out.insert(state.cornerPosition(t * 3 + k));
+  });
+  return out;
+}
+
+// Index of the first batch after the initial fill, which prices `fill_candidates` candidates.
+size_t firstCollapseBatch(const RecordingModel& model, size_t fill_candidates) {
+  size_t i = 0, filled = 0;
+  while (i < model.batches.size() && filled < fill_candidates) filled += model.batches[i++].size();
+  EXPECT_EQ(filled, fill_candidates);
+  return i;
+}
+
+TEST(CollapseEngine, BatchesAreTheInvalidatedEdges) {
+  core::Mesh sphere = test::icosphere(3, 1.0f, test::lumps);  // 642 positions, 1920 edges
+  core::computeNormals(sphere);  // attributes present, so placeAttributes is called
+  RecordingModel model;
+  mesh::EngineOptions options{.target_triangles = 600, .endpoint_only = true, .batch_size = 256};
+  auto result = mesh::runCollapseEngine(mesh::prepareMesh(sphere), model, options);
+  EXPECT_EQ(model.begun, sphere.vertexCount());
+  EXPECT_EQ(result.mesh.triangleCount(), 600u);
+  ASSERT_EQ(model.applied_collapses.size(), result.stats.collapses);
+  EXPECT_EQ(model.placed, result.stats.collapses);
+
+  // Initial fill: both directions of all 1920 edges, in batches of at least 256 (but the last).
+  const size_t fill = firstCollapseBatch(model, 2 * 1920);
+  std::set<std::pair<uint32_t, uint32_t>> directed;
+  for (size_t i = 0; i < fill; ++i) {
+    if (i + 1 < fill) {
+      EXPECT_GE(model.batches[i].size(), 256u);
+    }
+    for (const auto& c : model.batches[i]) directed.insert({c.from, c.to});
+  }
+  EXPECT_EQ(directed.size(), 2u * 1920u);
+  for (auto [a, b] : directed) EXPECT_TRUE(directed.count({b, a}));
+
+  // Then one batch per collapse, every candidate touching that collapse's survivor, and covering
+  // all of its edges (both directions).
+  ASSERT_EQ(model.batches.size() - fill, model.applied_collapses.size());
+  for (size_t k = 0; k < model.applied_collapses.size(); ++k) {
+    const auto& batch = model.batches[fill + k];
+    uint32_t survivor = model.applied_collapses[k].candidate.to;
+    std::set<uint32_t> others;
+    for (const auto& c : batch) {
+      EXPECT_TRUE(c.from == survivor || c.to == survivor);
+      EXPECT_TRUE(c.endpoint_only);
+      others.insert(c.from == survivor ? c.to : c.from);
+    }
+    EXPECT_EQ(batch.size(), 2 * others.size());
+  }
+  // Endpoint placement: every survivor kept an input position.
+  std::set<std::array<float, 3>> input;
+  for (auto p : sphere.positions) input.insert({p.x, p.y, p.z});
+  for (auto p : result.mesh.positions) EXPECT_TRUE(input.count({p.x, p.y, p.z}));
+}
+
+// With ring 2 the batch after a collapse also re-prices the edges around the survivor's
+// neighbours (a rendered cost changes there too).
+TEST(CollapseEngine, RingTwoInvalidatesTheNeighbours) {
+  core::Mesh sphere = test::icosphere(2, 1.0f, test::lumps);  // 162 positions, 480 edges
+  RecordingModel model;
+  mesh::EngineOptions options{.target_triangles = 200, .invalidation_ring = 2};
+  auto result = mesh::runCollapseEngine(mesh::prepareMesh(sphere), model, options);
+  EXPECT_EQ(result.mesh.triangleCount(), 200u);
+  // Optimal placement: one candidate per edge between free vertices.
+  const size_t fill = firstCollapseBatch(model, 480);
+  ASSERT_EQ(model.batches.size() - fill, model.applied_collapses.size());
+  size_t beyond = 0;
+  for (size_t k = 0; k < model.applied_collapses.size(); ++k) {
+    uint32_t survivor = model.applied_collapses[k].candidate.to;
+    for (const auto& c : model.batches[fill + k]) beyond += c.from != survivor && c.to != survivor;
+  }
+  EXPECT_GT(beyond, model.applied_collapses.size());
+}
+
+// The state a model sees is consistent: the live triangle count matches the triangles reachable
+// through the corner lists, and removed positions have none.
+TEST(CollapseEngine, StateStaysConsistent) {
+  core::Mesh grid = test::seamGrid(12, [](float x, float y) { return 0.1f * x * y; });
+  class CheckingModel : public RecordingModel {
+   public:
+    void onCollapse(const mesh::EngineState& state, const mesh::AppliedCollapse& applied) override {
+      RecordingModel::onCollapse(state, applied);
+      size_t corners = 0;
+      for (uint32_t p = 0; p < state.positions.size(); ++p)
+        if (state.position_alive[p]) state.forEachCorner(p, [&](uint32_t) { ++corners; });
+      EXPECT_EQ(corners, state.live_triangles * 3);
+      EXPECT_TRUE(neighbours(state, applied.candidate.from).empty());
+    }
+  } model;
+  auto result = mesh::runCollapseEngine(mesh::prepareMesh(grid), model, {.target_triangles = 40});
+  EXPECT_LE(result.mesh.triangleCount(), 60u);
+  EXPECT_GT(model.applied_collapses.size(), 100u);
+}
+
+}  // namespace
+}  // namespace duolod
