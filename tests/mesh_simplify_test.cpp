@@ -234,6 +234,23 @@ TEST(SimplifyQuadric, MaterialBorderIsKept) {
   }
 }
 
+// A flat two-material square: with material borders kept, each half can shrink to its own two
+// triangles at zero error, but no further; when collapses across the border are allowed the
+// square goes down to two triangles.
+TEST(SimplifyQuadric, MaterialBorderCollapseWhenAllowed) {
+  Mesh grid = test::gridMesh(8);
+  uint32_t half = uint32_t(grid.indices.size() / 2);
+  grid.submeshes = {{0, half, 0}, {half, half, 1}};
+  auto kept = mesh::simplifyQuadric(grid, {.target_triangles = 2, .target_error = 1e-6});
+  EXPECT_EQ(kept.mesh.triangleCount(), 4u);
+  EXPECT_EQ(kept.mesh.submeshes[0].index_count, 6u);
+  EXPECT_EQ(kept.mesh.submeshes[1].index_count, 6u);
+  auto crossed = mesh::simplifyQuadric(
+      grid, {.target_triangles = 2, .target_error = 1e-6, .allow_material_border_collapse = true});
+  EXPECT_EQ(crossed.mesh.triangleCount(), 2u);
+  EXPECT_TRUE(core::validateMesh(crossed.mesh).ok());
+}
+
 TEST(SimplifyQuadric, ErrorTargetBoundsTheReportedError) {
   Mesh sphere = test::icosphere(4, 1.0f, test::lumps);
   auto result = mesh::simplifyQuadric(sphere, {.target_error = 0.01});
