@@ -198,11 +198,18 @@ core::Status writeGltf(const core::Asset& asset, const std::string& path) {
   }
   std::string bin_name = target.stem().string() + ".bin";
   document["buffers"] = {{{"byteLength", builder.bin_.size()}, {"uri", bin_name}}};
+  // Side files must not replace anything beside the source asset (its own .bin or textures).
+  side_files.emplace_back((target.parent_path() / bin_name).string(), std::move(builder.bin_));
+  if (!asset.source_path.empty()) {
+    std::error_code ec;
+    fs::path source_folder = fs::weakly_canonical(fs::path(asset.source_path).parent_path(), ec);
+    for (const auto& [file, bytes] : side_files)
+      if (fs::exists(file, ec) &&
+          fs::weakly_canonical(fs::path(file).parent_path(), ec) == source_folder)
+        return Error{path + ": would replace " + file + " beside the source asset; write elsewhere"};
+  }
   for (const auto& [file, bytes] : side_files)
     if (auto written = writeFileAtomic(file, bytes); !written) return written;
-  if (auto written = writeFileAtomic((target.parent_path() / bin_name).string(), builder.bin_);
-      !written)
-    return written;
   return writeFileAtomic(path, document.dump(2));
 }
 

@@ -72,7 +72,9 @@ GlContext::~GlContext() {
   if (display_ != EGL_NO_DISPLAY) {
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     if (context_ != EGL_NO_CONTEXT) eglDestroyContext(display_, context_);
-    eglTerminate(display_);
+    // No eglTerminate: Mesa would unload its driver, and leak checkers could no longer name the
+    // driver's process-lifetime allocations. The display is reused by the next context.
+    eglReleaseThread();
   }
 }
 
