@@ -127,7 +127,7 @@ class TriangleBvh {
     return d;
   }
 
-  uint32_t build(uint32_t begin, uint32_t end) {
+  void build(uint32_t begin, uint32_t end) {
     // Iterative with an explicit stack of (node, begin, end); children are allocated in pairs.
     struct Task {
       uint32_t node, begin, end;
@@ -180,7 +180,6 @@ class TriangleBvh {
       tasks.push_back({node.first, task.begin, mid});
       tasks.push_back({node.first + 1, mid, task.end});
     }
-    return 0;
   }
 
   std::vector<P3> vertices_;  // 3 per (finite) triangle
