@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "duolod/core.hpp"
+#include "duolod/render.hpp"
 
 namespace duolod::mesh {
 
@@ -108,6 +109,47 @@ std::vector<core::Mesh> extractMeshes(const ProgressiveRecord& record,
 // put every candidate at the coarse end; when fewer than k-2 prefixes have a jump, the rest are
 // spread evenly by triangle count. Returns fewer than k when the record has fewer prefixes.
 std::vector<size_t> chooseCandidates(const ProgressiveRecord& record, size_t k);
+
+// ---------------------------------------------------------------------------------------------
+// Image-driven simplification: the paper's mode (§4.2, §5.1; Lindstrom & Turk 2000). A collapse
+// costs the change it makes to the image error of eq. (6) against the supersampled reference of
+// the original asset and shader at one distance, over the 20 views × 5 lights; the survivor stays
+// at the endpoint with the lower image error; edges longer than D pixels never collapse.
+
+struct ImageSimplifyOptions {
+  size_t target_triangles = 0;  // 0 = none
+  // Stop before a collapse that would take ε (eq. 6) above this; infinity = no error target.
+  double target_error = std::numeric_limits<double>::infinity();
+  float distance = 0;  // camera distance from the bounding-sphere centre, asset units
+  render::Display display;
+  int supersample = 4;           // k of the reference f̄
+  float max_edge_pixels = 1.0f;  // D
+  int tile_size = 16;  // pixels; a collapse whose neighbourhood is wider in some view is refused
+  bool lock_border = false;
+  bool allow_material_border_collapse = false;
+  bool record = true;
+};
+
+struct ImageSimplifyStats {
+  int footprint_px = 0;
+  double initial_error = 0;  // ε of the input against the reference
+  double final_error = 0;    // ε of the result
+  size_t rendered_evaluations = 0;
+  size_t refine_batches = 0;
+  size_t refreshed_regions = 0;
+  size_t rejected_long_edges = 0;
+  size_t rejected_wide_regions = 0;
+  double reference_seconds = 0;  // rendering f̄ and the input's images
+  double render_seconds = 0;     // pricing candidates by rendering
+  double predicted_change = 0;   // Σ of the applied collapses' rendered costs (≈ final − initial)
+  double total_seconds = 0;
+};
+
+// Errors: the shader does not compile, or rendering fails.
+core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const core::Asset& asset,
+                                           const render::GlslSource& shader,
+                                           const ImageSimplifyOptions& options,
+                                           ImageSimplifyStats* stats = nullptr);
 
 // ---------------------------------------------------------------------------------------------
 // Vertex clustering (Rossignac & Borrel 1993, with Willmott 2011's attribute-aware

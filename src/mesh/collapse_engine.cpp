@@ -131,6 +131,7 @@ struct QueuedCollapse {
   uint32_t stamp_from, stamp_to;
   float x, y, z;
   uint8_t placement;
+  uint8_t exact;  // 0: the cost is the model's estimate; refine before applying
 };
 enum : uint8_t { kAtTo, kAtFrom, kAtPoint };
 
@@ -250,6 +251,18 @@ class Engine {
                      uint8_t features, CandidateCollapse& out) const;
   void emitEdgeCandidates(uint32_t p, uint32_t done_round);
   void flushBatch(bool heapify_later = false);
+  void queueCandidate(const CandidateCollapse& candidate, bool heapify_later);
+  bool candidateFor(const QueuedCollapse& entry, CandidateCollapse& out);
+  void refineTop(const QueuedCollapse& first);
+  bool isStale(const QueuedCollapse& entry) const {
+    return !state_.position_alive[entry.from] || !state_.position_alive[entry.to] ||
+           stamps_[entry.from] != entry.stamp_from || stamps_[entry.to] != entry.stamp_to;
+  }
+  // The model refused it (infinite cost and error), e.g. an edge longer than D pixels.
+  static bool isForbidden(const QueuedCollapse& entry, float cost) {
+    return cost == std::numeric_limits<float>::max() &&
+           entry.error == std::numeric_limits<float>::max();
+  }
   void fillQueue();
   bool tryCollapse(const QueuedCollapse& entry, float cost);
   bool linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge);
@@ -603,33 +616,69 @@ void Engine::emitEdgeCandidates(uint32_t p, uint32_t done_round) {
   }
 }
 
+void Engine::queueCandidate(const CandidateCollapse& c, bool heapify_later) {
+  QueuedCollapse e;
+  e.error = std::isfinite(c.error) ? float(c.error) : std::numeric_limits<float>::max();
+  e.from = c.from;
+  e.to = c.to;
+  e.stamp_from = stamps_[c.from];
+  e.stamp_to = stamps_[c.to];
+  const Vec3d& p = c.position;
+  const Vec3d& at_to = state_.positions[c.to];
+  const Vec3d& at_from = state_.positions[c.from];
+  if (c.endpoint_only || (p.x == at_to.x && p.y == at_to.y && p.z == at_to.z))
+    e.placement = kAtTo;
+  else if (p.x == at_from.x && p.y == at_from.y && p.z == at_from.z)
+    e.placement = kAtFrom;
+  else
+    e.placement = isFinite(p) ? kAtPoint : kAtTo;
+  e.x = float(p.x), e.y = float(p.y), e.z = float(p.z);
+  e.exact = c.exact ? 1 : 0;
+  float cost = std::isfinite(c.cost) ? float(c.cost) : std::numeric_limits<float>::max();
+  if (heapify_later)
+    queue_.append(cost, e);
+  else
+    queue_.push(cost, e);
+}
+
 void Engine::flushBatch(bool heapify_later) {
   if (batch_.empty()) return;
   model_.evaluate(state_, batch_);
+  for (const CandidateCollapse& c : batch_) queueCandidate(c, heapify_later);
+  batch_.clear();
+}
+
+bool Engine::candidateFor(const QueuedCollapse& entry, CandidateCollapse& out) {
+  gatherNeighbors(entry.from);
+  for (const Neighbor& nb : neighbors_)
+    if (nb.vertex == entry.to) return makeCandidate(entry.from, entry.to, nb, true, edgeFeatures(nb), out);
+  return false;
+}
+
+// Lazy pricing: the cheapest entry is an estimate, so price it and the next estimates from the
+// top of the queue exactly, in one refine() call, and queue them again.
+void Engine::refineTop(const QueuedCollapse& first) {
+  std::vector<std::pair<float, QueuedCollapse>> exact_aside;
+  CandidateCollapse candidate;
+  if (candidateFor(first, candidate)) batch_.push_back(candidate);
+  const size_t limit = std::max<size_t>(1, model_.refineBatchSize());
+  while (batch_.size() < limit && !queue_.empty()) {
+    float cost = 0;
+    QueuedCollapse entry = queue_.pop(cost);
+    if (isStale(entry) || isForbidden(entry, cost)) continue;
+    if (entry.exact) {
+      exact_aside.push_back({cost, entry});
+      continue;
+    }
+    if (candidateFor(entry, candidate)) batch_.push_back(candidate);
+  }
+  if (!batch_.empty()) model_.refine(state_, batch_);
   for (CandidateCollapse& c : batch_) {
-    QueuedCollapse e;
-    e.error = std::isfinite(c.error) ? float(c.error) : std::numeric_limits<float>::max();
-    e.from = c.from;
-    e.to = c.to;
-    e.stamp_from = stamps_[c.from];
-    e.stamp_to = stamps_[c.to];
-    const Vec3d& p = c.position;
-    const Vec3d& at_to = state_.positions[c.to];
-    const Vec3d& at_from = state_.positions[c.from];
-    if (c.endpoint_only || (p.x == at_to.x && p.y == at_to.y && p.z == at_to.z))
-      e.placement = kAtTo;
-    else if (p.x == at_from.x && p.y == at_from.y && p.z == at_from.z)
-      e.placement = kAtFrom;
-    else
-      e.placement = isFinite(p) ? kAtPoint : kAtTo;
-    e.x = float(p.x), e.y = float(p.y), e.z = float(p.z);
-    float cost = std::isfinite(c.cost) ? float(c.cost) : std::numeric_limits<float>::max();
-    if (heapify_later)
-      queue_.append(cost, e);
-    else
-      queue_.push(cost, e);
+    c.exact = true;  // never ask twice for the same state
+    queueCandidate(c, false);
   }
   batch_.clear();
+  for (const auto& [cost, entry] : exact_aside) queue_.push(cost, entry);
 }
 
 void Engine::fillQueue() {
@@ -934,9 +983,11 @@ SimplifyResult Engine::run() {
     while (!queue_.empty() && !reached()) {
       float cost = 0;
       QueuedCollapse entry = queue_.pop(cost);
-      if (!state_.position_alive[entry.from] || !state_.position_alive[entry.to] ||
-          stamps_[entry.from] != entry.stamp_from || stamps_[entry.to] != entry.stamp_to)
+      if (isStale(entry) || isForbidden(entry, cost)) continue;
+      if (!entry.exact && model_.refineBatchSize() > 0) {
+        refineTop(entry);
         continue;
+      }
       if (double(entry.error) > options_.target_error) continue;
       tryCollapse(entry, cost);
     }

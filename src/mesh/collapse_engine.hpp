@@ -137,6 +137,9 @@ struct CandidateCollapse {
   double cost = 0;   // ordering key, smaller collapses first
   double error = 0;  // reported error, in SimplifyOptions::target_error units
   Vec3d position;    // survivor position (normalized); positions[to] when endpoint_only
+  // False when `cost` is only an estimate: a model with refineBatchSize() > 0 is asked to refine()
+  // such candidates before one of them is applied.
+  bool exact = true;
 };
 
 struct AppliedCollapse {
@@ -161,6 +164,13 @@ class CostModel {
   virtual void placeAttributes(const EngineState& state, const CandidateCollapse& chosen,
                                std::span<float> values) {
     (void)state, (void)chosen, (void)values;
+  }
+  // Lazy pricing for costly models (the image-driven cost): when the cheapest queued candidate is
+  // an estimate, the engine takes up to refineBatchSize() estimates from the top of its queue,
+  // asks refine() for their exact cost and error, and queues them again. 0 = never.
+  virtual size_t refineBatchSize() const { return 0; }
+  virtual void refine(const EngineState& state, std::span<CandidateCollapse> batch) {
+    (void)state, (void)batch;
   }
   // After the collapse is applied (state already updated), for incremental model data.
   virtual void onCollapse(const EngineState& state, const AppliedCollapse& applied) {

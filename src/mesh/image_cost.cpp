@@ -1,0 +1,399 @@
+// The image-driven collapse cost (Liang et al. §4.2, §5.1; Lindstrom & Turk 2000). See
+// image_cost.hpp for the scheme; the comments here say why each step is as it is.
+#include "mesh/image_cost.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace duolod::mesh {
+namespace {
+
+constexpr float kForbidden = std::numeric_limits<float>::infinity();
+
+uint64_t edgeKey(uint32_t from, uint32_t to) { return uint64_t(from) << 32 | to; }
+
+}  // namespace
+
+ImageCostModel::ImageCostModel(ImageCostSetup setup)
+    : setup_(std::move(setup)), quadric_(QuadricModelOptions{.endpoint_only = true}) {}
+
+void ImageCostModel::begin(const EngineState& state) {
+  quadric_.begin(state);
+  const int R = setup_.resolution;
+  view_count_ = int(setup_.samples.size()) / setup_.lights_per_view;
+  position_count_ = state.positions.size();
+
+  // Positions never move (endpoint placement), so each view's projection is computed once.
+  projected_.resize(size_t(view_count_) * position_count_);
+  for (int v = 0; v < view_count_; ++v) {
+    const render::Sample& sample = setup_.samples[size_t(v) * setup_.lights_per_view];
+    core::Mat4 view_projection = sample.projection * sample.view;
+    for (size_t p = 0; p < position_count_; ++p) {
+      core::Vec3 a = state.asset_positions[p];
+      core::Vec4 clip = core::transform(view_projection, {a.x, a.y, a.z, 1});
+      float w = clip.w > 1e-12f ? clip.w : 1e-12f;
+      projected_[size_t(v) * position_count_ + p] = {(clip.x / w * 0.5f + 0.5f) * R,
+                                                     (0.5f - clip.y / w * 0.5f) * R};
+    }
+  }
+
+  cells_per_side_ = (R + kCellPixels - 1) / kCellPixels;
+  bins_.assign(size_t(view_count_) * cells_per_side_ * cells_per_side_, {});
+  triangle_mark_.assign(state.triangle_alive.size(), 0);
+  for (uint32_t t = 0; t < state.triangle_alive.size(); ++t)
+    if (state.triangle_alive[t]) binTriangle(state, t);
+
+  const size_t samples = setup_.samples.size();
+  sample_error_.assign(samples, 0);
+  for (size_t s = 0; s < samples; ++s) {
+    const uint8_t* image = setup_.current.tile(int(s));
+    for (int y = 0; y < R; ++y)
+      for (int x = 0; x < R; ++x)
+        sample_error_[s] += pixelError(image + (size_t(y) * R + x) * 4, int(s), x, y);
+  }
+}
+
+double ImageCostModel::pixelError(const uint8_t* rgba, int sample, int x, int y) const {
+  const float* reference =
+      setup_.reference->tile(sample) + (size_t(y) * setup_.resolution + x) * 4;
+  double sum = 0;
+  for (int c = 0; c < 3; ++c) {
+    double d = rgba[c] * (1.0 / 255.0) - reference[c];
+    sum += d * d;
+  }
+  return sum;
+}
+
+double ImageCostModel::currentError() const {
+  double sum = 0;
+  for (double e : sample_error_) sum += e;
+  return sample_error_.empty() ? 0 : sum / double(sample_error_.size());
+}
+
+bool ImageCostModel::edgeTooLong(uint32_t from, uint32_t to) const {
+  // §4.2: an edge longer than D pixels on screen changes the image visibly whatever it costs.
+  const float limit = setup_.max_edge_pixels * setup_.max_edge_pixels;
+  for (int v = 0; v < view_count_; ++v) {
+    PixelPoint a = projected(v, from), b = projected(v, to);
+    float dx = a.x - b.x, dy = a.y - b.y;
+    if (dx * dx + dy * dy > limit) return true;
+  }
+  return false;
+}
+
+void ImageCostModel::binTriangle(const EngineState& state, uint32_t triangle) {
+  const int cells = cells_per_side_;
+  for (int v = 0; v < view_count_; ++v) {
+    float min_x = 1e30f, min_y = 1e30f, max_x = -1e30f, max_y = -1e30f;
+    for (int k = 0; k < 3; ++k) {
+      PixelPoint p = projected(v, state.cornerPosition(triangle * 3 + k));
+      min_x = std::min(min_x, p.x), max_x = std::max(max_x, p.x);
+      min_y = std::min(min_y, p.y), max_y = std::max(max_y, p.y);
+    }
+    int cx0 = std::clamp(int(std::floor(min_x)) / kCellPixels, 0, cells - 1);
+    int cx1 = std::clamp(int(std::floor(max_x)) / kCellPixels, 0, cells - 1);
+    int cy0 = std::clamp(int(std::floor(min_y)) / kCellPixels, 0, cells - 1);
+    int cy1 = std::clamp(int(std::floor(max_y)) / kCellPixels, 0, cells - 1);
+    if (max_x < 0 || max_y < 0 || min_x >= setup_.resolution || min_y >= setup_.resolution)
+      continue;  // off screen in this view
+    for (int cy = cy0; cy <= cy1; ++cy)
+      for (int cx = cx0; cx <= cx1; ++cx)
+        bins_[(size_t(v) * cells + cy) * cells + cx].push_back(triangle);
+  }
+}
+
+bool ImageCostModel::collapseRegion(const EngineState& state, const CandidateCollapse& candidate,
+                                    int view, Region& region) const {
+  // Only triangles at `from` change (their `from` corner moves to `to`; those holding both
+  // vanish), so the changed pixels lie in the box of from's one-ring, which contains `to`.
+  PixelPoint p = projected(view, candidate.from);
+  float min_x = p.x, max_x = p.x, min_y = p.y, max_y = p.y;
+  state.forEachCorner(candidate.from, [&](uint32_t corner) {
+    uint32_t t = corner / 3;
+    for (int k = 0; k < 3; ++k) {
+      PixelPoint q = projected(view, state.cornerPosition(t * 3 + k));
+      min_x = std::min(min_x, q.x), max_x = std::max(max_x, q.x);
+      min_y = std::min(min_y, q.y), max_y = std::max(max_y, q.y);
+    }
+  });
+  const int R = setup_.resolution;
+  // One pixel of margin: a pixel centre on the box edge may flip either way.
+  region.x0 = std::clamp(int(std::floor(min_x)) - 1, 0, R);
+  region.y0 = std::clamp(int(std::floor(min_y)) - 1, 0, R);
+  region.x1 = std::clamp(int(std::ceil(max_x)) + 1, 0, R);
+  region.y1 = std::clamp(int(std::ceil(max_y)) + 1, 0, R);
+  return region.x1 - region.x0 <= setup_.tile_size && region.y1 - region.y0 <= setup_.tile_size;
+}
+
+void ImageCostModel::appendTriangle(const EngineState& state, const uint32_t wedges[3],
+                                    uint32_t tile, uint32_t group,
+                                    render::Renderer::RegionSoup& soup) const {
+  const AttributeLayout& layout = state.layout;
+  core::Mesh& m = soup.triangles;
+  for (int k = 0; k < 3; ++k) {
+    const float* a = state.wedgeAttributes(wedges[k]);
+    m.positions.push_back(state.asset_positions[state.wedge_position[wedges[k]]]);
+    if (layout.normal != kAbsent)
+      m.normals.push_back({a[layout.normal], a[layout.normal + 1], a[layout.normal + 2]});
+    if (layout.tangent != kAbsent)
+      m.tangents.push_back({a[layout.tangent], a[layout.tangent + 1], a[layout.tangent + 2],
+                            a[layout.tangent + 3]});
+    if (layout.uv0 != kAbsent) m.uv0.push_back({a[layout.uv0], a[layout.uv0 + 1]});
+    if (layout.uv1 != kAbsent) m.uv1.push_back({a[layout.uv1], a[layout.uv1 + 1]});
+    if (layout.color != kAbsent)
+      m.colors.push_back({a[layout.color], a[layout.color + 1], a[layout.color + 2],
+                          a[layout.color + 3]});
+  }
+  soup.triangle_tile.push_back(tile);
+  soup.triangle_material.push_back(group < setup_.group_material.size()
+                                       ? setup_.group_material[group]
+                                       : 0);
+}
+
+void ImageCostModel::gatherTriangles(const EngineState& state, int view, const Region& region,
+                                     uint32_t skip_position, uint32_t tile,
+                                     render::Renderer::RegionSoup& soup) {
+  if (++mark_round_ == 0) {
+    std::fill(triangle_mark_.begin(), triangle_mark_.end(), 0);
+    mark_round_ = 1;
+  }
+  const int cells = cells_per_side_;
+  int cx0 = std::clamp(region.x0 / kCellPixels, 0, cells - 1);
+  int cx1 = std::clamp((region.x1 - 1) / kCellPixels, 0, cells - 1);
+  int cy0 = std::clamp(region.y0 / kCellPixels, 0, cells - 1);
+  int cy1 = std::clamp((region.y1 - 1) / kCellPixels, 0, cells - 1);
+  for (int cy = cy0; cy <= cy1; ++cy)
+    for (int cx = cx0; cx <= cx1; ++cx)
+      for (uint32_t t : bins_[(size_t(view) * cells + cy) * cells + cx]) {
+        if (!state.triangle_alive[t] || triangle_mark_[t] == mark_round_) continue;
+        triangle_mark_[t] = mark_round_;
+        float min_x = 1e30f, min_y = 1e30f, max_x = -1e30f, max_y = -1e30f;
+        bool skip = false;
+        uint32_t wedges[3];
+        for (int k = 0; k < 3; ++k) {
+          uint32_t position = state.cornerPosition(t * 3 + k);
+          skip |= position == skip_position;
+          wedges[k] = state.corners[t * 3 + k];
+          PixelPoint p = projected(view, position);
+          min_x = std::min(min_x, p.x), max_x = std::max(max_x, p.x);
+          min_y = std::min(min_y, p.y), max_y = std::max(max_y, p.y);
+        }
+        if (skip || max_x < region.x0 - 1 || min_x > region.x1 + 1 || max_y < region.y0 - 1 ||
+            min_y > region.y1 + 1)
+          continue;
+        appendTriangle(state, wedges, tile, state.groups[t], soup);
+      }
+}
+
+void ImageCostModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
+  quadric_.evaluate(state, batch);  // cost = quadric error: the estimate before rendering
+  for (CandidateCollapse& c : batch) {
+    c.position = state.positions[c.to];
+    if (edgeTooLong(c.from, c.to)) {
+      ++stats_.rejected_long_edges;
+      c.cost = c.error = kForbidden;
+      c.exact = true;
+      continue;
+    }
+    auto known = last_cost_.find(edgeKey(c.from, c.to));
+    if (known != last_cost_.end())
+      c.cost = known->second;
+    else if (quadric_to_image_ > 0)
+      c.cost *= quadric_to_image_;
+    c.error = 0;  // unknown until rendered; never a reason to skip
+    c.exact = false;
+  }
+}
+
+void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollapse> batch) {
+  if (!failure_.empty()) {
+    for (CandidateCollapse& c : batch) c.cost = c.error = kForbidden, c.exact = true;
+    return;
+  }
+  auto start = std::chrono::steady_clock::now();
+  auto since = [](auto t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  size_t refreshed_before = stats_.refreshed_regions;
+  refreshPendingRegions(state);
+  double refresh_s = since(start);
+  auto build_start = std::chrono::steady_clock::now();
+
+  // One tile per (candidate, view): the candidate's neighbourhood with the collapse applied.
+  struct Placed {
+    uint32_t candidate;
+    int view;
+    Region region;
+  };
+  std::vector<Placed> placed;
+  render::Renderer::RegionSoup soup;
+  std::vector<uint8_t> usable(batch.size(), 1);
+  for (uint32_t i = 0; i < batch.size(); ++i) {
+    const CandidateCollapse& c = batch[i];
+    std::vector<Placed> mine;
+    for (int v = 0; v < view_count_ && usable[i]; ++v) {
+      Region region;
+      if (!collapseRegion(state, c, v, region)) usable[i] = 0;
+      mine.push_back({i, v, region});
+    }
+    if (!usable[i]) {
+      ++stats_.rejected_wide_regions;
+      continue;
+    }
+    for (const Placed& p : mine) {
+      uint32_t tile = uint32_t(soup.tiles.size());
+      soup.tiles.push_back({p.view, p.region.x0, p.region.y0});
+      gatherTriangles(state, p.view, p.region, c.from, tile, soup);
+      // The moved triangles: from's corner takes the wedge it merges into.
+      state.forEachCorner(c.from, [&](uint32_t corner) {
+        uint32_t t = corner / 3;
+        uint32_t wedges[3];
+        bool vanishes = false;
+        for (int k = 0; k < 3; ++k) {
+          uint32_t w = state.corners[t * 3 + k];
+          uint32_t position = state.wedge_position[w];
+          vanishes |= position == c.to;
+          if (position == c.from)
+            for (int m = 0; m < c.wedge_count; ++m)
+              if (c.from_wedges[m] == w) w = c.to_wedges[m];
+          wedges[k] = w;
+        }
+        if (!vanishes) appendTriangle(state, wedges, tile, state.groups[t], soup);
+      });
+      placed.push_back(p);
+    }
+  }
+
+  const int R = setup_.resolution, T = setup_.tile_size, L = setup_.lights_per_view;
+  double build_s = since(build_start);
+  auto render_start = std::chrono::steady_clock::now();
+  auto tiles = setup_.renderer->renderRegions(setup_.asset, setup_.region_program, soup,
+                                              setup_.samples, L, R, T);
+  double render_s = since(render_start);
+  if (!tiles) {
+    failure_ = tiles.error().message;
+    for (CandidateCollapse& c : batch) c.cost = c.error = kForbidden, c.exact = true;
+    return;
+  }
+  if (std::getenv("DUOLOD_DEBUG"))
+    std::fprintf(stderr,
+                 "refine %zu: %zu candidates, %zu tiles, %zu soup triangles; refresh %zu regions "
+                 "%.0f ms, build %.0f ms, render %.0f ms\n",
+                 stats_.refine_batches, batch.size(), soup.tiles.size(), soup.triangle_tile.size(),
+                 stats_.refreshed_regions - refreshed_before, refresh_s * 1e3, build_s * 1e3,
+                 render_s * 1e3);
+  std::vector<double> delta(batch.size(), 0);
+  for (size_t tile = 0; tile < placed.size(); ++tile) {
+    const Placed& p = placed[tile];
+    for (int light = 0; light < L; ++light) {
+      int sample = p.view * L + light;
+      const uint8_t* rendered = tiles->tile(int(tile) * L + light);
+      const uint8_t* current = setup_.current.tile(sample);
+      for (int y = p.region.y0; y < p.region.y1; ++y)
+        for (int x = p.region.x0; x < p.region.x1; ++x) {
+          const uint8_t* now = rendered + (size_t(y - p.region.y0) * T + (x - p.region.x0)) * 4;
+          delta[p.candidate] += pixelError(now, sample, x, y) -
+                                pixelError(current + (size_t(y) * R + x) * 4, sample, x, y);
+        }
+    }
+  }
+  // The quadric cost of each, to learn how image costs scale against it for the estimates.
+  std::vector<CandidateCollapse> quadric_priced(batch.begin(), batch.end());
+  quadric_.evaluate(state, quadric_priced);
+  const double error_now = currentError();
+  const double samples = double(setup_.samples.size());
+  for (uint32_t i = 0; i < batch.size(); ++i) {
+    CandidateCollapse& c = batch[i];
+    c.exact = true;
+    if (!usable[i]) {
+      c.cost = c.error = kForbidden;
+      continue;
+    }
+    double quadric_cost = quadric_priced[i].cost;
+    c.cost = delta[i] / samples;  // the change of eq. (6), averaged over views × lights
+    c.error = error_now + c.cost;
+    last_cost_[edgeKey(c.from, c.to)] = float(c.cost);
+    if (quadric_cost > 0 && c.cost > 0) ratios_.push_back(c.cost / quadric_cost);
+  }
+  // Estimates for unpriced candidates: quadric × the median ratio seen so far.
+  if (ratios_.size() > 4096) ratios_.erase(ratios_.begin(), ratios_.end() - 2048);
+  if (!ratios_.empty()) {
+    std::vector<double> sorted = ratios_;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    quadric_to_image_ = sorted[sorted.size() / 2];
+  }
+  stats_.rendered_evaluations += batch.size();
+  ++stats_.refine_batches;
+  stats_.render_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse& applied) {
+  quadric_.onCollapse(state, applied);
+  stats_.predicted_change += applied.candidate.cost;
+  const uint32_t survivor = applied.candidate.to, removed = applied.candidate.from;
+  // The changed pixels: the box of the survivor's new one-ring and the removed vertex.
+  for (int v = 0; v < view_count_; ++v) {
+    PixelPoint p = projected(v, removed);
+    float min_x = p.x, max_x = p.x, min_y = p.y, max_y = p.y;
+    state.forEachCorner(survivor, [&](uint32_t corner) {
+      for (int k = 0; k < 3; ++k) {
+        PixelPoint q = projected(v, state.cornerPosition(corner / 3 * 3 + k));
+        min_x = std::min(min_x, q.x), max_x = std::max(max_x, q.x);
+        min_y = std::min(min_y, q.y), max_y = std::max(max_y, q.y);
+      }
+    });
+    const int R = setup_.resolution;
+    Region region{std::clamp(int(std::floor(min_x)) - 1, 0, R),
+                  std::clamp(int(std::floor(min_y)) - 1, 0, R),
+                  std::clamp(int(std::ceil(max_x)) + 1, 0, R),
+                  std::clamp(int(std::ceil(max_y)) + 1, 0, R)};
+    if (region.x1 > region.x0 && region.y1 > region.y0) pending_.push_back({v, region});
+  }
+  // The survivor's triangles changed shape: list them in the cells they reach now.
+  state.forEachCorner(survivor, [&](uint32_t corner) { binTriangle(state, corner / 3); });
+}
+
+void ImageCostModel::refreshPendingRegions(const EngineState& state) {
+  if (pending_.empty()) return;
+  const int T = setup_.tile_size, R = setup_.resolution, L = setup_.lights_per_view;
+  // Regions larger than a tile are cut into tiles.
+  std::vector<std::pair<int, Region>> pieces;
+  for (const auto& [view, region] : pending_)
+    for (int y = region.y0; y < region.y1; y += T)
+      for (int x = region.x0; x < region.x1; x += T)
+        pieces.push_back({view, Region{x, y, std::min(x + T, region.x1), std::min(y + T, region.y1)}});
+  pending_.clear();
+  render::Renderer::RegionSoup soup;
+  for (uint32_t tile = 0; tile < pieces.size(); ++tile) {
+    soup.tiles.push_back({pieces[tile].first, pieces[tile].second.x0, pieces[tile].second.y0});
+    gatherTriangles(state, pieces[tile].first, pieces[tile].second, kAbsent, tile, soup);
+  }
+  auto tiles = setup_.renderer->renderRegions(setup_.asset, setup_.region_program, soup,
+                                              setup_.samples, L, R, T);
+  if (!tiles) {
+    failure_ = tiles.error().message;
+    return;
+  }
+  for (uint32_t tile = 0; tile < pieces.size(); ++tile) {
+    const auto& [view, region] = pieces[tile];
+    for (int light = 0; light < L; ++light) {
+      int sample = view * L + light;
+      const uint8_t* rendered = tiles->tile(int(tile) * L + light);
+      uint8_t* current = setup_.current.tile(sample);
+      for (int y = region.y0; y < region.y1; ++y)
+        for (int x = region.x0; x < region.x1; ++x) {
+          const uint8_t* now = rendered + (size_t(y - region.y0) * T + (x - region.x0)) * 4;
+          uint8_t* old = current + (size_t(y) * R + x) * 4;
+          sample_error_[sample] += pixelError(now, sample, x, y) - pixelError(old, sample, x, y);
+          std::copy_n(now, 4, old);
+        }
+    }
+  }
+  stats_.refreshed_regions += pieces.size();
+}
+
+}  // namespace duolod::mesh

@@ -1,0 +1,115 @@
+// The image-driven collapse cost of Liang et al. §4.2 / §5.1 (after Lindstrom & Turk, "Image-driven
+// simplification", ACM TOG 2000): the price of a collapse is the change it makes to the image error
+// of eq. (6) against the supersampled reference of the original shader, summed over the training
+// views × lights. The survivor stays at an endpoint (the engine evaluates both directions, so the
+// endpoint with the lower image error wins), and an edge longer than D screen pixels in any view
+// never collapses.
+//
+// Pricing every candidate by rendering would be far too slow, so the model is lazy: evaluate()
+// gives estimates (a candidate's last rendered cost, or its quadric cost scaled to image units) and
+// the engine asks refine() for rendered costs only for candidates that reach the top of its queue,
+// in batches; one batch is one renderRegions() call that draws every candidate's neighbourhood,
+// with the collapse applied, into a small tile per view and light.
+#pragma once
+
+#include <unordered_map>
+#include <vector>
+
+#include "duolod/render.hpp"
+#include "mesh/collapse_engine.hpp"
+#include "mesh/quadric.hpp"
+
+namespace duolod::mesh {
+
+struct ImageCostSetup {
+  render::Renderer* renderer = nullptr;
+  render::Renderer::AssetId asset = -1;            // supplies materials and textures
+  render::Renderer::ProgramId region_program = -1;  // Renderer::compileRegionProgram
+  std::vector<render::Sample> samples;             // view-major
+  std::vector<uint32_t> group_material;            // material of each submesh (engine group)
+  int lights_per_view = 5;
+  int resolution = 64;  // the footprint s_d the samples are framed for
+  int tile_size = 16;   // a neighbourhood wider than this in any view does not collapse
+  float max_edge_pixels = 1.0f;  // D of §4.2
+  const render::ImageBatchF* reference = nullptr;  // f̄ of the original, per sample
+  render::ImageBatch8 current;                     // f of the input mesh, per sample
+};
+
+struct ImageCostStats {
+  size_t rendered_evaluations = 0;  // candidates priced by rendering
+  size_t refine_batches = 0;
+  size_t refreshed_regions = 0;  // regions re-rendered to keep `current` up to date
+  size_t rejected_long_edges = 0;
+  size_t rejected_wide_regions = 0;
+  double render_seconds = 0;
+  double predicted_change = 0;  // sum of the rendered costs of the applied collapses
+};
+
+class ImageCostModel final : public CostModel {
+ public:
+  explicit ImageCostModel(ImageCostSetup setup);
+
+  void begin(const EngineState& state) override;
+  void evaluate(const EngineState& state, std::span<CandidateCollapse> batch) override;
+  size_t refineBatchSize() const override { return 256; }
+  void refine(const EngineState& state, std::span<CandidateCollapse> batch) override;
+  void onCollapse(const EngineState& state, const AppliedCollapse& applied) override;
+
+  // eq. (6) of the current mesh: mean over samples of the summed squared RGB error.
+  double currentError() const;
+  const ImageCostStats& stats() const { return stats_; }
+  // The rendering failure that stopped pricing, if any (then every cost is infinite).
+  const std::string& failure() const { return failure_; }
+
+ private:
+  struct Region {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixel rectangle [x0, x1) × [y0, y1) in one view
+  };
+  struct PixelPoint {
+    float x = 0, y = 0;  // pixel coordinates, rows top first
+  };
+
+  PixelPoint projected(int view, uint32_t position) const {
+    return projected_[size_t(view) * position_count_ + position];
+  }
+  // The rectangle covering the survivor's and the removed vertex's neighbourhood in a view, or
+  // false when it is wider than a tile.
+  bool collapseRegion(const EngineState& state, const CandidateCollapse& candidate, int view,
+                      Region& region) const;
+  bool edgeTooLong(uint32_t from, uint32_t to) const;
+  void binTriangle(const EngineState& state, uint32_t triangle);
+  // Appends to the soup the live triangles overlapping `region` of `view`, except those at
+  // `skip_position` (kAbsent: none).
+  void gatherTriangles(const EngineState& state, int view, const Region& region,
+                       uint32_t skip_position, uint32_t tile, render::Renderer::RegionSoup& soup);
+  void appendTriangle(const EngineState& state, const uint32_t wedges[3], uint32_t tile,
+                      uint32_t group, render::Renderer::RegionSoup& soup) const;
+  // Re-renders the regions touched by collapses since the last refine, so `current` and the
+  // per-sample error sums describe the current mesh again.
+  void refreshPendingRegions(const EngineState& state);
+  double pixelError(const uint8_t* rgba, int sample, int x, int y) const;
+
+  ImageCostSetup setup_;
+  QuadricModel quadric_;
+  ImageCostStats stats_;
+  std::string failure_;
+  int view_count_ = 0;
+  size_t position_count_ = 0;
+  std::vector<PixelPoint> projected_;  // per view, per position
+  // Per view, a grid of 8-pixel cells listing the triangles whose screen box touches the cell.
+  // Entries go stale when triangles die or move; queries re-check.
+  static constexpr int kCellPixels = 8;
+  int cells_per_side_ = 0;
+  std::vector<std::vector<uint32_t>> bins_;  // [view * cells² + cell]
+  std::vector<uint32_t> triangle_mark_;
+  uint32_t mark_round_ = 0;
+  std::vector<double> sample_error_;  // per sample: Σ pixels |current − reference|²
+  std::vector<std::pair<int, Region>> pending_;  // (view, region) to refresh
+  // Rendered cost of (from, to) when last priced: a far better estimate than the quadric once a
+  // neighbour has changed it a little.
+  std::unordered_map<uint64_t, float> last_cost_;
+  std::vector<double> ratios_;  // rendered cost / quadric cost, to scale estimates
+  double quadric_to_image_ = 0;
+};
+
+}  // namespace duolod::mesh

@@ -1,0 +1,107 @@
+// Image-driven simplification (Liang et al. §4.2, §5.1): the collapse engine with the image cost
+// model, set up at one distance of the paper's view × light domain.
+#include <chrono>
+
+#include "duolod/mesh.hpp"
+#include "duolod/metric.hpp"
+#include "mesh/collapse_engine.hpp"
+#include "mesh/image_cost.hpp"
+
+namespace duolod::mesh {
+
+core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const core::Asset& asset,
+                                           const render::GlslSource& shader,
+                                           const ImageSimplifyOptions& options,
+                                           ImageSimplifyStats* stats) {
+  using core::Error;
+  auto start = std::chrono::steady_clock::now();
+  if (!(options.distance > 0)) return Error{"image-driven simplification needs a distance > 0"};
+  core::Asset prepared_asset = asset;
+  prepared_asset.mesh = prepareMesh(asset.mesh);
+  if (prepared_asset.mesh.triangleCount() == 0) return Error{"the mesh has no valid triangles"};
+
+  auto program = renderer.compileProgram(shader);
+  if (!program) return program.error();
+  auto region_program = renderer.compileRegionProgram(shader);
+  if (!region_program) return region_program.error();
+  auto original_id = renderer.uploadAsset(asset);
+  if (!original_id) return original_id.error();
+  auto prepared_id = renderer.uploadAsset(prepared_asset);
+  if (!prepared_id) return prepared_id.error();
+
+  // Frame everything by the original's bounding sphere, as the LOD levels will be.
+  core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
+  const int resolution = render::footprintPixels(sphere, options.distance, options.display);
+  std::vector<render::Sample> samples = render::domainSamples(sphere, options.distance);
+  auto reference = renderer.renderReference(*original_id, *program, samples,
+                                            {.resolution = resolution,
+                                             .supersample = options.supersample});
+  if (!reference) return reference.error();
+  auto current = renderer.render(*prepared_id, *program, samples, {.resolution = resolution});
+  if (!current) return current.error();
+  const double initial_error = metric::imageError(*current, *reference).epsilon;
+  double reference_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  ImageCostSetup setup;
+  setup.renderer = &renderer;
+  setup.asset = *prepared_id;
+  setup.region_program = *region_program;
+  setup.samples = samples;
+  setup.lights_per_view = int(samples.size() / render::viewDirections(render::ViewSet::kDodecahedron).size());
+  setup.resolution = resolution;
+  setup.tile_size = options.tile_size;
+  setup.max_edge_pixels = options.max_edge_pixels;
+  setup.reference = &reference.value();
+  setup.current = std::move(current.value());
+  for (const core::Submesh& sub : prepared_asset.mesh.submeshes)
+    setup.group_material.push_back(sub.material);
+  ImageCostModel model(std::move(setup));
+
+  EngineOptions engine_options;
+  engine_options.target_triangles = options.target_triangles;
+  engine_options.target_error = options.target_error;
+  engine_options.endpoint_only = true;  // §4.2: place-to-endpoints
+  engine_options.lock_border = options.lock_border;
+  engine_options.allow_material_border_collapse = options.allow_material_border_collapse;
+  engine_options.record = options.record;
+  engine_options.invalidation_ring = 2;  // a collapse changes the pixels its neighbours are priced on
+  SimplifyResult result = runCollapseEngine(prepared_asset.mesh, model, engine_options);
+
+  // The result's error, rendered whole: the model's running sum is only refreshed lazily.
+  double final_error = initial_error;
+  if (model.failure().empty()) {
+    core::Asset simplified = asset;
+    simplified.mesh = result.mesh;
+    auto simplified_id = renderer.uploadAsset(simplified);
+    if (!simplified_id) return simplified_id.error();
+    auto image = renderer.render(*simplified_id, *program, samples, {.resolution = resolution});
+    renderer.releaseAsset(*simplified_id);
+    if (!image) return image.error();
+    final_error = metric::imageError(*image, *reference).epsilon;
+  }
+  renderer.releaseAsset(*original_id);
+  renderer.releaseAsset(*prepared_id);
+  renderer.releaseProgram(*program);
+  renderer.releaseProgram(*region_program);
+  if (!model.failure().empty()) return Error{"image-driven simplification: " + model.failure()};
+  if (stats) {
+    const ImageCostStats& s = model.stats();
+    stats->footprint_px = resolution;
+    stats->initial_error = initial_error;
+    stats->final_error = final_error;
+    stats->rendered_evaluations = s.rendered_evaluations;
+    stats->refine_batches = s.refine_batches;
+    stats->refreshed_regions = s.refreshed_regions;
+    stats->rejected_long_edges = s.rejected_long_edges;
+    stats->rejected_wide_regions = s.rejected_wide_regions;
+    stats->reference_seconds = reference_seconds;
+    stats->render_seconds = s.render_seconds;
+    stats->predicted_change = s.predicted_change;
+    stats->total_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return result;
+}
+
+}  // namespace duolod::mesh
