@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 namespace duolod::mesh {
 namespace {
@@ -225,6 +226,44 @@ class CollapseQueue {
   std::vector<uint32_t> free_;
 };
 
+// A growable array of trivial values for the per-collapse scratch lists: unlike std::vector it
+// can be filled through a raw pointer after one capacity check, without initializing first.
+template <class T>
+class ScratchList {
+ public:
+  T* begin() { return data_.get(); }
+  T* end() { return data_.get() + size_; }
+  const T* begin() const { return data_.get(); }
+  const T* end() const { return data_.get() + size_; }
+  T* data() { return data_.get(); }
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  size_t capacity() const { return capacity_; }
+  T& operator[](size_t i) { return data_[i]; }
+  const T& operator[](size_t i) const { return data_[i]; }
+  operator std::span<const T>() const { return {data_.get(), size_}; }
+  void clear() { size_ = 0; }
+  void push_back(const T& value) {
+    if (size_ == capacity_) reserve(size_ + 1);
+    data_[size_++] = value;
+  }
+  // Room for at least n values, keeping the first size().
+  void reserve(size_t n) {
+    if (n <= capacity_) return;
+    size_t capacity = std::max<size_t>({16, n, capacity_ * 2});
+    std::unique_ptr<T[]> grown(new T[capacity]);
+    std::copy_n(data_.get(), size_, grown.get());
+    data_ = std::move(grown);
+    capacity_ = capacity;
+  }
+  // After writing through data() (within capacity()).
+  void setSize(size_t n) { size_ = n; }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  size_t size_ = 0, capacity_ = 0;
+};
+
 // One neighbour of the position being examined, with the (first two) triangles on the edge.
 struct Neighbor {
   uint32_t vertex;
@@ -287,9 +326,9 @@ class Engine {
 
   // Scratch (sized once).
   std::vector<uint32_t> neighbor_slot_;  // per position: index into neighbors_, or kAbsent
-  std::vector<Neighbor> neighbors_;
-  std::vector<uint32_t> incident_;       // live corners of the gathered position
-  std::vector<uint32_t> to_incident_;    // live corners of the survivor (link/flip tests)
+  ScratchList<Neighbor> neighbors_;
+  ScratchList<uint32_t> incident_;       // live corners of the gathered position
+  ScratchList<uint32_t> to_incident_;    // live corners of the survivor (link/flip tests)
   std::vector<uint32_t> mark_;           // per position: round marks
   uint32_t round_ = 0;
   std::vector<uint32_t> union_find_;
@@ -406,13 +445,16 @@ void Engine::buildState() {
 // corners) and neighbors_ (one entry per adjacent position with the edge's triangles).
 void Engine::gatherNeighbors(uint32_t p) {
   EngineState& s = state_;
-  incident_.clear();
-  neighbors_.clear();
   const uint32_t* corners = s.corners.data();
   const uint32_t* wedge_position = s.wedge_position.data();
   const uint8_t* alive = s.triangle_alive.data();
   uint32_t* next_of = s.corner_next.data();
   uint32_t* slot_of = neighbor_slot_.data();
+  // The scratch lists are written through raw pointers (this runs several times per collapse);
+  // they grow only for a higher valence than seen before.
+  uint32_t* incident = incident_.data();
+  Neighbor* neighbors = neighbors_.data();
+  uint32_t incident_count = 0, neighbor_count = 0;
   uint32_t previous = kAbsent;
   for (uint32_t c = s.first_corner[p]; c != kAbsent;) {
     const uint32_t next = next_of[c];
@@ -426,8 +468,16 @@ void Engine::gatherNeighbors(uint32_t p) {
       continue;
     }
     previous = c;
-    const uint32_t local = uint32_t(incident_.size());
-    incident_.push_back(c);
+    if (incident_count == incident_.capacity() || neighbor_count + 2 > neighbors_.capacity()) {
+      incident_.setSize(incident_count);
+      neighbors_.setSize(neighbor_count);
+      incident_.reserve(incident_count + 1);
+      neighbors_.reserve(neighbor_count + 2);
+      incident = incident_.data();
+      neighbors = neighbors_.data();
+    }
+    const uint32_t local = incident_count;
+    incident[incident_count++] = c;
     const uint32_t k = c - t * 3;
     // The corner after p runs p -> n (outgoing), the one before runs n -> p.
     const uint32_t others[2] = {t * 3 + kNextCorner[k], t * 3 + kNextCorner[kNextCorner[k]]};
@@ -435,12 +485,14 @@ void Engine::gatherNeighbors(uint32_t p) {
       const uint32_t other_corner = others[step];
       const uint32_t n = wedge_position[corners[other_corner]];
       if (n == p) continue;  // degenerate triangle (cannot survive preparation; defensive)
-      uint32_t slot = slot_of[n];
+      const uint32_t slot = slot_of[n];
       if (slot == kAbsent) {
-        slot = slot_of[n] = uint32_t(neighbors_.size());
-        neighbors_.push_back(Neighbor{n, 0, {kAbsent, kAbsent}, {kAbsent, kAbsent}, 0});
+        slot_of[n] = neighbor_count;
+        neighbors[neighbor_count++] =
+            Neighbor{n, 1, {local, kAbsent}, {other_corner, kAbsent}, uint8_t(step == 0)};
+        continue;
       }
-      Neighbor& nb = neighbors_[slot];
+      Neighbor& nb = neighbors[slot];
       if (nb.count < 2) {
         nb.local[nb.count] = local;
         nb.other_corner[nb.count] = other_corner;
@@ -450,7 +502,9 @@ void Engine::gatherNeighbors(uint32_t p) {
     }
     c = next;
   }
-  for (const Neighbor& nb : neighbors_) slot_of[nb.vertex] = kAbsent;
+  for (uint32_t i = 0; i < neighbor_count; ++i) slot_of[neighbors[i].vertex] = kAbsent;
+  incident_.setSize(incident_count);
+  neighbors_.setSize(neighbor_count);
 }
 
 uint8_t Engine::edgeFeatures(const Neighbor& nb) const {

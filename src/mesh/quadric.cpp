@@ -51,6 +51,23 @@ Vec3d normalized(Vec3d v) {
   return len > 0 ? v * (1.0 / len) : Vec3d{0, 0, 0};
 }
 
+// The helpers below run for every candidate (hundreds of thousands per mesh): forced inline, so
+// the quadric stays in registers instead of being reloaded behind a call.
+#define DUOLOD_HOT [[gnu::always_inline]] inline
+
+DUOLOD_HOT void addInto(Quadric& q, const Quadric& o) {
+  q.a00 += o.a00, q.a01 += o.a01, q.a02 += o.a02, q.a11 += o.a11, q.a12 += o.a12;
+  q.a22 += o.a22, q.b0 += o.b0, q.b1 += o.b1, q.b2 += o.b2, q.c += o.c, q.weight += o.weight;
+}
+
+DUOLOD_HOT double quadricValue(const Quadric& q, Vec3d p) {
+  double ax = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z;
+  double ay = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z;
+  double az = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z;
+  double value = p.x * ax + p.y * ay + p.z * az + 2 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) + q.c;
+  return std::max(value, 0.0);  // rounding can leave a tiny negative
+}
+
 }  // namespace
 
 Quadric planeQuadric(Vec3d n, double d, double weight, double area) {
@@ -63,23 +80,14 @@ Quadric planeQuadric(Vec3d n, double d, double weight, double area) {
   return q;
 }
 
-void addQuadric(Quadric& q, const Quadric& o) {
-  q.a00 += o.a00, q.a01 += o.a01, q.a02 += o.a02, q.a11 += o.a11, q.a12 += o.a12;
-  q.a22 += o.a22, q.b0 += o.b0, q.b1 += o.b1, q.b2 += o.b2, q.c += o.c, q.weight += o.weight;
-}
+void addQuadric(Quadric& q, const Quadric& o) { addInto(q, o); }
 
-double evaluateQuadric(const Quadric& q, Vec3d p) {
-  double ax = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z;
-  double ay = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z;
-  double az = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z;
-  double value = p.x * ax + p.y * ay + p.z * az + 2 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) + q.c;
-  return std::max(value, 0.0);  // rounding can leave a tiny negative
-}
+double evaluateQuadric(const Quadric& q, Vec3d p) { return quadricValue(q, p); }
 
 namespace {
 
 // The right-hand side r = -(A center + b) of A x = r, for the offset x from `center`.
-Vec3d residual(const Quadric& q, Vec3d center) {
+DUOLOD_HOT Vec3d residual(const Quadric& q, Vec3d center) {
   return {-(q.a00 * center.x + q.a01 * center.y + q.a02 * center.z + q.b0),
           -(q.a01 * center.x + q.a11 * center.y + q.a12 * center.z + q.b1),
           -(q.a02 * center.x + q.a12 * center.y + q.a22 * center.z + q.b2)};
@@ -87,7 +95,7 @@ Vec3d residual(const Quadric& q, Vec3d center) {
 
 // Solves (A + mu I) x = r by cofactors. With `min_det` > 0 it gives up (false) as soon as the
 // determinant shows the system is not well conditioned, before the rest of the work.
-bool solveShifted(const Quadric& q, double mu, Vec3d r, double min_det, Vec3d& x) {
+DUOLOD_HOT bool solveShifted(const Quadric& q, double mu, Vec3d r, double min_det, Vec3d& x) {
   const double a00 = q.a00 + mu, a11 = q.a11 + mu, a22 = q.a22 + mu;
   const double c00 = a11 * a22 - q.a12 * q.a12;
   const double c01 = q.a02 * q.a12 - q.a01 * a22;
@@ -109,8 +117,8 @@ bool solveShifted(const Quadric& q, double mu, Vec3d r, double min_det, Vec3d& x
 // directions that is the minimizer, along the weak ones (flat or cylindrical neighbourhoods) it
 // stays at `center`. This is Tikhonov's smooth version of Lindstrom's truncated pseudo-inverse,
 // at the price of one 3x3 solve instead of an eigen-decomposition (this runs for every candidate).
-bool solveAround(const Quadric& q, Vec3d center, double max_move_sq, Vec3d& exact,
-                 Vec3d& damped) {
+DUOLOD_HOT bool solveAround(const Quadric& q, Vec3d center, double max_move_sq, Vec3d& exact,
+                            Vec3d& damped) {
   const Vec3d r = residual(q, center);
   const double trace = q.a00 + q.a11 + q.a22;
   damped = center;
@@ -129,7 +137,9 @@ bool solveAround(const Quadric& q, Vec3d center, double max_move_sq, Vec3d& exac
 
 }  // namespace
 
-Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
+namespace {
+
+DUOLOD_HOT Vec3d minimizeOnEdge(const Quadric& q, Vec3d a, Vec3d b, double* error) {
   const Vec3d mid = (a + b) * 0.5;
   const double edge_sq = dot(b - a, b - a);
   Vec3d exact, damped;  // damped = mid when no damped solution is found
@@ -139,7 +149,7 @@ Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
     const double snap_sq = 1e-20 * edge_sq;
     if (dot(exact - b, exact - b) <= snap_sq) exact = b;
     if (dot(exact - a, exact - a) <= snap_sq) exact = a;
-    if (error) *error = evaluateQuadric(q, exact);
+    if (error) *error = quadricValue(q, exact);
     return exact;
   }
   // Ill-conditioned: the best of the endpoints, the midpoint and the damped solution; ties go to
@@ -147,11 +157,17 @@ Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
   // q(p) + mu |p - mid|², so q(damped) <= q(mid) whenever it was found: mid needs no evaluation
   // then.
   Vec3d best = b;
-  double best_error = evaluateQuadric(q, b);
-  if (double e = evaluateQuadric(q, a); e < best_error) best_error = e, best = a;
-  if (double e = evaluateQuadric(q, damped); e < best_error) best_error = e, best = damped;
+  double best_error = quadricValue(q, b);
+  if (double e = quadricValue(q, a); e < best_error) best_error = e, best = a;
+  if (double e = quadricValue(q, damped); e < best_error) best_error = e, best = damped;
   if (error) *error = best_error;
   return best;
+}
+
+}  // namespace
+
+Vec3d minimizeQuadric(const Quadric& q, Vec3d a, Vec3d b, double* error) {
+  return minimizeOnEdge(q, a, b, error);
 }
 
 Vec3d minimizeQuadricNear(const Quadric& q, Vec3d center, double max_distance) {
@@ -333,7 +349,7 @@ Quadric QuadricModel::reducedAttributeQuadric(const double* q) const {
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
   for (CandidateCollapse& cand : batch) {
     Quadric geometric = geometric_[cand.from];
-    addQuadric(geometric, geometric_[cand.to]);
+    addInto(geometric, geometric_[cand.to]);
     const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
     const double area = geometric.weight > 0 ? geometric.weight : 1.0;
     // The cost is the area-weighted quadric itself (Garland & Heckbert's Q(v)): squared distance
@@ -346,9 +362,9 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
       double value = 0;
       if (cand.endpoint_only) {
         cand.position = b;
-        value = evaluateQuadric(geometric, b);
+        value = quadricValue(geometric, b);
       } else {
-        cand.position = minimizeQuadric(geometric, a, b, &value);
+        cand.position = minimizeOnEdge(geometric, a, b, &value);
       }
       cand.cost = value;
       cand.error = std::sqrt(value / area) * state.scale;
