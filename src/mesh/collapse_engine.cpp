@@ -1092,6 +1092,8 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
   std::vector<uint32_t> kept_keys;  // rotated position triples of kept triangles
   std::vector<uint32_t> kept_groups;
   kept_indices.reserve(triangles * 3);
+  kept_keys.reserve(triangles * 3);
+  kept_groups.reserve(triangles);
   IndexTable triangle_table(triangles);
   for (size_t t = 0; t < triangles; ++t) {
     uint32_t v[3], p[3];
@@ -1106,7 +1108,7 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
     int first = p[0] < p[1] ? (p[0] < p[2] ? 0 : 2) : (p[1] < p[2] ? 1 : 2);
     uint32_t key[3] = {p[first], p[(first + 1) % 3], p[(first + 2) % 3]};
     uint32_t index = uint32_t(kept_groups.size());
-    kept_keys.insert(kept_keys.end(), key, key + 3);
+    for (uint32_t k : key) kept_keys.push_back(k);
     uint32_t found = triangle_table.findOrInsert(index, hashWords(key, 3), [&](uint32_t other) {
       return std::memcmp(key, &kept_keys[size_t(other) * 3], 12) == 0;
     });
@@ -1114,20 +1116,32 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
       kept_keys.resize(kept_keys.size() - 3);
       continue;
     }
-    kept_indices.insert(kept_indices.end(), v, v + 3);
+    for (uint32_t k : v) kept_indices.push_back(k);
     kept_groups.push_back(groups[t]);
   }
 
-  // Referenced vertices, in their original order.
+  // Referenced vertices, in their original order, copied stream by stream.
   std::vector<uint32_t> remap(n, kAbsent);
   for (uint32_t v : kept_indices) remap[v] = 0;
-  core::Mesh out;
-  uint32_t next = 0;
+  std::vector<uint32_t> kept_vertices;
+  kept_vertices.reserve(n);
   for (uint32_t v = 0; v < n; ++v) {
     if (remap[v] == kAbsent) continue;
-    remap[v] = next++;
-    appendVertex(out, layout, mesh.positions[v], packed.data() + size_t(v) * layout.stride);
+    remap[v] = uint32_t(kept_vertices.size());
+    kept_vertices.push_back(v);
   }
+  core::Mesh out;
+  auto copy_stream = [&](auto& to, const auto& from, uint32_t offset) {
+    if (offset == kAbsent) return;
+    to.resize(kept_vertices.size());
+    for (size_t i = 0; i < kept_vertices.size(); ++i) to[i] = from[kept_vertices[i]];
+  };
+  copy_stream(out.positions, mesh.positions, 0);
+  copy_stream(out.normals, mesh.normals, layout.normal);
+  copy_stream(out.tangents, mesh.tangents, layout.tangent);
+  copy_stream(out.uv0, mesh.uv0, layout.uv0);
+  copy_stream(out.uv1, mesh.uv1, layout.uv1);
+  copy_stream(out.colors, mesh.colors, layout.color);
   out.indices.resize(kept_indices.size());
   for (size_t i = 0; i < kept_indices.size(); ++i) out.indices[i] = remap[kept_indices[i]];
 

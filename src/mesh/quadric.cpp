@@ -253,7 +253,7 @@ void QuadricModel::begin(const EngineState& state) {
     const double area = 0.5 * double_area;
     const Vec3d n = cross_product * (1.0 / double_area);
     const Quadric plane = planeQuadric(n, -dot(n, p[0]), area, area);  // eq. (2), area-weighted
-    for (int k = 0; k < 3; ++k) addQuadric(geometric_[position[k]], plane);
+    for (int k = 0; k < 3; ++k) addInto(geometric_[position[k]], plane);
 
     if (dims_ == 0) continue;
     // Hoppe 1999 §4: per attribute j the linear function g_j·p + d_j that interpolates the three
@@ -308,8 +308,8 @@ void QuadricModel::begin(const EngineState& state) {
     Vec3d n = normalized(cross(e, face_normal));
     if (dot(n, n) == 0 || !std::isfinite(n.x)) continue;
     Quadric plane = planeQuadric(n, -dot(n, pa), kFeatureWeight * dot(e, e), 0.0);
-    addQuadric(geometric_[edge.a], plane);
-    addQuadric(geometric_[edge.b], plane);
+    addInto(geometric_[edge.a], plane);
+    addInto(geometric_[edge.b], plane);
   }
 }
 
@@ -414,7 +414,7 @@ void QuadricModel::placeAttributes(const EngineState& state, const CandidateColl
 void QuadricModel::onCollapse(const EngineState& state, const AppliedCollapse& applied) {
   (void)state;
   const CandidateCollapse& c = applied.candidate;
-  addQuadric(geometric_[c.to], geometric_[c.from]);
+  addInto(geometric_[c.to], geometric_[c.from]);
   if (dims_ == 0) return;
   for (uint32_t i = 0; i < c.wedge_count; ++i) {
     double* target = attribute_.data() + size_t(c.to_wedges[i]) * attribute_stride_;
