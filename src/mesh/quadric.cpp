@@ -327,17 +327,30 @@ const double* QuadricModel::mergedAttributeQuadric(const CandidateCollapse& cand
 
 // Hoppe 1999 §4: minimizing over the attributes s = -(Bᵀp + b_s) / area leaves a quadric in p
 // alone: A - B Bᵀ / area, b_p - B b_s / area, c - |b_s|² / area.
-Quadric QuadricModel::reducedAttributeQuadric(const double* q) const {
+// Here for the attribute quadric of `target` merged with those of the wedges that merge into it,
+// summed element by element as it is read (this runs for every candidate).
+Quadric QuadricModel::reducedMergedQuadric(const CandidateCollapse& candidate,
+                                           uint32_t target) const {
+  const double* sources[1 + kMaxWedges];
+  uint32_t count = 0;
+  sources[count++] = attribute_.data() + size_t(target) * attribute_stride_;
+  for (uint32_t i = 0; i < candidate.wedge_count; ++i)
+    if (candidate.to_wedges[i] == target)
+      sources[count++] = attribute_.data() + size_t(candidate.from_wedges[i]) * attribute_stride_;
+  auto sum = [&](uint32_t k) {
+    double v = sources[0][k];
+    for (uint32_t i = 1; i < count; ++i) v += sources[i][k];
+    return v;
+  };
   Quadric r;
-  r.a00 = q[0], r.a01 = q[1], r.a02 = q[2], r.a11 = q[3], r.a12 = q[4], r.a22 = q[5];
-  r.b0 = q[6], r.b1 = q[7], r.b2 = q[8], r.c = q[9];
-  const double area = q[10];
+  r.a00 = sum(0), r.a01 = sum(1), r.a02 = sum(2), r.a11 = sum(3), r.a12 = sum(4), r.a22 = sum(5);
+  r.b0 = sum(6), r.b1 = sum(7), r.b2 = sum(8), r.c = sum(9);
+  const double area = sum(10);
   if (!(area > 0)) return r;
   const double inv = 1.0 / area;
-  const double* column = q + 11;
-  const double* bs = q + 11 + 3 * dims_;
   for (uint32_t j = 0; j < dims_; ++j) {
-    double x = column[3 * j], y = column[3 * j + 1], z = column[3 * j + 2], s = bs[j];
+    const double x = sum(11 + 3 * j), y = sum(12 + 3 * j), z = sum(13 + 3 * j);
+    const double s = sum(11 + 3 * dims_ + j);
     r.a00 -= x * x * inv, r.a01 -= x * y * inv, r.a02 -= x * z * inv;
     r.a11 -= y * y * inv, r.a12 -= y * z * inv, r.a22 -= z * z * inv;
     r.b0 -= x * s * inv, r.b1 -= y * s * inv, r.b2 -= z * s * inv;
@@ -372,18 +385,16 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     }
     // Every wedge of the survivor: merged ones with their sources, the others as they are.
     Quadric total = geometric;
-    state.forEachWedge(cand.to, [&](uint32_t w) {
-      addQuadric(total, reducedAttributeQuadric(mergedAttributeQuadric(cand, w)));
-    });
+    state.forEachWedge(cand.to, [&](uint32_t w) { addInto(total, reducedMergedQuadric(cand, w)); });
     double value = 0;
     if (cand.endpoint_only) {
       cand.position = b;
-      value = evaluateQuadric(total, b);
+      value = quadricValue(total, b);
     } else {
-      cand.position = minimizeQuadric(total, a, b, &value);
+      cand.position = minimizeOnEdge(total, a, b, &value);
     }
     cand.cost = value;
-    cand.error = std::sqrt(evaluateQuadric(geometric, cand.position) / area) * state.scale;
+    cand.error = std::sqrt(quadricValue(geometric, cand.position) / area) * state.scale;
   }
 }
 

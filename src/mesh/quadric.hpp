@@ -53,9 +53,9 @@ class QuadricModel final : public CostModel {
 
  private:
   // Sums the attribute quadrics of the wedges that merge into `target` (and target's own) into
-  // scratch_, returns a pointer to it.
+  // scratch_, returns a pointer to it (for placeAttributes).
   const double* mergedAttributeQuadric(const CandidateCollapse& candidate, uint32_t target);
-  Quadric reducedAttributeQuadric(const double* attribute_quadric) const;
+  Quadric reducedMergedQuadric(const CandidateCollapse& candidate, uint32_t target) const;
 
   QuadricModelOptions options_;
   // Per position: plane quadrics plus feature-line penalty planes.
