@@ -31,6 +31,9 @@ int main(int argc, char** argv) {
   int pixels = 128;
   double ratio = 0.25;
   int supersample = 4;
+  size_t refine_batch = 32;
+  app.add_option("--refine-batch", refine_batch, "candidates priced per rendering batch")
+      ->capture_default_str();
   app.add_option("--mesh", mesh_path, "mesh file (scripts/fetch-bench-data.sh fetches the default)")
       ->capture_default_str();
   app.add_option("--shader", shader_name)->capture_default_str();
@@ -62,6 +65,7 @@ int main(int argc, char** argv) {
   options.target_triangles = target;
   options.distance = distance;
   options.supersample = supersample;
+  options.refine_batch = refine_batch;
   mesh::ImageSimplifyStats stats;
   auto start = std::chrono::steady_clock::now();
   auto image_result = mesh::simplifyImage(r, *asset, *shader, options, &stats);
@@ -105,9 +109,9 @@ int main(int argc, char** argv) {
   std::printf("| quadric | %zu | %.3f | %.5f | %.3f s |\n", quadric.mesh.triangleCount(),
               quadric_error.epsilon, quadric_error.per_pixel, quadric_seconds);
   std::printf("\nimage-driven: %zu rendered evaluations in %zu batches (%.1f s rendering), "
-              "%zu regions refreshed, %zu long-edge and %zu wide-region refusals, reference %.1f s\n",
+              "%zu regions re-rendered, %zu copied, %zu full re-renders, %zu long-edge and %zu wide-region refusals, reference %.1f s\n",
               stats.rendered_evaluations, stats.refine_batches, stats.render_seconds,
-              stats.refreshed_regions, stats.rejected_long_edges, stats.rejected_wide_regions,
+              stats.refreshed_regions, stats.copied_regions, stats.full_renders, stats.rejected_long_edges, stats.rejected_wide_regions,
               stats.reference_seconds);
   std::printf("predicted change of epsilon %.3f, measured %.3f\n", stats.predicted_change,
               stats.final_error - stats.initial_error);

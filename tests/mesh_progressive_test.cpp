@@ -155,9 +155,12 @@ TEST(ProgressiveRecord, FiveHundredCandidatesOfALargeMeshExtractQuickly) {
               result.stats.seconds, total_triangles, seconds);
   EXPECT_EQ(meshes.front().triangleCount(), input.triangleCount());
   EXPECT_EQ(meshes.back().triangleCount(), result.mesh.triangleCount());
-#if !defined(__SANITIZE_ADDRESS__)
-  EXPECT_LT(seconds, 1.0);
-#endif
+  // Each candidate matches a one-off extraction (the sweep is a replay, not an approximation).
+  for (size_t i : {size_t(1), size_t(250), size_t(499)})
+    EXPECT_EQ(meshes[i].indices, mesh::extractMesh(record, candidates[i]).indices) << i;
+  // Wall time is the benchmark's business (bench_simplify prints it; a loaded CI machine must not
+  // fail a test): here only report it.
+  RecordProperty("extract_500_seconds", std::to_string(seconds));
 }
 
 TEST(ProgressiveRecord, EmptyRecord) {

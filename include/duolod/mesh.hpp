@@ -124,10 +124,11 @@ struct ImageSimplifyOptions {
   render::Display display;
   int supersample = 4;           // k of the reference f̄
   float max_edge_pixels = 1.0f;  // D
-  int tile_size = 16;  // pixels; a collapse whose neighbourhood is wider in some view is refused
+  int tile_size = 8;  // pixels; a collapse whose neighbourhood is wider in some view is refused
   bool lock_border = false;
   bool allow_material_border_collapse = false;
   bool record = true;
+  size_t refine_batch = 32;  // candidates priced by rendering per batch
 };
 
 struct ImageSimplifyStats {
@@ -136,7 +137,9 @@ struct ImageSimplifyStats {
   double final_error = 0;    // ε of the result
   size_t rendered_evaluations = 0;
   size_t refine_batches = 0;
-  size_t refreshed_regions = 0;
+  size_t refreshed_regions = 0;  // re-rendered after collapses
+  size_t copied_regions = 0;     // updated from the tiles the collapse was priced with
+  size_t full_renders = 0;       // whole-domain re-renders of the current mesh
   size_t rejected_long_edges = 0;
   size_t rejected_wide_regions = 0;
   double reference_seconds = 0;  // rendering f̄ and the input's images

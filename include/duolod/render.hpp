@@ -140,6 +140,9 @@ class Renderer {
   using ProgramId = int;
 
   core::Result<AssetId> uploadAsset(const core::Asset& asset);
+  // Another mesh with the materials and textures of an uploaded asset (textures are shared, not
+  // copied): for the many meshes of one asset an optimizer renders.
+  core::Result<AssetId> uploadMesh(AssetId materials_from, const core::Mesh& mesh);
   void releaseAsset(AssetId asset);
   core::Result<ProgramId> compileProgram(const GlslSource& source);
   core::Result<ProgramId> compileProgram(const SpirvBinary& binary);
@@ -171,6 +174,9 @@ class Renderer {
   struct RegionTile {
     int view_index = 0;  // which view's camera (samples are view-major)
     int x0 = 0, y0 = 0;  // top-left pixel of the region in the view's image (rows top first)
+    // The region's size; drawing is clipped to it, so no fragment outside it is shaded. 0 = the
+    // whole tile.
+    int width = 0, height = 0;
   };
   struct RegionSoup {
     core::Mesh triangles;  // non-indexed: 3 consecutive vertices per triangle; attribute streams

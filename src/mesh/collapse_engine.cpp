@@ -1052,6 +1052,7 @@ SimplifyResult Engine::run() {
     if (pass_rejections_ == 0) break;
   }
 
+  model_.end(state_);
   SimplifyResult result;
   result.mesh = buildOutput();
   result.error = max_error_;

@@ -172,6 +172,8 @@ class CostModel {
   virtual void refine(const EngineState& state, std::span<CandidateCollapse> batch) {
     (void)state, (void)batch;
   }
+  // Once, when the engine stops (state final).
+  virtual void end(const EngineState& state) { (void)state; }
   // After the collapse is applied (state already updated), for incremental model data.
   virtual void onCollapse(const EngineState& state, const AppliedCollapse& applied) {
     (void)state, (void)applied;

@@ -36,11 +36,15 @@ void ImageCostModel::begin(const EngineState& state) {
       core::Vec4 clip = core::transform(view_projection, {a.x, a.y, a.z, 1});
       float w = clip.w > 1e-12f ? clip.w : 1e-12f;
       projected_[size_t(v) * position_count_ + p] = {(clip.x / w * 0.5f + 0.5f) * R,
-                                                     (0.5f - clip.y / w * 0.5f) * R};
+                                                     (0.5f - clip.y / w * 0.5f) * R,
+                                                     clip.z / w * 0.5f + 0.5f};
     }
   }
 
-  cells_per_side_ = (R + kCellPixels - 1) / kCellPixels;
+  // Cells of a few pixels: a collapse's region is a few pixels wide, and at small footprints many
+  // triangles share each pixel.
+  cell_pixels_ = std::max(2, R / 64);
+  cells_per_side_ = (R + cell_pixels_ - 1) / cell_pixels_;
   bins_.assign(size_t(view_count_) * cells_per_side_ * cells_per_side_, {});
   triangle_mark_.assign(state.triangle_alive.size(), 0);
   for (uint32_t t = 0; t < state.triangle_alive.size(); ++t)
@@ -88,15 +92,19 @@ void ImageCostModel::binTriangle(const EngineState& state, uint32_t triangle) {
   const int cells = cells_per_side_;
   for (int v = 0; v < view_count_; ++v) {
     float min_x = 1e30f, min_y = 1e30f, max_x = -1e30f, max_y = -1e30f;
+    PixelPoint c[3];
     for (int k = 0; k < 3; ++k) {
-      PixelPoint p = projected(v, state.cornerPosition(triangle * 3 + k));
+      PixelPoint p = c[k] = projected(v, state.cornerPosition(triangle * 3 + k));
       min_x = std::min(min_x, p.x), max_x = std::max(max_x, p.x);
       min_y = std::min(min_y, p.y), max_y = std::max(max_y, p.y);
     }
-    int cx0 = std::clamp(int(std::floor(min_x)) / kCellPixels, 0, cells - 1);
-    int cx1 = std::clamp(int(std::floor(max_x)) / kCellPixels, 0, cells - 1);
-    int cy0 = std::clamp(int(std::floor(min_y)) / kCellPixels, 0, cells - 1);
-    int cy1 = std::clamp(int(std::floor(max_y)) / kCellPixels, 0, cells - 1);
+    // Back-facing now: never drawn, so not listed (re-binned if a collapse turns it).
+    if (!((c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y) < 0))
+      continue;
+    int cx0 = std::clamp(int(std::floor(min_x)) / cell_pixels_, 0, cells - 1);
+    int cx1 = std::clamp(int(std::floor(max_x)) / cell_pixels_, 0, cells - 1);
+    int cy0 = std::clamp(int(std::floor(min_y)) / cell_pixels_, 0, cells - 1);
+    int cy1 = std::clamp(int(std::floor(max_y)) / cell_pixels_, 0, cells - 1);
     if (max_x < 0 || max_y < 0 || min_x >= setup_.resolution || min_y >= setup_.resolution)
       continue;  // off screen in this view
     for (int cy = cy0; cy <= cy1; ++cy)
@@ -154,38 +162,96 @@ void ImageCostModel::appendTriangle(const EngineState& state, const uint32_t wed
 }
 
 void ImageCostModel::gatherTriangles(const EngineState& state, int view, const Region& region,
-                                     uint32_t skip_position, uint32_t tile,
-                                     render::Renderer::RegionSoup& soup) {
+                                     uint32_t skip_position, std::vector<LocalTriangle>& out) {
   if (++mark_round_ == 0) {
     std::fill(triangle_mark_.begin(), triangle_mark_.end(), 0);
     mark_round_ = 1;
   }
   const int cells = cells_per_side_;
-  int cx0 = std::clamp(region.x0 / kCellPixels, 0, cells - 1);
-  int cx1 = std::clamp((region.x1 - 1) / kCellPixels, 0, cells - 1);
-  int cy0 = std::clamp(region.y0 / kCellPixels, 0, cells - 1);
-  int cy1 = std::clamp((region.y1 - 1) / kCellPixels, 0, cells - 1);
+  int cx0 = std::clamp(region.x0 / cell_pixels_, 0, cells - 1);
+  int cx1 = std::clamp((region.x1 - 1) / cell_pixels_, 0, cells - 1);
+  int cy0 = std::clamp(region.y0 / cell_pixels_, 0, cells - 1);
+  int cy1 = std::clamp((region.y1 - 1) / cell_pixels_, 0, cells - 1);
+  // Pixel centres of the region lie in [x0 + 0.5, x1 − 0.5]: a triangle whose box misses that
+  // range covers none of them.
+  const float min_cx = region.x0 + 0.5f, max_cx = region.x1 - 0.5f;
+  const float min_cy = region.y0 + 0.5f, max_cy = region.y1 - 0.5f;
   for (int cy = cy0; cy <= cy1; ++cy)
     for (int cx = cx0; cx <= cx1; ++cx)
       for (uint32_t t : bins_[(size_t(view) * cells + cy) * cells + cx]) {
         if (!state.triangle_alive[t] || triangle_mark_[t] == mark_round_) continue;
         triangle_mark_[t] = mark_round_;
-        float min_x = 1e30f, min_y = 1e30f, max_x = -1e30f, max_y = -1e30f;
+        LocalTriangle local;
+        local.group = state.groups[t];
         bool skip = false;
-        uint32_t wedges[3];
+        float min_x = 1e30f, min_y = 1e30f, max_x = -1e30f, max_y = -1e30f;
         for (int k = 0; k < 3; ++k) {
           uint32_t position = state.cornerPosition(t * 3 + k);
           skip |= position == skip_position;
-          wedges[k] = state.corners[t * 3 + k];
-          PixelPoint p = projected(view, position);
-          min_x = std::min(min_x, p.x), max_x = std::max(max_x, p.x);
-          min_y = std::min(min_y, p.y), max_y = std::max(max_y, p.y);
+          local.wedges[k] = state.corners[t * 3 + k];
+          local.corners[k] = projected(view, position);
+          min_x = std::min(min_x, local.corners[k].x), max_x = std::max(max_x, local.corners[k].x);
+          min_y = std::min(min_y, local.corners[k].y), max_y = std::max(max_y, local.corners[k].y);
         }
-        if (skip || max_x < region.x0 - 1 || min_x > region.x1 + 1 || max_y < region.y0 - 1 ||
-            min_y > region.y1 + 1)
-          continue;
-        appendTriangle(state, wedges, tile, state.groups[t], soup);
+        if (skip || max_x < min_cx || min_x > max_cx || max_y < min_cy || min_y > max_cy) continue;
+        out.push_back(local);
       }
+}
+
+void ImageCostModel::keepVisible(const Region& region, std::vector<LocalTriangle>& triangles) {
+  const int width = region.x1 - region.x0, height = region.y1 - region.y0;
+  depth_scratch_.assign(size_t(width) * height, 2.0f);
+  // Two passes over the front faces: the nearest depth at every pixel centre, then every triangle
+  // that reaches within a tolerance of it. The tolerances keep what OpenGL might draw where our
+  // rasterization and its (fixed-point, top-left-rule) one can disagree: on shared edges, and
+  // within 1/64 pixel of an edge.
+  constexpr float kDepthTolerance = 1e-5f;
+  constexpr float kEdgeSlackPixels = 1.0f / 64.0f;
+  auto rasterize = [&](const LocalTriangle& t, float slack, auto&& visit) {
+    const PixelPoint* c = t.corners;
+    // Rows top first flip the winding: OpenGL's counter-clockwise front faces have negative area.
+    float area = (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
+    if (!(area < 0)) return;  // back-facing or degenerate: culled like glCullFace(GL_BACK)
+    float min_x = std::min({c[0].x, c[1].x, c[2].x}), max_x = std::max({c[0].x, c[1].x, c[2].x});
+    float min_y = std::min({c[0].y, c[1].y, c[2].y}), max_y = std::max({c[0].y, c[1].y, c[2].y});
+    int px0 = std::max(region.x0, int(std::ceil(min_x - 0.5f - slack)));
+    int px1 = std::min(region.x1 - 1, int(std::floor(max_x - 0.5f + slack)));
+    int py0 = std::max(region.y0, int(std::ceil(min_y - 0.5f - slack)));
+    int py1 = std::min(region.y1 - 1, int(std::floor(max_y - 0.5f + slack)));
+    float inverse_area = 1.0f / area;
+    // Slack along each edge's normal: the edge function grows with the edge's length.
+    float e0 = slack * std::hypot(c[2].x - c[1].x, c[2].y - c[1].y);
+    float e1 = slack * std::hypot(c[0].x - c[2].x, c[0].y - c[2].y);
+    float e2 = slack * std::hypot(c[1].x - c[0].x, c[1].y - c[0].y);
+    for (int py = py0; py <= py1; ++py)
+      for (int px = px0; px <= px1; ++px) {
+        float x = px + 0.5f, y = py + 0.5f;
+        // Edge functions; all ≤ 0 inside for this (negative-area) winding.
+        float w0 = (c[2].x - c[1].x) * (y - c[1].y) - (c[2].y - c[1].y) * (x - c[1].x);
+        float w1 = (c[0].x - c[2].x) * (y - c[2].y) - (c[0].y - c[2].y) * (x - c[2].x);
+        float w2 = (c[1].x - c[0].x) * (y - c[0].y) - (c[1].y - c[0].y) * (x - c[0].x);
+        if (w0 > e0 || w1 > e1 || w2 > e2) continue;
+        float z = (w0 * c[0].z + w1 * c[1].z + w2 * c[2].z) * inverse_area;
+        visit(size_t(py - region.y0) * width + (px - region.x0), z);
+      }
+  };
+  for (const LocalTriangle& t : triangles)
+    rasterize(t, 0.0f, [&](size_t at, float z) { depth_scratch_[at] = std::min(depth_scratch_[at], z); });
+  size_t kept = 0;
+  for (size_t i = 0; i < triangles.size(); ++i) {
+    bool visible = false;
+    rasterize(triangles[i], kEdgeSlackPixels, [&](size_t at, float z) {
+      visible |= z <= depth_scratch_[at] + kDepthTolerance;
+    });
+    if (visible) triangles[kept++] = triangles[i];  // original order: deterministic soups
+  }
+  triangles.resize(kept);
+}
+
+void ImageCostModel::appendToSoup(const EngineState& state,
+                                  const std::vector<LocalTriangle>& triangles, uint32_t tile,
+                                  render::Renderer::RegionSoup& soup) const {
+  for (const LocalTriangle& t : triangles) appendTriangle(state, t.wedges, tile, t.group, soup);
 }
 
 void ImageCostModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
@@ -218,7 +284,14 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
   size_t refreshed_before = stats_.refreshed_regions;
-  refreshPendingRegions(state);
+  size_t pending_pixels = 0;
+  for (const auto& [view, region] : pending_)
+    pending_pixels += size_t(region.x1 - region.x0) * (region.y1 - region.y0);
+  const size_t view_pixels = size_t(setup_.resolution) * setup_.resolution * view_count_;
+  if (pending_pixels * 4 > view_pixels || ++batches_since_full_ >= 32)
+    renderFully(state);
+  else
+    refreshPendingRegions(state);
   double refresh_s = since(start);
   auto build_start = std::chrono::steady_clock::now();
 
@@ -245,24 +318,32 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
     }
     for (const Placed& p : mine) {
       uint32_t tile = uint32_t(soup.tiles.size());
-      soup.tiles.push_back({p.view, p.region.x0, p.region.y0});
-      gatherTriangles(state, p.view, p.region, c.from, tile, soup);
-      // The moved triangles: from's corner takes the wedge it merges into.
+      soup.tiles.push_back({p.view, p.region.x0, p.region.y0, p.region.x1 - p.region.x0,
+                            p.region.y1 - p.region.y0});
+      local_.clear();
+      gatherTriangles(state, p.view, p.region, c.from, local_);
+      // The moved triangles: from's corner takes the wedge (and position) it merges into.
       state.forEachCorner(c.from, [&](uint32_t corner) {
         uint32_t t = corner / 3;
-        uint32_t wedges[3];
+        LocalTriangle moved;
+        moved.group = state.groups[t];
         bool vanishes = false;
         for (int k = 0; k < 3; ++k) {
           uint32_t w = state.corners[t * 3 + k];
           uint32_t position = state.wedge_position[w];
           vanishes |= position == c.to;
-          if (position == c.from)
+          if (position == c.from) {
             for (int m = 0; m < c.wedge_count; ++m)
               if (c.from_wedges[m] == w) w = c.to_wedges[m];
-          wedges[k] = w;
+            position = c.to;
+          }
+          moved.wedges[k] = w;
+          moved.corners[k] = projected(p.view, position);
         }
-        if (!vanishes) appendTriangle(state, wedges, tile, state.groups[t], soup);
+        if (!vanishes) local_.push_back(moved);
       });
+      keepVisible(p.region, local_);
+      appendToSoup(state, local_, tile, soup);
       placed.push_back(p);
     }
   }
@@ -300,6 +381,20 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
         }
     }
   }
+  // Keep the tiles: an applied candidate's new pixels are in them (see onCollapse).
+  last_refined_.clear();
+  last_placed_.clear();
+  changed_since_refine_.clear();
+  for (size_t first = 0; first < placed.size();) {
+    size_t end = first;
+    while (end < placed.size() && placed[end].candidate == placed[first].candidate) ++end;
+    const CandidateCollapse& c = batch[placed[first].candidate];
+    last_refined_[edgeKey(c.from, c.to)] = {uint32_t(first), uint32_t(end)};
+    first = end;
+  }
+  for (size_t i = 0; i < placed.size(); ++i)
+    last_placed_.push_back({placed[i].view, placed[i].region, uint32_t(i)});
+
   // The quadric cost of each, to learn how image costs scale against it for the estimates.
   std::vector<CandidateCollapse> quadric_priced(batch.begin(), batch.end());
   quadric_.evaluate(state, quadric_priced);
@@ -325,6 +420,7 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
     quadric_to_image_ = sorted[sorted.size() / 2];
   }
+  last_tiles_ = std::move(tiles.value());
   stats_.rendered_evaluations += batch.size();
   ++stats_.refine_batches;
   stats_.render_seconds +=
@@ -333,10 +429,45 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
 
 void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse& applied) {
   quadric_.onCollapse(state, applied);
-  stats_.predicted_change += applied.candidate.cost;
+  // The queue clamps negative costs to 0; the rendered value is the one to add up.
+  auto known = last_cost_.find(edgeKey(applied.candidate.from, applied.candidate.to));
+  stats_.predicted_change += known != last_cost_.end() ? known->second : applied.candidate.cost;
   const uint32_t survivor = applied.candidate.to, removed = applied.candidate.from;
-  // The changed pixels: the box of the survivor's new one-ring and the removed vertex.
+  const int R = setup_.resolution, T = setup_.tile_size, L = setup_.lights_per_view;
+  auto overlaps = [](const Region& a, const Region& b) {
+    return a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1;
+  };
+  auto priced = last_refined_.find(edgeKey(removed, survivor));
   for (int v = 0; v < view_count_; ++v) {
+    // Priced in the last batch, with nothing applied near it since: copy its rendered pixels.
+    if (priced != last_refined_.end() && !std::getenv("DUOLOD_NO_COPY")) {
+      const PricedTile* tile = nullptr;
+      for (uint32_t i = priced->second.first; i < priced->second.second; ++i)
+        if (last_placed_[i].view == v) tile = &last_placed_[i];
+      bool untouched = tile != nullptr;
+      for (const auto& [view, region] : changed_since_refine_)
+        if (untouched && view == v && overlaps(region, tile->region)) untouched = false;
+      if (untouched) {
+        const Region& region = tile->region;
+        for (int light = 0; light < L; ++light) {
+          int sample = v * L + light;
+          const uint8_t* rendered = last_tiles_.tile(int(tile->tile) * L + light);
+          uint8_t* current = setup_.current.tile(sample);
+          for (int y = region.y0; y < region.y1; ++y)
+            for (int x = region.x0; x < region.x1; ++x) {
+              const uint8_t* now = rendered + (size_t(y - region.y0) * T + (x - region.x0)) * 4;
+              uint8_t* old = current + (size_t(y) * R + x) * 4;
+              sample_error_[sample] += pixelError(now, sample, x, y) - pixelError(old, sample, x, y);
+              std::copy_n(now, 4, old);
+            }
+        }
+        changed_since_refine_.push_back({v, region});
+        ++stats_.copied_regions;
+        continue;
+      }
+    }
+    // Otherwise re-render the changed pixels before the next pricing: the box of the survivor's
+    // new one-ring and the removed vertex.
     PixelPoint p = projected(v, removed);
     float min_x = p.x, max_x = p.x, min_y = p.y, max_y = p.y;
     state.forEachCorner(survivor, [&](uint32_t corner) {
@@ -346,15 +477,60 @@ void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse&
         min_y = std::min(min_y, q.y), max_y = std::max(max_y, q.y);
       }
     });
-    const int R = setup_.resolution;
     Region region{std::clamp(int(std::floor(min_x)) - 1, 0, R),
                   std::clamp(int(std::floor(min_y)) - 1, 0, R),
                   std::clamp(int(std::ceil(max_x)) + 1, 0, R),
                   std::clamp(int(std::ceil(max_y)) + 1, 0, R)};
-    if (region.x1 > region.x0 && region.y1 > region.y0) pending_.push_back({v, region});
+    if (region.x1 > region.x0 && region.y1 > region.y0) {
+      pending_.push_back({v, region});
+      changed_since_refine_.push_back({v, region});
+    }
   }
   // The survivor's triangles changed shape: list them in the cells they reach now.
   state.forEachCorner(survivor, [&](uint32_t corner) { binTriangle(state, corner / 3); });
+}
+
+void ImageCostModel::renderFully(const EngineState& state) {
+  batches_since_full_ = 0;
+  pending_.clear();
+  if (!failure_.empty()) return;
+  // The current mesh: every wedge (unreferenced ones are harmless), live triangles by submesh.
+  const AttributeLayout& layout = state.layout;
+  core::Mesh mesh;
+  for (uint32_t w = 0; w < state.wedge_position.size(); ++w)
+    appendVertex(mesh, layout, state.asset_positions[state.wedge_position[w]],
+                 state.wedgeAttributes(w));
+  const uint32_t groups = uint32_t(setup_.group_material.size());
+  for (uint32_t g = 0; g < std::max(groups, 1u); ++g) {
+    uint32_t first = uint32_t(mesh.indices.size());
+    for (uint32_t t = 0; t < state.triangle_alive.size(); ++t)
+      if (state.triangle_alive[t] && (groups == 0 || state.groups[t] == g))
+        for (int k = 0; k < 3; ++k) mesh.indices.push_back(state.corners[t * 3 + k]);
+    uint32_t material = groups ? setup_.group_material[g] : 0;
+    mesh.submeshes.push_back({first, uint32_t(mesh.indices.size()) - first, material});
+  }
+  auto id = setup_.renderer->uploadMesh(setup_.asset, mesh);
+  if (!id) {
+    failure_ = id.error().message;
+    return;
+  }
+  auto images = setup_.renderer->render(*id, setup_.program, setup_.samples,
+                                        {.resolution = setup_.resolution});
+  setup_.renderer->releaseAsset(*id);
+  if (!images) {
+    failure_ = images.error().message;
+    return;
+  }
+  setup_.current = std::move(images.value());
+  const int R = setup_.resolution;
+  for (size_t s = 0; s < sample_error_.size(); ++s) {
+    sample_error_[s] = 0;
+    const uint8_t* image = setup_.current.tile(int(s));
+    for (int y = 0; y < R; ++y)
+      for (int x = 0; x < R; ++x)
+        sample_error_[s] += pixelError(image + (size_t(y) * R + x) * 4, int(s), x, y);
+  }
+  ++stats_.full_renders;
 }
 
 void ImageCostModel::refreshPendingRegions(const EngineState& state) {
@@ -369,8 +545,13 @@ void ImageCostModel::refreshPendingRegions(const EngineState& state) {
   pending_.clear();
   render::Renderer::RegionSoup soup;
   for (uint32_t tile = 0; tile < pieces.size(); ++tile) {
-    soup.tiles.push_back({pieces[tile].first, pieces[tile].second.x0, pieces[tile].second.y0});
-    gatherTriangles(state, pieces[tile].first, pieces[tile].second, kAbsent, tile, soup);
+    const Region& piece = pieces[tile].second;
+    soup.tiles.push_back({pieces[tile].first, piece.x0, piece.y0, piece.x1 - piece.x0,
+                          piece.y1 - piece.y0});
+    local_.clear();
+    gatherTriangles(state, pieces[tile].first, pieces[tile].second, kAbsent, local_);
+    keepVisible(pieces[tile].second, local_);
+    appendToSoup(state, local_, tile, soup);
   }
   auto tiles = setup_.renderer->renderRegions(setup_.asset, setup_.region_program, soup,
                                               setup_.samples, L, R, T);

@@ -25,12 +25,14 @@ struct ImageCostSetup {
   render::Renderer* renderer = nullptr;
   render::Renderer::AssetId asset = -1;            // supplies materials and textures
   render::Renderer::ProgramId region_program = -1;  // Renderer::compileRegionProgram
+  render::Renderer::ProgramId program = -1;         // the same shader, for whole views
   std::vector<render::Sample> samples;             // view-major
   std::vector<uint32_t> group_material;            // material of each submesh (engine group)
   int lights_per_view = 5;
   int resolution = 64;  // the footprint s_d the samples are framed for
   int tile_size = 16;   // a neighbourhood wider than this in any view does not collapse
   float max_edge_pixels = 1.0f;  // D of §4.2
+  size_t refine_batch = 32;      // candidates priced per renderRegions() call
   const render::ImageBatchF* reference = nullptr;  // f̄ of the original, per sample
   render::ImageBatch8 current;                     // f of the input mesh, per sample
 };
@@ -39,6 +41,8 @@ struct ImageCostStats {
   size_t rendered_evaluations = 0;  // candidates priced by rendering
   size_t refine_batches = 0;
   size_t refreshed_regions = 0;  // regions re-rendered to keep `current` up to date
+  size_t copied_regions = 0;     // regions updated from the tiles they were priced with
+  size_t full_renders = 0;       // whole-domain re-renders of the current mesh
   size_t rejected_long_edges = 0;
   size_t rejected_wide_regions = 0;
   double render_seconds = 0;
@@ -51,9 +55,12 @@ class ImageCostModel final : public CostModel {
 
   void begin(const EngineState& state) override;
   void evaluate(const EngineState& state, std::span<CandidateCollapse> batch) override;
-  size_t refineBatchSize() const override { return 256; }
+  size_t refineBatchSize() const override { return setup_.refine_batch; }
   void refine(const EngineState& state, std::span<CandidateCollapse> batch) override;
   void onCollapse(const EngineState& state, const AppliedCollapse& applied) override;
+  void end(const EngineState& state) override { renderFully(state); }
+  // The current images (of the mesh as simplified so far), one per sample.
+  const render::ImageBatch8& currentImages() const { return setup_.current; }
 
   // eq. (6) of the current mesh: mean over samples of the summed squared RGB error.
   double currentError() const;
@@ -67,6 +74,13 @@ class ImageCostModel final : public CostModel {
   };
   struct PixelPoint {
     float x = 0, y = 0;  // pixel coordinates, rows top first
+    float z = 0;         // window depth in [0, 1]
+  };
+  // A triangle considered for one tile: its wedges, submesh and screen corners.
+  struct LocalTriangle {
+    uint32_t wedges[3];
+    uint32_t group;
+    PixelPoint corners[3];
   };
 
   PixelPoint projected(int view, uint32_t position) const {
@@ -78,15 +92,25 @@ class ImageCostModel final : public CostModel {
                       Region& region) const;
   bool edgeTooLong(uint32_t from, uint32_t to) const;
   void binTriangle(const EngineState& state, uint32_t triangle);
-  // Appends to the soup the live triangles overlapping `region` of `view`, except those at
-  // `skip_position` (kAbsent: none).
+  // The live triangles that may cover a pixel centre of `region` in `view`, except those at
+  // `skip_position` (kAbsent: none), appended to `out`.
   void gatherTriangles(const EngineState& state, int view, const Region& region,
-                       uint32_t skip_position, uint32_t tile, render::Renderer::RegionSoup& soup);
+                       uint32_t skip_position, std::vector<LocalTriangle>& out);
+  // Keeps only the triangles that are front-facing and nearest at some pixel centre of `region`
+  // (a depth-buffered CPU rasterization with OpenGL's sampling rule): at small footprints a region
+  // overlaps hundreds of triangles but shows a few dozen, and only those need shading on the GPU.
+  void keepVisible(const Region& region, std::vector<LocalTriangle>& triangles);
+  void appendToSoup(const EngineState& state, const std::vector<LocalTriangle>& triangles,
+                    uint32_t tile, render::Renderer::RegionSoup& soup) const;
   void appendTriangle(const EngineState& state, const uint32_t wedges[3], uint32_t tile,
                       uint32_t group, render::Renderer::RegionSoup& soup) const;
   // Re-renders the regions touched by collapses since the last refine, so `current` and the
   // per-sample error sums describe the current mesh again.
   void refreshPendingRegions(const EngineState& state);
+  // Renders every view of the current mesh anew: exact, and at small footprints cheaper than many
+  // regions. Done when the pending regions cover much of the images, and every few batches so
+  // that small differences between region and whole-view rasterization cannot accumulate.
+  void renderFully(const EngineState& state);
   double pixelError(const uint8_t* rgba, int sample, int x, int y) const;
 
   ImageCostSetup setup_;
@@ -96,20 +120,34 @@ class ImageCostModel final : public CostModel {
   int view_count_ = 0;
   size_t position_count_ = 0;
   std::vector<PixelPoint> projected_;  // per view, per position
-  // Per view, a grid of 8-pixel cells listing the triangles whose screen box touches the cell.
-  // Entries go stale when triangles die or move; queries re-check.
-  static constexpr int kCellPixels = 8;
+  // Per view, a grid of small cells listing the front-facing triangles whose screen box touches
+  // the cell. Entries go stale when triangles die or move; queries re-check.
+  int cell_pixels_ = 2;
   int cells_per_side_ = 0;
   std::vector<std::vector<uint32_t>> bins_;  // [view * cells² + cell]
   std::vector<uint32_t> triangle_mark_;
+  std::vector<LocalTriangle> local_;    // scratch for one tile
+  std::vector<float> depth_scratch_;    // scratch: region depth buffer
   uint32_t mark_round_ = 0;
   std::vector<double> sample_error_;  // per sample: Σ pixels |current − reference|²
   std::vector<std::pair<int, Region>> pending_;  // (view, region) to refresh
+  // The last refine's tiles: a candidate applied before anything near it changed has its new
+  // pixels there already, so they are copied instead of rendered again.
+  struct PricedTile {
+    int view;
+    Region region;
+    uint32_t tile;
+  };
+  render::ImageBatch8 last_tiles_;
+  std::vector<PricedTile> last_placed_;
+  std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> last_refined_;  // → placed range
+  std::vector<std::pair<int, Region>> changed_since_refine_;
   // Rendered cost of (from, to) when last priced: a far better estimate than the quadric once a
   // neighbour has changed it a little.
   std::unordered_map<uint64_t, float> last_cost_;
   std::vector<double> ratios_;  // rendered cost / quadric cost, to scale estimates
   double quadric_to_image_ = 0;
+  size_t batches_since_full_ = 0;
 };
 
 }  // namespace duolod::mesh

@@ -141,9 +141,13 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
     const RegionTile& tile = soup.tiles[t];
     float ax = float((t % columns) * tile_size), ay = float((t / columns) * tile_size);
     float gx0 = float(tile.x0), gy0 = float(view_resolution - tile.y0 - tile_size);
+    // Clip to the region (its top rows are the tile's top rows: GL's y runs up).
+    float region_w = float(tile.width > 0 ? std::min(tile.width, tile_size) : tile_size);
+    float region_h = float(tile.height > 0 ? std::min(tile.height, tile_size) : tile_size);
+    float clip_y0 = ay + tile_size - region_h;
     float values[8] = {(R - 2 * gx0 + 2 * ax) / W - 1, (R - 2 * gy0 + 2 * ay) / H - 1,
-                       2 * ax / W - 1, 2 * ay / H - 1,
-                       2 * (ax + tile_size) / W - 1, 2 * (ay + tile_size) / H - 1, 0, 0};
+                       2 * ax / W - 1, 2 * clip_y0 / H - 1,
+                       2 * (ax + region_w) / W - 1, 2 * (ay + tile_size) / H - 1, 0, 0};
     for (int v = 0; v < 3; ++v) std::copy_n(values, 8, placement.data() + (i * 3 + v) * 8);
   }
 

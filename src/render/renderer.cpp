@@ -183,14 +183,15 @@ void Renderer::setBindings(const Bindings& bindings) { state_->bindings = bindin
 void Renderer::setAmbient(core::Vec3 ambient_color) { state_->ambient = ambient_color; }
 void Renderer::setLightColor(core::Vec3 light_color) { state_->light_color = light_color; }
 
-core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) {
-  const core::Mesh& mesh = asset.mesh;
-  if (auto valid = core::validateMesh(mesh); !valid)
-    return Error{asset.source_path + ": " + valid.error().message};
-  if (mesh.triangleCount() == 0) return Error{asset.source_path + ": no triangles to render"};
-  GpuAsset gpu;
+namespace {
+
+// Vertex streams, index buffer, submeshes and material blocks of `mesh`; textures are separate.
+core::Status uploadGeometry(const core::Mesh& mesh, const std::vector<core::Material>& materials,
+                            GLint ubo_alignment, GpuAsset& gpu) {
+  if (auto valid = core::validateMesh(mesh); !valid) return valid;
+  if (mesh.triangleCount() == 0) return Error{"no triangles to render"};
   gpu.bounds = core::computeBoundingSphere(mesh);
-  gpu.materials = asset.materials;
+  gpu.materials = materials;
   glCreateVertexArrays(1, &gpu.vao);
   auto addStream = [&](const void* data, size_t bytes) {
     GLuint buffer;
@@ -220,11 +221,11 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
       gpu.submeshes.push_back({static_cast<GLsizei>(sub.index_count), sub.first_index, sub.material});
 
   // One material block per material, at aligned offsets of one buffer.
-  gpu.material_stride = roundUp(sizeof(MaterialBlock), state_->ubo_alignment);
-  std::vector<uint8_t> material_bytes(std::max<size_t>(1, asset.materials.size()) *
+  gpu.material_stride = roundUp(sizeof(MaterialBlock), ubo_alignment);
+  std::vector<uint8_t> material_bytes(std::max<size_t>(1, materials.size()) *
                                       gpu.material_stride);
-  for (size_t m = 0; m < asset.materials.size(); ++m) {
-    const core::Material& mat = asset.materials[m];
+  for (size_t m = 0; m < materials.size(); ++m) {
+    const core::Material& mat = materials[m];
     MaterialBlock block{};
     float* f = block.base_color_factor;
     f[0] = mat.base_color_factor.x, f[1] = mat.base_color_factor.y, f[2] = mat.base_color_factor.z,
@@ -246,7 +247,18 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
   glCreateBuffers(1, &gpu.material_ubo);
   glNamedBufferStorage(gpu.material_ubo, static_cast<GLsizeiptr>(material_bytes.size()),
                        material_bytes.data(), 0);
+  return core::okStatus();
+}
 
+}  // namespace
+
+core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) {
+  GpuAsset gpu;
+  if (auto uploaded = uploadGeometry(asset.mesh, asset.materials, state_->ubo_alignment, gpu);
+      !uploaded) {
+    State::release(gpu);
+    return Error{asset.source_path + ": " + uploaded.error().message};
+  }
   for (const core::Texture& texture : asset.textures) {
     GLuint id = 0;
     if (!texture.image.pixels.empty()) {
@@ -264,7 +276,7 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
       glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_REPEAT);
       glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_REPEAT);
     }
-    gpu.textures.push_back(id);
+    gpu.textures->ids.push_back(id);
   }
   GLenum error = glGetError();
   if (error != GL_NO_ERROR) {
@@ -272,6 +284,23 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
     return Error{asset.source_path + ": uploading to the GPU failed (GL error " +
                  std::to_string(error) + ")"};
   }
+  state_->assets.push_back(std::move(gpu));
+  return static_cast<AssetId>(state_->assets.size() - 1);
+}
+
+core::Result<Renderer::AssetId> Renderer::uploadMesh(AssetId materials_from,
+                                                     const core::Mesh& mesh) {
+  if (materials_from < 0 || materials_from >= static_cast<int>(state_->assets.size()) ||
+      !state_->assets[materials_from])
+    return Error{"uploadMesh: unknown asset id " + std::to_string(materials_from)};
+  const GpuAsset& source = *state_->assets[materials_from];
+  GpuAsset gpu;
+  if (auto uploaded = uploadGeometry(mesh, source.materials, state_->ubo_alignment, gpu);
+      !uploaded) {
+    State::release(gpu);
+    return Error{"uploadMesh: " + uploaded.error().message};
+  }
+  gpu.textures = source.textures;
   state_->assets.push_back(std::move(gpu));
   return static_cast<AssetId>(state_->assets.size() - 1);
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -33,6 +34,17 @@ struct MaterialBlock {
   float texture_flags2[4];
 };
 
+// Deletes its textures with the last asset that uses them (the context is current then).
+struct TextureSet {
+  std::vector<GLuint> ids;
+  TextureSet() = default;
+  TextureSet(const TextureSet&) = delete;
+  TextureSet& operator=(const TextureSet&) = delete;
+  ~TextureSet() {
+    if (!ids.empty()) glDeleteTextures(static_cast<GLsizei>(ids.size()), ids.data());
+  }
+};
+
 struct GpuSubmesh {
   GLsizei index_count = 0;
   size_t first_index = 0;
@@ -44,7 +56,8 @@ struct GpuAsset {
   std::vector<GLuint> buffers;
   GLuint material_ubo = 0;
   GLsizeiptr material_stride = 0;
-  std::vector<GLuint> textures;  // one per asset texture
+  // One per asset texture; shared by meshes uploaded with uploadMesh() from this asset.
+  std::shared_ptr<TextureSet> textures = std::make_shared<TextureSet>();
   std::vector<core::Material> materials;
   std::vector<GpuSubmesh> submeshes;
   core::Sphere bounds;
@@ -130,8 +143,7 @@ struct Renderer::State {
     glDeleteVertexArrays(1, &asset.vao);
     glDeleteBuffers(static_cast<GLsizei>(asset.buffers.size()), asset.buffers.data());
     glDeleteBuffers(1, &asset.material_ubo);
-    if (!asset.textures.empty())
-      glDeleteTextures(static_cast<GLsizei>(asset.textures.size()), asset.textures.data());
+    asset.textures.reset();
   }
 
   GLuint makeSolidTexture(uint8_t r, uint8_t g, uint8_t b) {
@@ -219,8 +231,8 @@ struct ChunkDrawer {
     const core::Material& m =
         material_index < asset.materials.size() ? asset.materials[material_index] : fallback;
     auto texture = [&](int index, GLuint missing) {
-      return index >= 0 && index < static_cast<int>(asset.textures.size()) && asset.textures[index]
-                 ? asset.textures[index]
+      const std::vector<GLuint>& ids = asset.textures->ids;
+      return index >= 0 && index < static_cast<int>(ids.size()) && ids[index] ? ids[index]
                  : missing;
     };
     const std::pair<int, GLuint> units[] = {
