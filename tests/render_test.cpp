@@ -370,3 +370,20 @@ TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
 
 }  // namespace
 }  // namespace duolod
+
+namespace duolod {
+namespace {
+
+TEST(RendererDevices, ChoosesAnEglDeviceOrSaysHowManyExist) {
+  // Mesa lists at least its software device; a GPU machine lists its GPUs too.
+  auto first = render::Renderer::create({.device = 0});
+  ASSERT_TRUE(first) << first.error().message;
+  EXPECT_FALSE((*first)->deviceDescription().empty());
+  first.value().reset();
+  auto missing = render::Renderer::create({.device = 999});
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("999"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace duolod
