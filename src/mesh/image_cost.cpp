@@ -220,9 +220,12 @@ void ImageCostModel::keepVisible(const Region& region, std::vector<LocalTriangle
     int py1 = std::min(region.y1 - 1, int(std::floor(max_y - 0.5f + slack)));
     float inverse_area = 1.0f / area;
     // Slack along each edge's normal: the edge function grows with the edge's length.
-    float e0 = slack * std::hypot(c[2].x - c[1].x, c[2].y - c[1].y);
-    float e1 = slack * std::hypot(c[0].x - c[2].x, c[0].y - c[2].y);
-    float e2 = slack * std::hypot(c[1].x - c[0].x, c[1].y - c[0].y);
+    auto length = [](PixelPoint a, PixelPoint b) {
+      return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y));
+    };
+    float e0 = slack * length(c[2], c[1]);
+    float e1 = slack * length(c[0], c[2]);
+    float e2 = slack * length(c[1], c[0]);
     for (int py = py0; py <= py1; ++py)
       for (int px = px0; px <= px1; ++px) {
         float x = px + 0.5f, y = py + 0.5f;
