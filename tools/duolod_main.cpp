@@ -1,16 +1,20 @@
 // The duolod command line: a thin layer over libduolod. Each subcommand parses flags, calls the
 // library, and prints what a user needs; errors go to stderr with a non-zero exit code.
 #include <CLI/CLI.hpp>
-
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <span>
 #include <sstream>
 
 #include "duolod/core.hpp"
 #include "duolod/io.hpp"
+#include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
 
@@ -201,6 +205,41 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   return 0;
 }
 
+// ε (eq. 6) of each of `approximations` against the supersampled reference of `original`, over the
+// 20 views × 5 lights at `distance`, all framed by the original's bounding sphere so that their
+// pixels correspond.
+struct ImageComparison {
+  int footprint_px = 0;
+  std::vector<metric::ImageError> errors;  // one per approximation
+};
+
+core::Result<ImageComparison> compareRendered(Session& session, const core::Asset& original,
+                                              std::span<const core::Asset* const> approximations,
+                                              float distance, const render::Display& display,
+                                              int supersample) {
+  auto& renderer = *session.renderer;
+  ImageComparison comparison;
+  core::Sphere sphere = core::computeBoundingSphere(original.mesh);
+  comparison.footprint_px = render::footprintPixels(sphere, distance, display);
+  std::vector<render::Sample> samples = render::domainSamples(sphere, distance);
+  render::RenderOptions options{.resolution = comparison.footprint_px, .supersample = supersample};
+  auto original_id = renderer.uploadAsset(original);
+  if (!original_id) return original_id.error();
+  auto reference = renderer.renderReference(*original_id, session.program, samples, options);
+  renderer.releaseAsset(*original_id);
+  if (!reference) return reference.error();
+  options.supersample = 1;
+  for (const core::Asset* approximation : approximations) {
+    auto id = renderer.uploadAsset(*approximation);
+    if (!id) return id.error();
+    auto image = renderer.render(*id, session.program, samples, options);
+    renderer.releaseAsset(*id);
+    if (!image) return image.error();
+    comparison.errors.push_back(metric::imageError(*image, *reference));
+  }
+  return comparison;
+}
+
 int runError(const std::string& path_a, const std::string& path_b, ShadingFlags& flags,
              int supersample, const metric::BoundConfig& bound) {
   if ((flags.distance > 0) == (flags.pixels > 0))
@@ -211,33 +250,301 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   if (!b) return fail(b.error().message);
   auto session = openSession(flags);
   if (!session) return fail(session.error().message);
-  auto& renderer = *session->renderer;
-  auto id_a = renderer.uploadAsset(*a);
-  if (!id_a) return fail(id_a.error().message);
-  auto id_b = renderer.uploadAsset(*b);
-  if (!id_b) return fail(id_b.error().message);
-  // Both are framed by A's bounding sphere so that their pixels correspond.
-  core::Sphere sphere = core::computeBoundingSphere(a->mesh);
-  float distance = resolveDistance(flags, sphere);
-  int resolution = render::footprintPixels(sphere, distance, flags.display());
-  std::vector<render::Sample> samples = render::domainSamples(sphere, distance);
-  render::RenderOptions options{.resolution = resolution, .supersample = supersample};
-  auto reference = renderer.renderReference(*id_a, session->program, samples, options);
-  if (!reference) return fail(reference.error().message);
-  options.supersample = 1;
-  auto image = renderer.render(*id_b, session->program, samples, options);
-  if (!image) return fail(image.error().message);
-  metric::ImageError error = metric::imageError(*image, *reference);
+  float distance = resolveDistance(flags, core::computeBoundingSphere(a->mesh));
+  const core::Asset* approximations[] = {&*b};
+  auto comparison =
+      compareRendered(*session, *a, approximations, distance, flags.display(), supersample);
+  if (!comparison) return fail(comparison.error().message);
+  const metric::ImageError& error = comparison->errors[0];
   double e_a = metric::perPixelBound(bound, distance);
   bool ok = metric::withinBound(error, bound, distance);
   std::printf("distance %g  footprint %d px  samples %d (20 views x 5 lights)\n", distance,
-              resolution, error.samples);
+              comparison->footprint_px, error.samples);
   std::printf("epsilon (eq. 6)      %.6g\n", error.epsilon);
   std::printf("coverage s_d         %.1f px\n", error.coverage_px);
   std::printf("per-pixel error      %.6g\n", error.per_pixel);
   std::printf("bound e_a(d)*s_d     %.6g  (e_a = %.4g: e_max %.3g, Q %.3g, d %g..%g)\n",
               e_a * error.coverage_px, e_a, bound.e_max, bound.q, bound.d_near, bound.d_far);
   std::printf("within bound         %s\n", ok ? "yes" : "no");
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// simplify
+
+std::string formatNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+std::string lowerExtension(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return extension;
+}
+
+struct SimplifyFlags {
+  std::string in, out;
+  std::string mode = "quadric";
+  std::string placement = "optimal";
+  double ratio = 0;
+  int64_t triangles = 0;  // signed, so that a negative count is reported rather than wrapped
+  double error = 0;
+  int grid = 0;
+  bool lock_border = false;
+  bool force = false;
+  ShadingFlags shading;
+  // Which of the optional flags were given (CLI11 counts them).
+  CLI::Option* ratio_option = nullptr;
+  CLI::Option* triangles_option = nullptr;
+  CLI::Option* error_option = nullptr;
+  CLI::Option* grid_option = nullptr;
+  CLI::Option* placement_option = nullptr;
+
+  void add(CLI::App* command) {
+    command->add_option("in", in, "glTF/GLB/OBJ/PLY/OFF file to simplify")->required();
+    command->add_option("out", out, "output: .gltf (+ .bin and PNGs beside it), .glb or .obj")
+        ->required();
+    ratio_option =
+        command->add_option("--ratio", ratio, "target fraction of the triangles, (0, 1]");
+    triangles_option = command->add_option("--triangles", triangles, "target triangle count");
+    error_option = command->add_option(
+        "--error", error,
+        "error target: geometric distance in asset units (quadric: the collapse error; cluster: "
+        "how far a vertex may move), or the image error epsilon of eq. (6) (image)");
+    command
+        ->add_option("--mode", mode,
+                     "quadric (fast), image (the paper's, needs a distance) or "
+                     "cluster (very fast, coarse)")
+        ->check(CLI::IsMember({"quadric", "image", "cluster"}))
+        ->capture_default_str();
+    placement_option =
+        command
+            ->add_option("--placement", placement, "quadric mode: where a collapse puts the vertex")
+            ->check(CLI::IsMember({"optimal", "endpoint"}))
+            ->capture_default_str();
+    grid_option = command->add_option(
+        "--grid", grid, "cluster mode: cells along the longest side (instead of a target)");
+    command->add_flag("--lock-border", lock_border, "open-boundary vertices never move");
+    shading.add(command);
+    command->add_option("--distance", shading.distance,
+                        "camera distance (asset units): image mode's distance, and reports the "
+                        "image error there");
+    command->add_option("--pixels", shading.pixels,
+                        "alternatively: the distance at which the object spans N pixels");
+    command->add_flag("--force", force, "replace OUT if it exists");
+  }
+
+  bool given(const CLI::Option* option) const { return option && option->count() > 0; }
+
+  // Flag combinations, checked before any file is read.
+  core::Status check() const {
+    int targets = given(ratio_option) + given(triangles_option) + given(error_option);
+    if (mode == "cluster") {
+      if (targets + given(grid_option) != 1)
+        return core::Error{
+            "cluster mode: give exactly one of --ratio R, --triangles N, --error E "
+            "or --grid N"};
+    } else {
+      if (targets != 1)
+        return core::Error{"give exactly one of --ratio R, --triangles N or --error E"};
+      if (given(grid_option)) return core::Error{"--grid applies to --mode cluster only"};
+    }
+    if (given(ratio_option) && !(ratio > 0 && ratio <= 1))
+      return core::Error{"--ratio must be in (0, 1], got " + formatNumber(ratio)};
+    if (given(triangles_option) && triangles < 1)
+      return core::Error{"--triangles must be at least 1, got " + std::to_string(triangles)};
+    if (given(error_option) && !(std::isfinite(error) && error >= 0))
+      return core::Error{"--error must be a finite number >= 0"};
+    if (given(grid_option) && grid < 1) return core::Error{"--grid must be at least 1"};
+    if (given(placement_option) && mode != "quadric")
+      return core::Error{
+          "--placement applies to --mode quadric only (image mode always places at "
+          "an endpoint)"};
+    if (lock_border && mode == "cluster")
+      return core::Error{"--lock-border does not apply to --mode cluster"};
+    if (shading.distance < 0 || shading.pixels < 0)
+      return core::Error{"--distance and --pixels must be positive"};
+    if (shading.distance > 0 && shading.pixels > 0)
+      return core::Error{"give at most one of --distance D or --pixels N"};
+    if (mode == "image" && shading.distance <= 0 && shading.pixels <= 0)
+      return core::Error{
+          "--mode image simplifies for one viewing distance: give --distance D or "
+          "--pixels N"};
+    std::string extension = lowerExtension(out);
+    if (extension != ".gltf" && extension != ".glb" && extension != ".obj")
+      return core::Error{out + ": output must be .gltf, .glb or .obj"};
+    return core::okStatus();
+  }
+
+  bool wantsImageError() const { return shading.distance > 0 || shading.pixels > 0; }
+  bool writesObj() const { return lowerExtension(out) == ".obj"; }
+};
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Cluster mode with a triangle or error target: the grid resolution is its only control, so it is
+// found by bisection over 1..65536 cells. Triangles grow and the error shrinks with the resolution,
+// though not strictly, so the grid found meets the target but need not be the best that does.
+mesh::SimplifyResult clusterToTarget(const core::Mesh& input, size_t target_triangles,
+                                     double target_error, int* grid_used) {
+  const bool by_triangles = target_triangles > 0;
+  auto meets = [&](const mesh::SimplifyResult& r) {
+    return by_triangles ? r.mesh.triangleCount() <= target_triangles : r.error <= target_error;
+  };
+  // `good` meets the target, `bad` does not: a triangle target wants the finest such grid, an error
+  // target the coarsest.
+  int good = by_triangles ? 1 : 65536;
+  int bad = by_triangles ? 65536 : 1;
+  mesh::SimplifyResult best = mesh::simplifyCluster(input, {.grid_resolution = good});
+  while (std::abs(good - bad) > 1) {
+    int middle = (good + bad) / 2;
+    mesh::SimplifyResult trial = mesh::simplifyCluster(input, {.grid_resolution = middle});
+    if (meets(trial)) {
+      good = middle;
+      best = std::move(trial);
+    } else {
+      bad = middle;
+    }
+  }
+  *grid_used = good;
+  return best;
+}
+
+int runSimplify(SimplifyFlags& flags) {
+  if (auto ok = flags.check(); !ok) return fail(ok.error().message);
+  if (auto ok = checkOutputPath(flags.out, {flags.in}, flags.force); !ok)
+    return fail(ok.error().message);
+
+  auto start = std::chrono::steady_clock::now();
+  auto asset = loadWithWarnings(flags.in);
+  if (!asset) return fail(asset.error().message);
+  const core::Mesh& input = asset->mesh;
+  const size_t input_triangles = input.triangleCount();
+  std::printf("load      %s: %zu triangles, %zu vertices, %.3f s\n", flags.in.c_str(),
+              input_triangles, input.vertexCount(), secondsSince(start));
+
+  size_t target_triangles = 0;
+  if (flags.given(flags.ratio_option))
+    target_triangles =
+        std::max<size_t>(1, size_t(std::lround(double(input_triangles) * flags.ratio)));
+  if (flags.given(flags.triangles_option)) target_triangles = size_t(flags.triangles);
+  const double target_error =
+      flags.given(flags.error_option) ? flags.error : std::numeric_limits<double>::infinity();
+
+  // A renderer is needed for image mode and for the image error at a distance.
+  Session session;
+  float distance = 0;
+  if (flags.wantsImageError()) {
+    auto opened = openSession(flags.shading);
+    if (!opened) return fail(opened.error().message);
+    session = std::move(*opened);
+    distance = resolveDistance(flags.shading, core::computeBoundingSphere(input));
+  }
+
+  start = std::chrono::steady_clock::now();
+  mesh::SimplifyResult result;
+  mesh::ImageSimplifyStats image_stats;
+  std::string detail;
+  char text[256];
+  if (flags.mode == "quadric") {
+    result = mesh::simplifyQuadric(
+        input, {.target_triangles = target_triangles,
+                .target_error = target_error,
+                .placement = flags.placement == "endpoint" ? mesh::Placement::kEndpoint
+                                                           : mesh::Placement::kOptimal,
+                .lock_border = flags.lock_border,
+                .record = false});
+    std::snprintf(text, sizeof text, "largest collapse error %.4g (asset units)", result.error);
+    detail = text;
+  } else if (flags.mode == "cluster") {
+    int grid = flags.grid;
+    if (flags.given(flags.grid_option))
+      result = mesh::simplifyCluster(input, {.grid_resolution = grid});
+    else
+      result = clusterToTarget(input, target_triangles, target_error, &grid);
+    std::snprintf(text, sizeof text, "grid %d, largest vertex move %.4g (asset units)", grid,
+                  result.error);
+    detail = text;
+  } else {
+    auto source = flags.shading.source();
+    if (!source) return fail(source.error().message);
+    auto simplified = mesh::simplifyImage(*session.renderer, *asset, *source,
+                                          {.target_triangles = target_triangles,
+                                           .target_error = target_error,
+                                           .distance = distance,
+                                           .display = flags.shading.display(),
+                                           .lock_border = flags.lock_border,
+                                           .record = false},
+                                          &image_stats);
+    if (!simplified) return fail(simplified.error().message);
+    result = std::move(*simplified);
+    std::snprintf(text, sizeof text,
+                  "distance %g, footprint %d px, epsilon %.4g -> %.4g (eq. 6), %zu rendered "
+                  "evaluations",
+                  distance, image_stats.footprint_px, image_stats.initial_error,
+                  image_stats.final_error, image_stats.rendered_evaluations);
+    detail = text;
+  }
+  const double simplify_seconds = secondsSince(start);
+  const size_t output_triangles = result.mesh.triangleCount();
+  if (target_triangles > 0 && output_triangles > target_triangles) {
+    const mesh::SimplifyStats& s = result.stats;
+    std::snprintf(text, sizeof text,
+                  "; target %zu not reached (refused collapses: %zu topology, %zu flip, %zu "
+                  "border, %zu longer than 1 pixel)",
+                  target_triangles, s.rejected_topology, s.rejected_flip, s.rejected_border,
+                  image_stats.rejected_long_edges);
+    detail += text;
+  }
+  std::printf("simplify  %s: %zu -> %zu triangles (%.1f%%), %.3f s, %s\n", flags.mode.c_str(),
+              input_triangles, output_triangles,
+              input_triangles ? 100.0 * double(output_triangles) / double(input_triangles) : 0.0,
+              simplify_seconds, detail.c_str());
+
+  // The output keeps the input's materials and textures (and its source path, so that the writers
+  // refuse to replace the input or the files beside it).
+  core::Asset output = *asset;
+  output.mesh = std::move(result.mesh);
+  start = std::chrono::steady_clock::now();
+  core::Status written =
+      flags.writesObj() ? io::writeObj(output, flags.out) : io::writeGltf(output, flags.out);
+  if (!written) return fail(written.error().message);
+  std::printf("write     %s: %zu triangles, %zu vertices, %.3f s\n", flags.out.c_str(),
+              output.mesh.triangleCount(), output.mesh.vertexCount(), secondsSince(start));
+
+  start = std::chrono::steady_clock::now();
+  mesh::SurfaceDistance distances = mesh::surfaceDistance(input, output.mesh);
+  const double diagonal = core::length(core::computeBounds(input).size());
+  const double percent = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  std::printf(
+      "geometry  Hausdorff %.4g (%.3f%% of the bounding-box diagonal %.4g), mean %.4g "
+      "(%.4f%%), %.3f s\n",
+      distances.hausdorff, distances.hausdorff * percent, diagonal, distances.mean,
+      distances.mean * percent, secondsSince(start));
+
+  if (flags.wantsImageError()) {
+    start = std::chrono::steady_clock::now();
+    const int supersample = 4;
+    const core::Asset* approximations[] = {&output, &*asset};
+    auto comparison = compareRendered(session, *asset, approximations, distance,
+                                      flags.shading.display(), supersample);
+    if (!comparison) return fail(comparison.error().message);
+    const metric::ImageError& simplified = comparison->errors[0];
+    const metric::ImageError& original = comparison->errors[1];
+    // The original's own ε (the aliasing of its plain render) is the scale to read the result by.
+    std::printf(
+        "image     distance %g, footprint %d px, %d samples (20 views x 5 lights, %dx%d "
+        "reference): epsilon %.4g (original %.4g), per-pixel %.4g (original %.4g), "
+        "%.3f s\n",
+        distance, comparison->footprint_px, simplified.samples, supersample, supersample,
+        simplified.epsilon, original.epsilon, simplified.per_pixel, original.per_pixel,
+        secondsSince(start));
+  }
   return 0;
 }
 
@@ -294,6 +601,11 @@ int main(int argc, char** argv) {
   error_cmd->add_option("--d-near", bound.d_near, "nearest LOD distance (eq. 4)")->capture_default_str();
   error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")->capture_default_str();
 
+  SimplifyFlags simplify_flags;
+  CLI::App* simplify_cmd = app.add_subcommand(
+      "simplify", "Simplify an asset's mesh (quadric, image-driven or clustering) and write it");
+  simplify_flags.add(simplify_cmd);
+
   CLI11_PARSE(app, argc, argv);
 
   if (*info) return runInfo(info_path);
@@ -301,5 +613,6 @@ int main(int argc, char** argv) {
     return runRender(render_path, render_flags, render_view, render_light, render_supersample,
                      render_out, render_force);
   if (*error_cmd) return runError(error_a, error_b, error_flags, error_supersample, bound);
+  if (*simplify_cmd) return runSimplify(simplify_flags);
   return 0;
 }

@@ -1,0 +1,292 @@
+// End-to-end tests of `duolod simplify`: the built binary (DUOLOD_CLI) runs with stdout and stderr
+// redirected to scratch files; the tests check the exit code, what the user reads, and the files
+// written (reloaded with io::loadAsset).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "duolod/io.hpp"
+#include "test_support.hpp"
+
+namespace duolod {
+namespace {
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int exit_code = -1;  // -1: did not exit normally (e.g. killed by a signal)
+  std::string out, err;
+};
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::string quoted(const std::string& argument) {
+  std::string out = "'";
+  for (char c : argument) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+CliRun runCli(const std::vector<std::string>& args) {
+  fs::path dir = test::scratchDir("cli_run");
+  std::string command = quoted(DUOLOD_CLI);
+  for (const std::string& arg : args) command += " " + quoted(arg);
+  command += " > " + quoted((dir / "stdout").string()) + " 2> " + quoted((dir / "stderr").string());
+  int status = std::system(command.c_str());
+  CliRun run;
+  if (status != -1 && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
+  run.out = readText(dir / "stdout");
+  run.err = readText(dir / "stderr");
+  return run;
+}
+
+bool contains(const std::string& text, const std::string& fragment) {
+  return text.find(fragment) != std::string::npos;
+}
+
+// The line of `text` starting with `prefix` ("" when there is none).
+std::string lineStarting(const std::string& text, const std::string& prefix) {
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind(prefix, 0) == 0) return line;
+  return {};
+}
+
+// A UV sphere (`rings` × `segments` quads, poles fanned) with normals, as a .glb in `dir`: a cheap
+// closed input (352 triangles by default).
+std::string writeSphere(const fs::path& dir, int rings = 12, int segments = 16,
+                        const std::string& name = "sphere.glb") {
+  core::Asset asset;
+  core::Mesh& m = asset.mesh;
+  const float pi = 3.14159265f;
+  for (int r = 0; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      float theta = pi * float(r) / float(rings), phi = 2 * pi * float(s) / float(segments);
+      core::Vec3 p{std::sin(theta) * std::cos(phi), std::cos(theta),
+                   std::sin(theta) * std::sin(phi)};
+      m.positions.push_back(p);
+      m.normals.push_back(p);
+      if (r == 0 || r == rings) break;  // one vertex per pole
+    }
+  auto index = [&](int r, int s) -> uint32_t {
+    if (r == 0) return 0;
+    if (r == rings) return uint32_t(m.positions.size() - 1);
+    return uint32_t(1 + (r - 1) * segments + (s % segments));
+  };
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      uint32_t a = index(r, s), b = index(r, s + 1), c = index(r + 1, s), d = index(r + 1, s + 1);
+      if (r != 0) m.indices.insert(m.indices.end(), {a, b, c});
+      if (r != rings - 1) m.indices.insert(m.indices.end(), {b, d, c});
+    }
+  m.submeshes = {{0, uint32_t(m.indices.size()), 0}};
+  asset.materials = {core::Material{.name = "grey"}};
+  std::string path = (dir / name).string();
+  EXPECT_TRUE(io::writeGltf(asset, path));
+  return path;
+}
+
+// The headline case: Spot to 10% with the quadric mode writes a .glb that reloads with about 10%
+// of the triangles, Spot's texture and material, and the attribute streams; the report has one line
+// per stage with the counts and the geometric error.
+TEST(CliSimplify, QuadricSpotToTenPercentWritesAValidGlb) {
+  DUOLOD_REQUIRE_ASSET(path, "obj/spot/spot.obj");
+  fs::path dir = test::scratchDir("spot");
+  std::string out = (dir / "spot_10.glb").string();
+  CliRun run = runCli({"simplify", path, out, "--ratio", "0.1"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+
+  auto input = io::loadAsset(path);
+  ASSERT_TRUE(input) << input.error().message;
+  auto output = io::loadAsset(out);
+  ASSERT_TRUE(output) << output.error().message;
+  const double expected = 0.1 * double(input->mesh.triangleCount());  // 585.6
+  EXPECT_NEAR(double(output->mesh.triangleCount()), expected, 0.02 * expected);
+  EXPECT_EQ(output->mesh.uv0.size(), output->mesh.vertexCount());
+  EXPECT_EQ(output->mesh.normals.size(), output->mesh.vertexCount());
+  ASSERT_EQ(output->materials.size(), input->materials.size());
+  EXPECT_GE(output->materials[0].base_color_texture, 0) << "the texture was dropped";
+  ASSERT_EQ(output->textures.size(), input->textures.size());
+  EXPECT_EQ(output->textures[0].image.width, input->textures[0].image.width);
+
+  const std::string simplify = lineStarting(run.out, "simplify");
+  EXPECT_TRUE(contains(simplify, "quadric")) << run.out;
+  EXPECT_TRUE(contains(simplify, std::to_string(input->mesh.triangleCount()) + " -> " +
+                                     std::to_string(output->mesh.triangleCount())))
+      << run.out;
+  const std::string geometry = lineStarting(run.out, "geometry");
+  EXPECT_TRUE(contains(geometry, "Hausdorff")) << run.out;
+  EXPECT_TRUE(contains(geometry, "mean")) << run.out;
+  EXPECT_TRUE(contains(geometry, "% of the bounding-box diagonal")) << run.out;
+  EXPECT_FALSE(lineStarting(run.out, "load").empty()) << run.out;
+  EXPECT_FALSE(lineStarting(run.out, "write").empty()) << run.out;
+  EXPECT_TRUE(lineStarting(run.out, "image").empty()) << "no distance, no image error: " << run.out;
+
+  // An existing OUT needs --force, and is left alone without it.
+  std::string before = readText(out);
+  CliRun again = runCli({"simplify", path, out, "--ratio", "0.5"});
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_NE(again.exit_code, -1);
+  EXPECT_TRUE(contains(again.err, "already exists")) << again.err;
+  EXPECT_EQ(readText(out), before);
+  CliRun forced = runCli({"simplify", path, out, "--ratio", "0.5", "--force"});
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  auto replaced = io::loadAsset(out);
+  ASSERT_TRUE(replaced) << replaced.error().message;
+  EXPECT_NEAR(double(replaced->mesh.triangleCount()), 5 * expected, 0.02 * 5 * expected);
+}
+
+// Works on a scratch copy, so that a regression cannot overwrite a shared asset.
+TEST(CliSimplify, RefusesToOverwriteItsInput) {
+  fs::path dir = test::scratchDir("input");
+  std::string sphere = writeSphere(dir);
+  std::string before = readText(sphere);
+  for (bool force : {false, true}) {
+    std::vector<std::string> args = {"simplify", sphere, sphere, "--ratio", "0.5"};
+    if (force) args.push_back("--force");
+    CliRun run = runCli(args);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.exit_code, -1) << "crashed";
+    EXPECT_TRUE(contains(run.err, "input")) << run.err;
+    EXPECT_EQ(readText(sphere), before);
+  }
+  // The same file by another name.
+  std::string alias = (dir / "." / "sphere.glb").string();
+  CliRun run = runCli({"simplify", sphere, alias, "--ratio", "0.5", "--force"});
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_EQ(readText(sphere), before);
+}
+
+// Each bad combination fails before any work with a message naming the problem, and writes
+// nothing.
+TEST(CliSimplify, BadFlagsFailWithAMessage) {
+  fs::path dir = test::scratchDir("flags");
+  std::string sphere = writeSphere(dir);
+  std::string out = (dir / "out.glb").string();
+  struct Case {
+    std::vector<std::string> flags;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{}, "exactly one of --ratio"},
+      {{"--ratio", "0.5", "--triangles", "10"}, "exactly one of --ratio"},
+      {{"--ratio", "0.5", "--error", "0.1"}, "exactly one of --ratio"},
+      {{"--ratio", "0"}, "(0, 1]"},
+      {{"--ratio", "1.5"}, "(0, 1]"},
+      {{"--ratio", "-0.2"}, "(0, 1]"},
+      {{"--triangles", "0"}, "at least 1"},
+      {{"--triangles", "-5"}, "at least 1"},
+      {{"--error", "-1"}, "--error"},
+      {{"--mode", "image", "--ratio", "0.5"}, "--distance D or --pixels N"},
+      {{"--ratio", "0.5", "--distance", "3", "--pixels", "64"}, "at most one of --distance"},
+      {{"--ratio", "0.5", "--grid", "8"}, "--grid applies to --mode cluster"},
+      {{"--mode", "cluster", "--ratio", "0.5", "--grid", "8"}, "cluster mode: give exactly one"},
+      {{"--mode", "cluster", "--grid", "8", "--lock-border"}, "--lock-border"},
+      {{"--mode", "cluster", "--grid", "0"}, "--grid must be at least 1"},
+      {{"--mode", "image", "--pixels", "32", "--ratio", "0.5", "--placement", "optimal"},
+       "--placement applies to --mode quadric"},
+      {{"--mode", "fancy", "--ratio", "0.5"}, "fancy"},
+      {{"--placement", "middle", "--ratio", "0.5"}, "middle"},
+      {{"--ratio", "half"}, "--ratio"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"simplify", sphere, out};
+    args.insert(args.end(), c.flags.begin(), c.flags.end());
+    std::string shown;
+    for (const std::string& a : c.flags) shown += a + " ";
+    SCOPED_TRACE(shown);
+    CliRun run = runCli(args);
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.exit_code, -1) << "crashed";
+    EXPECT_TRUE(contains(run.err, c.message)) << run.err;
+    EXPECT_FALSE(fs::exists(out)) << "a failed run wrote its output";
+  }
+
+  CliRun extension = runCli({"simplify", sphere, (dir / "out.png").string(), "--ratio", "0.5"});
+  EXPECT_NE(extension.exit_code, 0);
+  EXPECT_TRUE(contains(extension.err, ".gltf, .glb or .obj")) << extension.err;
+
+  CliRun missing = runCli({"simplify", (dir / "nowhere.obj").string(), out, "--ratio", "0.5"});
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.exit_code, -1) << "crashed";
+  EXPECT_TRUE(contains(missing.err, "nowhere.obj")) << missing.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// The other modes and targets on small spheres, each reloading with the count it reports; with
+// --pixels the image error at that distance is reported too. Image mode never collapses an edge
+// longer than 1 pixel, so its sphere is finer (1,920 triangles, 64 segments: edges under 1 px at a
+// 20 px footprint) and drawn with the constant shader to keep the run to a couple of seconds.
+TEST(CliSimplify, OtherModesAndTargets) {
+  fs::path dir = test::scratchDir("modes");
+  const std::string coarse = writeSphere(dir);
+  const std::string fine = writeSphere(dir, 16, 64, "fine_sphere.glb");
+  auto coarse_asset = io::loadAsset(coarse);
+  ASSERT_TRUE(coarse_asset) << coarse_asset.error().message;
+  const size_t coarse_triangles = coarse_asset->mesh.triangleCount();
+  ASSERT_EQ(coarse_triangles, 352u);
+
+  struct Case {
+    std::string out;
+    std::string input;
+    std::vector<std::string> flags;
+    size_t at_most;    // triangles
+    int footprint_px;  // 0: no distance given, no image line
+  };
+  const std::vector<Case> cases = {
+      {"triangles.obj", coarse, {"--triangles", "100"}, 100, 0},
+      {"error.gltf",
+       coarse,
+       {"--error", "0.05", "--placement", "endpoint", "--lock-border"},
+       coarse_triangles - 1,
+       0},
+      {"grid.glb", coarse, {"--mode", "cluster", "--grid", "4"}, coarse_triangles / 2, 0},
+      {"cluster_ratio.glb",
+       coarse,
+       {"--mode", "cluster", "--ratio", "0.25"},
+       coarse_triangles / 4,
+       0},
+      {"quadric_pixels.glb",
+       coarse,
+       {"--ratio", "0.5", "--pixels", "48"},
+       coarse_triangles / 2,
+       48},
+      {"image.glb",
+       fine,
+       {"--mode", "image", "--pixels", "20", "--ratio", "0.8", "--shader", "constant"},
+       1536,
+       20},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.out);
+    std::string out = (dir / c.out).string();
+    std::vector<std::string> args = {"simplify", c.input, out};
+    args.insert(args.end(), c.flags.begin(), c.flags.end());
+    CliRun run = runCli(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    auto output = io::loadAsset(out);
+    ASSERT_TRUE(output) << output.error().message;
+    EXPECT_GT(output->mesh.triangleCount(), 0u);
+    EXPECT_LE(output->mesh.triangleCount(), c.at_most) << run.out;
+    EXPECT_TRUE(contains(lineStarting(run.out, "simplify"),
+                         "-> " + std::to_string(output->mesh.triangleCount()) + " triangles"))
+        << run.out;
+    const std::string image = lineStarting(run.out, "image");
+    EXPECT_EQ(image.empty(), c.footprint_px == 0) << run.out;
+    if (c.footprint_px > 0) {
+      EXPECT_TRUE(contains(image, "footprint " + std::to_string(c.footprint_px) + " px"))
+          << run.out;
+      EXPECT_TRUE(contains(image, "epsilon")) << run.out;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace duolod
