@@ -335,3 +335,30 @@ TEST(BoundingSphere, EmptyMeshHasZeroRadius) {
 
 }  // namespace
 }  // namespace duolod
+
+namespace duolod {
+namespace {
+
+// A UV seam splits vertices but must not split their normal: a fold along the seam keeps one
+// smooth normal on both sides.
+TEST(ComputeNormals, SeamVerticesShareOneNormal) {
+  core::Mesh mesh;
+  // Two triangles meeting at the edge (0,0,0)-(0,1,0) with a 90° fold; the edge's vertices are
+  // duplicated (different UVs on each side).
+  mesh.positions = {{0, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, 0, 0}, {0, 1, 0}, {0, 0, -1}};
+  mesh.uv0 = {{0, 0}, {0, 1}, {1, 0}, {0.5f, 0}, {0.5f, 1}, {1, 1}};
+  mesh.indices = {0, 1, 2, 3, 4, 5};  // faces +z and -x
+  mesh.submeshes = {{0, 6, 0}};
+  core::computeNormals(mesh);
+  EXPECT_EQ(mesh.normals[0], mesh.normals[3]);
+  EXPECT_EQ(mesh.normals[1], mesh.normals[4]);
+  // Both faces' normals, (0,0,1) and (-1,0,0), weighted alike: the bisector.
+  float h = std::sqrt(0.5f);
+  EXPECT_NEAR(mesh.normals[0].x, -h, 1e-5f);
+  EXPECT_NEAR(mesh.normals[0].z, h, 1e-5f);
+  // Unshared vertices keep their face's normal.
+  EXPECT_NEAR(mesh.normals[2].z, 1.0f, 1e-5f);
+}
+
+}  // namespace
+}  // namespace duolod

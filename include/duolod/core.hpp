@@ -147,7 +147,8 @@ Bounds computeBounds(const Mesh& mesh);
 Sphere computeBoundingSphere(const Mesh& mesh);
 
 // Vertex normals as the angle-weighted average of face normals (Thürmer & Wüthrich 1998), which
-// does not depend on how a polygon was triangulated.
+// does not depend on how a polygon was triangulated. Vertices at the same position (split by a
+// UV or colour seam) get the same normal.
 void computeNormals(Mesh& mesh);
 // Per-vertex tangents from UV derivatives in the MikkTSpace convention (tangent along +u, w the
 // handedness so that bitangent = w * cross(normal, tangent)), angle-weighted, Gram-Schmidt

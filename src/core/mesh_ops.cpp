@@ -117,6 +117,32 @@ void computeNormals(Mesh& mesh) {
     for (int k = 0; k < 3; ++k)
       mesh.normals[i[k]] += face * cornerAngle(p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
   }
+  // Vertices that share a position (split only by a UV or colour seam) share one normal: a
+  // texture seam must not become a shading crease.
+  std::unordered_map<uint64_t, std::vector<uint32_t>> by_position;
+  for (uint32_t v = 0; v < mesh.vertexCount(); ++v) {
+    Vec3 p = mesh.positions[v];
+    if (p.x == 0) p.x = 0;  // -0 and +0 are one position
+    if (p.y == 0) p.y = 0;
+    if (p.z == 0) p.z = 0;
+    by_position[hashBytes(&p, sizeof p)].push_back(v);
+  }
+  for (auto& [hash, vertices] : by_position) {
+    if (vertices.size() < 2) continue;
+    // Same hash: group by exact position (collisions are possible, so compare).
+    for (size_t i = 0; i < vertices.size(); ++i) {
+      if (vertices[i] == UINT32_MAX) continue;
+      Vec3 sum = mesh.normals[vertices[i]];
+      std::vector<uint32_t> group = {vertices[i]};
+      for (size_t j = i + 1; j < vertices.size(); ++j)
+        if (vertices[j] != UINT32_MAX && mesh.positions[vertices[j]] == mesh.positions[vertices[i]]) {
+          sum += mesh.normals[vertices[j]];
+          group.push_back(vertices[j]);
+          vertices[j] = UINT32_MAX;
+        }
+      for (uint32_t v : group) mesh.normals[v] = sum;
+    }
+  }
   for (Vec3& n : mesh.normals) {
     n = normalize(n);
     if (length(n) == 0) n = {0, 0, 1};  // isolated or degenerate-only vertex
