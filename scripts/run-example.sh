@@ -20,4 +20,8 @@ echo "== duolod render: all 20 views of the paper's domain at 1 m, and one 4x4 s
 echo "== duolod error: the plain render against the 4x4 supersampled reference, near and far =="
 "$duolod" error "$asset" "$asset" --distance 1
 "$duolod" error "$asset" "$asset" --distance 4
-echo "Images written to $out"
+echo "== duolod simplify: quadric to 25%, measured in geometry and in the image at 128 px =="
+"$duolod" simplify "$asset" "$out/simplified_25.glb" --ratio 0.25 --pixels 128 --force
+echo "== duolod simplify: the paper's image-driven mode at 48 px, to 50% =="
+"$duolod" simplify "$asset" "$out/image_driven_50.glb" --mode image --ratio 0.5 --pixels 48 --force
+echo "Results written to $out"
