@@ -18,38 +18,11 @@ namespace duolod {
 namespace {
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;  // -1: did not exit normally (e.g. killed by a signal)
-  std::string out, err;
-};
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+test::CommandRun runCli(const std::vector<std::string>& args) {
+  return test::runCommand(DUOLOD_CLI, args);
 }
 
-std::string quoted(const std::string& argument) {
-  std::string out = "'";
-  for (char c : argument) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-CliRun runCli(const std::vector<std::string>& args) {
-  fs::path dir = test::scratchDir("cli_run");
-  std::string command = quoted(DUOLOD_CLI);
-  for (const std::string& arg : args) command += " " + quoted(arg);
-  command += " > " + quoted((dir / "stdout").string()) + " 2> " + quoted((dir / "stderr").string());
-  int status = std::system(command.c_str());
-  CliRun run;
-  if (status != -1 && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
-  run.out = readText(dir / "stdout");
-  run.err = readText(dir / "stderr");
-  return run;
-}
-
-bool contains(const std::string& text, const std::string& fragment) {
-  return text.find(fragment) != std::string::npos;
-}
 
 // The line of `text` starting with `prefix` ("" when there is none).
 std::string lineStarting(const std::string& text, const std::string& prefix) {
@@ -100,7 +73,7 @@ TEST(CliSimplify, QuadricSpotToTenPercentWritesAValidGlb) {
   DUOLOD_REQUIRE_ASSET(path, "obj/spot/spot.obj");
   fs::path dir = test::scratchDir("spot");
   std::string out = (dir / "spot_10.glb").string();
-  CliRun run = runCli({"simplify", path, out, "--ratio", "0.1"});
+  test::CommandRun run = runCli({"simplify", path, out, "--ratio", "0.1"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
 
   auto input = io::loadAsset(path);
@@ -117,26 +90,26 @@ TEST(CliSimplify, QuadricSpotToTenPercentWritesAValidGlb) {
   EXPECT_EQ(output->textures[0].image.width, input->textures[0].image.width);
 
   const std::string simplify = lineStarting(run.out, "simplify");
-  EXPECT_TRUE(contains(simplify, "quadric")) << run.out;
-  EXPECT_TRUE(contains(simplify, std::to_string(input->mesh.triangleCount()) + " -> " +
+  EXPECT_TRUE(test::contains(simplify, "quadric")) << run.out;
+  EXPECT_TRUE(test::contains(simplify, std::to_string(input->mesh.triangleCount()) + " -> " +
                                      std::to_string(output->mesh.triangleCount())))
       << run.out;
   const std::string geometry = lineStarting(run.out, "geometry");
-  EXPECT_TRUE(contains(geometry, "Hausdorff")) << run.out;
-  EXPECT_TRUE(contains(geometry, "mean")) << run.out;
-  EXPECT_TRUE(contains(geometry, "% of the bounding-box diagonal")) << run.out;
+  EXPECT_TRUE(test::contains(geometry, "Hausdorff")) << run.out;
+  EXPECT_TRUE(test::contains(geometry, "mean")) << run.out;
+  EXPECT_TRUE(test::contains(geometry, "% of the bounding-box diagonal")) << run.out;
   EXPECT_FALSE(lineStarting(run.out, "load").empty()) << run.out;
   EXPECT_FALSE(lineStarting(run.out, "write").empty()) << run.out;
   EXPECT_TRUE(lineStarting(run.out, "image").empty()) << "no distance, no image error: " << run.out;
 
   // An existing OUT needs --force, and is left alone without it.
-  std::string before = readText(out);
-  CliRun again = runCli({"simplify", path, out, "--ratio", "0.5"});
+  std::string before = test::readText(out);
+  test::CommandRun again = runCli({"simplify", path, out, "--ratio", "0.5"});
   EXPECT_NE(again.exit_code, 0);
   EXPECT_NE(again.exit_code, -1);
-  EXPECT_TRUE(contains(again.err, "already exists")) << again.err;
-  EXPECT_EQ(readText(out), before);
-  CliRun forced = runCli({"simplify", path, out, "--ratio", "0.5", "--force"});
+  EXPECT_TRUE(test::contains(again.err, "already exists")) << again.err;
+  EXPECT_EQ(test::readText(out), before);
+  test::CommandRun forced = runCli({"simplify", path, out, "--ratio", "0.5", "--force"});
   EXPECT_EQ(forced.exit_code, 0) << forced.err;
   auto replaced = io::loadAsset(out);
   ASSERT_TRUE(replaced) << replaced.error().message;
@@ -147,21 +120,21 @@ TEST(CliSimplify, QuadricSpotToTenPercentWritesAValidGlb) {
 TEST(CliSimplify, RefusesToOverwriteItsInput) {
   fs::path dir = test::scratchDir("input");
   std::string sphere = writeSphere(dir);
-  std::string before = readText(sphere);
+  std::string before = test::readText(sphere);
   for (bool force : {false, true}) {
     std::vector<std::string> args = {"simplify", sphere, sphere, "--ratio", "0.5"};
     if (force) args.push_back("--force");
-    CliRun run = runCli(args);
+    test::CommandRun run = runCli(args);
     EXPECT_NE(run.exit_code, 0);
     EXPECT_NE(run.exit_code, -1) << "crashed";
-    EXPECT_TRUE(contains(run.err, "input")) << run.err;
-    EXPECT_EQ(readText(sphere), before);
+    EXPECT_TRUE(test::contains(run.err, "input")) << run.err;
+    EXPECT_EQ(test::readText(sphere), before);
   }
   // The same file by another name.
   std::string alias = (dir / "." / "sphere.glb").string();
-  CliRun run = runCli({"simplify", sphere, alias, "--ratio", "0.5", "--force"});
+  test::CommandRun run = runCli({"simplify", sphere, alias, "--ratio", "0.5", "--force"});
   EXPECT_NE(run.exit_code, 0);
-  EXPECT_EQ(readText(sphere), before);
+  EXPECT_EQ(test::readText(sphere), before);
 }
 
 // Each bad combination fails before any work with a message naming the problem, and writes
@@ -202,21 +175,21 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
     std::string shown;
     for (const std::string& a : c.flags) shown += a + " ";
     SCOPED_TRACE(shown);
-    CliRun run = runCli(args);
+    test::CommandRun run = runCli(args);
     EXPECT_NE(run.exit_code, 0);
     EXPECT_NE(run.exit_code, -1) << "crashed";
-    EXPECT_TRUE(contains(run.err, c.message)) << run.err;
+    EXPECT_TRUE(test::contains(run.err, c.message)) << run.err;
     EXPECT_FALSE(fs::exists(out)) << "a failed run wrote its output";
   }
 
-  CliRun extension = runCli({"simplify", sphere, (dir / "out.png").string(), "--ratio", "0.5"});
+  test::CommandRun extension = runCli({"simplify", sphere, (dir / "out.png").string(), "--ratio", "0.5"});
   EXPECT_NE(extension.exit_code, 0);
-  EXPECT_TRUE(contains(extension.err, ".gltf, .glb or .obj")) << extension.err;
+  EXPECT_TRUE(test::contains(extension.err, ".gltf, .glb or .obj")) << extension.err;
 
-  CliRun missing = runCli({"simplify", (dir / "nowhere.obj").string(), out, "--ratio", "0.5"});
+  test::CommandRun missing = runCli({"simplify", (dir / "nowhere.obj").string(), out, "--ratio", "0.5"});
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.exit_code, -1) << "crashed";
-  EXPECT_TRUE(contains(missing.err, "nowhere.obj")) << missing.err;
+  EXPECT_TRUE(test::contains(missing.err, "nowhere.obj")) << missing.err;
   EXPECT_FALSE(fs::exists(out));
 }
 
@@ -269,21 +242,21 @@ TEST(CliSimplify, OtherModesAndTargets) {
     std::string out = (dir / c.out).string();
     std::vector<std::string> args = {"simplify", c.input, out};
     args.insert(args.end(), c.flags.begin(), c.flags.end());
-    CliRun run = runCli(args);
+    test::CommandRun run = runCli(args);
     ASSERT_EQ(run.exit_code, 0) << run.err;
     auto output = io::loadAsset(out);
     ASSERT_TRUE(output) << output.error().message;
     EXPECT_GT(output->mesh.triangleCount(), 0u);
     EXPECT_LE(output->mesh.triangleCount(), c.at_most) << run.out;
-    EXPECT_TRUE(contains(lineStarting(run.out, "simplify"),
+    EXPECT_TRUE(test::contains(lineStarting(run.out, "simplify"),
                          "-> " + std::to_string(output->mesh.triangleCount()) + " triangles"))
         << run.out;
     const std::string image = lineStarting(run.out, "image");
     EXPECT_EQ(image.empty(), c.footprint_px == 0) << run.out;
     if (c.footprint_px > 0) {
-      EXPECT_TRUE(contains(image, "footprint " + std::to_string(c.footprint_px) + " px"))
+      EXPECT_TRUE(test::contains(image, "footprint " + std::to_string(c.footprint_px) + " px"))
           << run.out;
-      EXPECT_TRUE(contains(image, "epsilon")) << run.out;
+      EXPECT_TRUE(test::contains(image, "epsilon")) << run.out;
     }
   }
 }

@@ -18,39 +18,12 @@ namespace duolod {
 namespace {
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;  // -1: did not exit normally (e.g. killed by a signal)
-  std::string out, err;
-};
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::string quoted(const std::string& argument) {
-  std::string out = "'";
-  for (char c : argument) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
 
 // Runs `duolod ARGS...` and captures its output.
-CliRun runCli(const std::vector<std::string>& args) {
-  fs::path dir = test::scratchDir("cli_run");
-  std::string command = quoted(DUOLOD_CLI);
-  for (const std::string& arg : args) command += " " + quoted(arg);
-  command += " > " + quoted((dir / "stdout").string()) + " 2> " + quoted((dir / "stderr").string());
-  int status = std::system(command.c_str());
-  CliRun run;
-  if (status != -1 && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
-  run.out = readText(dir / "stdout");
-  run.err = readText(dir / "stderr");
-  return run;
+test::CommandRun runCli(const std::vector<std::string>& args) {
+  return test::runCommand(DUOLOD_CLI, args);
 }
 
-bool contains(const std::string& text, const std::string& fragment) {
-  return text.find(fragment) != std::string::npos;
-}
 
 // A small quad written as a .glb into `dir`: a cheap input for tests that do not need a real asset.
 std::string writeQuad(const fs::path& dir) {
@@ -75,39 +48,39 @@ double printedValue(const std::string& text, const std::string& label) {
 }
 
 TEST(Cli, VersionAndHelp) {
-  CliRun version = runCli({"--version"});
+  test::CommandRun version = runCli({"--version"});
   EXPECT_EQ(version.exit_code, 0) << version.err;
-  EXPECT_TRUE(contains(version.out, "duolod 0.1.0")) << version.out;
+  EXPECT_TRUE(test::contains(version.out, "duolod 0.1.0")) << version.out;
 
-  CliRun help = runCli({"--help"});
+  test::CommandRun help = runCli({"--help"});
   EXPECT_EQ(help.exit_code, 0) << help.err;
   for (const char* command : {"info", "render", "error"})
-    EXPECT_TRUE(contains(help.out, command)) << "--help does not mention " << command;
+    EXPECT_TRUE(test::contains(help.out, command)) << "--help does not mention " << command;
 }
 
 TEST(Cli, NoSubcommandOrUnknownFlagFails) {
-  CliRun none = runCli({});
+  test::CommandRun none = runCli({});
   EXPECT_NE(none.exit_code, 0);
   EXPECT_NE(none.exit_code, -1);
-  CliRun unknown = runCli({"info", "--no-such-flag", "x.gltf"});
+  test::CommandRun unknown = runCli({"info", "--no-such-flag", "x.gltf"});
   EXPECT_NE(unknown.exit_code, 0);
   EXPECT_NE(unknown.exit_code, -1);
 }
 
 TEST(Cli, InfoOnWaterBottle) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
-  CliRun info = runCli({"info", path});
+  test::CommandRun info = runCli({"info", path});
   ASSERT_EQ(info.exit_code, 0) << info.err;
-  EXPECT_TRUE(contains(info.out, "triangles   4510")) << info.out;
-  EXPECT_TRUE(contains(info.out, "BottleMat")) << info.out;
+  EXPECT_TRUE(test::contains(info.out, "triangles   4510")) << info.out;
+  EXPECT_TRUE(test::contains(info.out, "BottleMat")) << info.out;
 }
 
 TEST(Cli, InfoOnMissingAndGarbageFiles) {
   fs::path dir = test::scratchDir("in");
-  CliRun missing = runCli({"info", (dir / "nowhere.gltf").string()});
+  test::CommandRun missing = runCli({"info", (dir / "nowhere.gltf").string()});
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.exit_code, -1) << "crashed";
-  EXPECT_TRUE(contains(missing.err, "nowhere.gltf")) << missing.err;
+  EXPECT_TRUE(test::contains(missing.err, "nowhere.gltf")) << missing.err;
 
   std::string garbage_bytes;
   for (int i = 0; i < 512; ++i) garbage_bytes += char((i * 131 + 7) % 251);
@@ -115,10 +88,10 @@ TEST(Cli, InfoOnMissingAndGarbageFiles) {
     SCOPED_TRACE(name);
     std::string path = (dir / name).string();
     std::ofstream(path, std::ios::binary) << garbage_bytes;
-    CliRun garbage = runCli({"info", path});
+    test::CommandRun garbage = runCli({"info", path});
     EXPECT_NE(garbage.exit_code, 0);
     EXPECT_NE(garbage.exit_code, -1) << "crashed";
-    EXPECT_TRUE(contains(garbage.err, name)) << garbage.err;
+    EXPECT_TRUE(test::contains(garbage.err, name)) << garbage.err;
   }
 }
 
@@ -126,7 +99,7 @@ TEST(Cli, RenderOneViewOfWaterBottle) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
   fs::path dir = test::scratchDir("render");
   std::string out = (dir / "bottle.png").string();
-  CliRun render = runCli({"render", path, "--distance", "1", "--view", "0", "--out", out});
+  test::CommandRun render = runCli({"render", path, "--distance", "1", "--view", "0", "--out", out});
   ASSERT_EQ(render.exit_code, 0) << render.err;
   auto image = io::readImage(out);
   ASSERT_TRUE(image) << image.error().message;
@@ -144,29 +117,29 @@ TEST(Cli, RenderOneViewOfWaterBottle) {
   EXPECT_EQ(alpha(last, last), 0);
 
   // A second render to the same --out without --force fails and leaves the file as it was.
-  std::string before = readText(out);
-  CliRun again =
+  std::string before = test::readText(out);
+  test::CommandRun again =
       runCli({"render", path, "--distance", "1", "--view", "0", "--light", "2", "--out", out});
   EXPECT_NE(again.exit_code, 0);
   EXPECT_NE(again.exit_code, -1);
-  EXPECT_TRUE(contains(again.err, "already exists")) << again.err;
-  EXPECT_EQ(readText(out), before);
+  EXPECT_TRUE(test::contains(again.err, "already exists")) << again.err;
+  EXPECT_EQ(test::readText(out), before);
 }
 
 // Works on a scratch file, so that a regression cannot overwrite a shared asset.
 TEST(Cli, RenderRefusesToOverwriteItsInput) {
   fs::path dir = test::scratchDir("render");
   std::string quad = writeQuad(dir);
-  std::string before = readText(quad);
+  std::string before = test::readText(quad);
   for (bool force : {false, true}) {
     std::vector<std::string> args = {"render", quad, "--distance", "5",
                                      "--view", "0",  "--out",      quad};
     if (force) args.push_back("--force");
-    CliRun run = runCli(args);
+    test::CommandRun run = runCli(args);
     EXPECT_NE(run.exit_code, 0);
     EXPECT_NE(run.exit_code, -1);
-    EXPECT_TRUE(contains(run.err, "input")) << run.err;
-    EXPECT_EQ(readText(quad), before);
+    EXPECT_TRUE(test::contains(run.err, "input")) << run.err;
+    EXPECT_EQ(test::readText(quad), before);
   }
 }
 
@@ -178,12 +151,12 @@ TEST(Cli, RenderWithAShaderThatFailsToCompile) {
                          "layout(location = 0) out vec4 outColor;\n"
                          "void main() { outColor = no_such_variable; }\n";
   std::string out = (dir / "never.png").string();
-  CliRun run = runCli({"render", quad, "--distance", "5", "--view", "0", "--vert",
+  test::CommandRun run = runCli({"render", quad, "--distance", "5", "--view", "0", "--vert",
                        test::sourcePath("shaders/constant.vert"), "--frag", frag, "--out", out});
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.exit_code, -1) << "crashed";
-  EXPECT_TRUE(contains(run.err, "broken.frag")) << run.err;
-  EXPECT_TRUE(contains(run.err, "no_such_variable")) << "no compile log in: " << run.err;
+  EXPECT_TRUE(test::contains(run.err, "broken.frag")) << run.err;
+  EXPECT_TRUE(test::contains(run.err, "no_such_variable")) << "no compile log in: " << run.err;
   EXPECT_FALSE(fs::exists(out));
 }
 
@@ -192,7 +165,7 @@ TEST(Cli, RenderWithAShaderThatFailsToCompile) {
 // same plain render, so ε is exactly 0.
 TEST(Cli, ErrorOfAnAssetAgainstItself) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
-  CliRun run = runCli({"error", path, path, "--distance", "1"});
+  test::CommandRun run = runCli({"error", path, path, "--distance", "1"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   double epsilon = printedValue(run.out, "epsilon (eq. 6)");
   EXPECT_TRUE(std::isfinite(epsilon));
@@ -201,10 +174,10 @@ TEST(Cli, ErrorOfAnAssetAgainstItself) {
   std::istringstream lines(run.out);
   for (std::string line; std::getline(lines, line);)
     if (line.rfind("within bound", 0) == 0)
-      verdict = contains(line, " yes") || contains(line, " no");
+      verdict = test::contains(line, " yes") || test::contains(line, " no");
   EXPECT_TRUE(verdict) << "no 'within bound yes|no' line in:\n" << run.out;
 
-  CliRun plain = runCli({"error", path, path, "--distance", "1", "--supersample", "1"});
+  test::CommandRun plain = runCli({"error", path, path, "--distance", "1", "--supersample", "1"});
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_EQ(printedValue(plain.out, "epsilon (eq. 6)"), 0.0) << plain.out;
 }

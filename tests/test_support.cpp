@@ -1,6 +1,10 @@
 #include "test_support.hpp"
 
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 
 namespace duolod::test {
 
@@ -30,6 +34,33 @@ std::string writeScratchFile(const std::string& name, const std::string& content
   std::filesystem::path path = dir / name;
   std::ofstream(path, std::ios::binary) << contents;
   return path.string();
+}
+
+std::string readText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+namespace {
+std::string shellQuoted(const std::string& argument) {
+  std::string out = "'";
+  for (char c : argument) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+}  // namespace
+
+CommandRun runCommand(const std::string& binary, const std::vector<std::string>& args) {
+  std::filesystem::path dir = scratchDir("command_run");
+  std::string command = shellQuoted(binary);
+  for (const std::string& arg : args) command += " " + shellQuoted(arg);
+  command += " > " + shellQuoted((dir / "stdout").string()) + " 2> " +
+             shellQuoted((dir / "stderr").string());
+  int status = std::system(command.c_str());
+  CommandRun run;
+  if (status != -1 && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
+  run.out = readText(dir / "stdout");
+  run.err = readText(dir / "stderr");
+  return run;
 }
 
 }  // namespace duolod::test

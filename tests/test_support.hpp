@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace duolod::test {
 
@@ -16,6 +17,17 @@ std::string sourcePath(const std::string& relative_path);
 std::filesystem::path scratchDir(const std::string& name);
 // Writes text/bytes into a scratch file and returns its path.
 std::string writeScratchFile(const std::string& name, const std::string& contents);
+
+// Runs `binary ARGS...` with stdout and stderr captured through scratch files.
+struct CommandRun {
+  int exit_code = -1;  // -1: did not exit normally (e.g. killed by a signal)
+  std::string out, err;
+};
+CommandRun runCommand(const std::string& binary, const std::vector<std::string>& args);
+std::string readText(const std::filesystem::path& path);
+inline bool contains(const std::string& text, const std::string& fragment) {
+  return text.find(fragment) != std::string::npos;
+}
 
 }  // namespace duolod::test
 

@@ -436,14 +436,14 @@ void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse&
   auto known = last_cost_.find(edgeKey(applied.candidate.from, applied.candidate.to));
   stats_.predicted_change += known != last_cost_.end() ? known->second : applied.candidate.cost;
   const uint32_t survivor = applied.candidate.to, removed = applied.candidate.from;
-  const int R = setup_.resolution, T = setup_.tile_size, L = setup_.lights_per_view;
+  const int R = setup_.resolution, L = setup_.lights_per_view;
   auto overlaps = [](const Region& a, const Region& b) {
     return a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1;
   };
   auto priced = last_refined_.find(edgeKey(removed, survivor));
   for (int v = 0; v < view_count_; ++v) {
     // Priced in the last batch, with nothing applied near it since: copy its rendered pixels.
-    if (priced != last_refined_.end() && !std::getenv("DUOLOD_NO_COPY")) {
+    if (priced != last_refined_.end()) {
       const PricedTile* tile = nullptr;
       for (uint32_t i = priced->second.first; i < priced->second.second; ++i)
         if (last_placed_[i].view == v) tile = &last_placed_[i];
@@ -452,18 +452,8 @@ void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse&
         if (untouched && view == v && overlaps(region, tile->region)) untouched = false;
       if (untouched) {
         const Region& region = tile->region;
-        for (int light = 0; light < L; ++light) {
-          int sample = v * L + light;
-          const uint8_t* rendered = last_tiles_.tile(int(tile->tile) * L + light);
-          uint8_t* current = setup_.current.tile(sample);
-          for (int y = region.y0; y < region.y1; ++y)
-            for (int x = region.x0; x < region.x1; ++x) {
-              const uint8_t* now = rendered + (size_t(y - region.y0) * T + (x - region.x0)) * 4;
-              uint8_t* old = current + (size_t(y) * R + x) * 4;
-              sample_error_[sample] += pixelError(now, sample, x, y) - pixelError(old, sample, x, y);
-              std::copy_n(now, 4, old);
-            }
-        }
+        for (int light = 0; light < L; ++light)
+          writeTile(last_tiles_.tile(int(tile->tile) * L + light), v * L + light, region);
         changed_since_refine_.push_back({v, region});
         ++stats_.copied_regions;
         continue;
@@ -491,6 +481,18 @@ void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse&
   }
   // The survivor's triangles changed shape: list them in the cells they reach now.
   state.forEachCorner(survivor, [&](uint32_t corner) { binTriangle(state, corner / 3); });
+}
+
+void ImageCostModel::writeTile(const uint8_t* tile, int sample, const Region& region) {
+  const int R = setup_.resolution, T = setup_.tile_size;
+  uint8_t* current = setup_.current.tile(sample);
+  for (int y = region.y0; y < region.y1; ++y)
+    for (int x = region.x0; x < region.x1; ++x) {
+      const uint8_t* now = tile + (size_t(y - region.y0) * T + (x - region.x0)) * 4;
+      uint8_t* old = current + (size_t(y) * R + x) * 4;
+      sample_error_[sample] += pixelError(now, sample, x, y) - pixelError(old, sample, x, y);
+      std::copy_n(now, 4, old);
+    }
 }
 
 void ImageCostModel::renderFully(const EngineState& state) {
@@ -564,18 +566,8 @@ void ImageCostModel::refreshPendingRegions(const EngineState& state) {
   }
   for (uint32_t tile = 0; tile < pieces.size(); ++tile) {
     const auto& [view, region] = pieces[tile];
-    for (int light = 0; light < L; ++light) {
-      int sample = view * L + light;
-      const uint8_t* rendered = tiles->tile(int(tile) * L + light);
-      uint8_t* current = setup_.current.tile(sample);
-      for (int y = region.y0; y < region.y1; ++y)
-        for (int x = region.x0; x < region.x1; ++x) {
-          const uint8_t* now = rendered + (size_t(y - region.y0) * T + (x - region.x0)) * 4;
-          uint8_t* old = current + (size_t(y) * R + x) * 4;
-          sample_error_[sample] += pixelError(now, sample, x, y) - pixelError(old, sample, x, y);
-          std::copy_n(now, 4, old);
-        }
-    }
+    for (int light = 0; light < L; ++light)
+      writeTile(tiles->tile(int(tile) * L + light), view * L + light, region);
   }
   stats_.refreshed_regions += pieces.size();
 }

@@ -112,6 +112,9 @@ class ImageCostModel final : public CostModel {
   // that small differences between region and whole-view rasterization cannot accumulate.
   void renderFully(const EngineState& state);
   double pixelError(const uint8_t* rgba, int sample, int x, int y) const;
+  // Writes a rendered tile's `region` pixels into the current image of `sample`, keeping the
+  // sample's error sum in step.
+  void writeTile(const uint8_t* tile, int sample, const Region& region);
 
   ImageCostSetup setup_;
   QuadricModel quadric_;
