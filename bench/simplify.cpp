@@ -28,29 +28,16 @@
 #include <string>
 #include <thread>
 
+#include "bench_support.hpp"
 #include "duolod/io.hpp"
 #include "duolod/mesh.hpp"
 
 using namespace duolod;
+using bench::median;
+using bench::medianSeconds;
 
 namespace {
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-template <class F>
-double medianSeconds(int repeats, F&& run) {
-  std::vector<double> times;
-  for (int r = 0; r < repeats; ++r) {
-    auto start = std::chrono::steady_clock::now();
-    run();
-    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  return median(times);
-}
 
 std::string cpuModel() {
   std::ifstream in("/proc/cpuinfo");
