@@ -151,54 +151,44 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
     for (int v = 0; v < 3; ++v) std::copy_n(values, 8, placement.data() + (i * 3 + v) * 8);
   }
 
-  // Upload the sorted soup into a temporary vertex array laid out like an asset's.
-  GLuint vao;
-  glCreateVertexArrays(1, &vao);
-  std::vector<GLuint> buffers;
-  bool has[6] = {};
-  auto stream = [&](int slot, const auto& values) {
+  // Upload the soup, in draw order, like an asset's vertices; it borrows the asset's materials
+  // and textures.
+  core::Mesh sorted;
+  auto reorder = [&](const auto& values, auto& out) {
     if (values.empty()) return;
-    using Value = std::decay_t<decltype(values[0])>;
-    std::vector<Value> sorted(values.size());
+    out.resize(values.size());
     for (size_t i = 0; i < triangle_count; ++i)
-      for (int v = 0; v < 3; ++v) sorted[i * 3 + v] = values[order[i] * 3 + v];
-    GLuint buffer;
-    glCreateBuffers(1, &buffer);
-    glNamedBufferStorage(buffer, GLsizeiptr(sorted.size() * sizeof(Value)), sorted.data(), 0);
-    glVertexArrayVertexBuffer(vao, slot, buffer, 0, sizeof(Value));
-    buffers.push_back(buffer);
-    has[slot] = true;
+      for (int v = 0; v < 3; ++v) out[i * 3 + v] = values[order[i] * 3 + v];
   };
-  stream(0, mesh.positions);
-  stream(1, mesh.normals);
-  stream(2, mesh.tangents);
-  stream(3, mesh.uv0);
-  stream(4, mesh.uv1);
-  stream(5, mesh.colors);
-  GLuint placement_buffer;
-  glCreateBuffers(1, &placement_buffer);
-  glNamedBufferStorage(placement_buffer, GLsizeiptr(placement.size() * sizeof(float)),
-                       placement.data(), 0);
-  buffers.push_back(placement_buffer);
-
-  // The camera/light blocks are those of the full-view passes.
+  reorder(mesh.positions, sorted.positions);
+  reorder(mesh.normals, sorted.normals);
+  reorder(mesh.tangents, sorted.tangents);
+  reorder(mesh.uv0, sorted.uv0);
+  reorder(mesh.uv1, sorted.uv1);
+  reorder(mesh.colors, sorted.colors);
   const GpuAsset& asset = *s.assets[asset_id];
-  GpuAsset soup_asset;  // borrows the asset's materials and textures, uses the soup's vertices
-  soup_asset.vao = vao;
+  GpuAsset soup_asset;
+  uploadVertexStreams(sorted, soup_asset);
+  GLuint placement_buffer = addBuffer(soup_asset, placement.data(), placement.size() * sizeof(float));
   soup_asset.material_ubo = asset.material_ubo;
   soup_asset.material_stride = asset.material_stride;
   soup_asset.textures = asset.textures;
   soup_asset.materials = asset.materials;
   soup_asset.bounds = asset.bounds;
-  std::copy(std::begin(has), std::end(has), soup_asset.has);
+  // Frees what this call created, but not the borrowed material buffer.
+  auto releaseSoup = [&] {
+    glDeleteBuffers(GLsizei(soup_asset.buffers.size()), soup_asset.buffers.data());
+    glDeleteVertexArrays(1, &soup_asset.vao);
+  };
+
+  // The camera/light blocks are those of the full-view passes.
   GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
   ChunkDrawer drawer{s, soup_asset, s.programs[program_id]};
   drawer.uploadFrames(samples, stride);
 
   RenderStats local;
   if (auto ok = ensureFramebuffer(s.atlas, width, height, 0, GL_RGBA8, true, false); !ok) {
-    glDeleteBuffers(GLsizei(buffers.size()), buffers.data());
-    glDeleteVertexArrays(1, &vao);
+    releaseSoup();
     return ok.error();
   }
   beginDrawing(s.atlas);
@@ -234,8 +224,7 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   glBindFramebuffer(GL_READ_FRAMEBUFFER, s.atlas.fbo);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, atlas_pixels.data());
-  glDeleteBuffers(GLsizei(buffers.size()), buffers.data());
-  glDeleteVertexArrays(1, &vao);
+  releaseSoup();
   if (GLenum error = glGetError(); error != GL_NO_ERROR)
     return Error{"renderRegions: OpenGL error " + std::to_string(error)};
 

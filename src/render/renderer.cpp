@@ -41,6 +41,30 @@ void main() {
 
 namespace internal {
 
+GLuint addBuffer(GpuAsset& gpu, const void* data, size_t bytes) {
+  GLuint buffer;
+  glCreateBuffers(1, &buffer);
+  glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(bytes), data, 0);
+  gpu.buffers.push_back(buffer);
+  return buffer;
+}
+
+void uploadVertexStreams(const core::Mesh& mesh, GpuAsset& gpu) {
+  glCreateVertexArrays(1, &gpu.vao);
+  auto stream = [&](int slot, const auto& values) {
+    if (values.empty()) return;
+    GLuint buffer = addBuffer(gpu, values.data(), values.size() * sizeof(values[0]));
+    glVertexArrayVertexBuffer(gpu.vao, slot, buffer, 0, sizeof(values[0]));
+    gpu.has[slot] = true;
+  };
+  stream(0, mesh.positions);
+  stream(1, mesh.normals);
+  stream(2, mesh.tangents);
+  stream(3, mesh.uv0);
+  stream(4, mesh.uv1);
+  stream(5, mesh.colors);
+}
+
 void destroyFramebuffer(Framebuffer& f) {
   if (f.fbo) glDeleteFramebuffers(1, &f.fbo);
   if (f.texture) {
@@ -192,29 +216,8 @@ core::Status uploadGeometry(const core::Mesh& mesh, const std::vector<core::Mate
   if (mesh.triangleCount() == 0) return Error{"no triangles to render"};
   gpu.bounds = core::computeBoundingSphere(mesh);
   gpu.materials = materials;
-  glCreateVertexArrays(1, &gpu.vao);
-  auto addStream = [&](const void* data, size_t bytes) {
-    GLuint buffer;
-    glCreateBuffers(1, &buffer);
-    glNamedBufferStorage(buffer, static_cast<GLsizeiptr>(bytes), data, 0);
-    gpu.buffers.push_back(buffer);
-    return buffer;
-  };
-  // Stream slot i binds to VAO binding point i; the attribute location comes from the bindings at
-  // draw time (so one upload serves any bindings).
-  auto stream = [&](int slot, const auto& values) {
-    if (values.empty()) return;
-    GLuint buffer = addStream(values.data(), values.size() * sizeof(values[0]));
-    glVertexArrayVertexBuffer(gpu.vao, slot, buffer, 0, sizeof(values[0]));
-    gpu.has[slot] = true;
-  };
-  stream(0, mesh.positions);
-  stream(1, mesh.normals);
-  stream(2, mesh.tangents);
-  stream(3, mesh.uv0);
-  stream(4, mesh.uv1);
-  stream(5, mesh.colors);
-  GLuint index_buffer = addStream(mesh.indices.data(), mesh.indices.size() * 4);
+  uploadVertexStreams(mesh, gpu);
+  GLuint index_buffer = addBuffer(gpu, mesh.indices.data(), mesh.indices.size() * 4);
   glVertexArrayElementBuffer(gpu.vao, index_buffer);
   for (const core::Submesh& sub : mesh.submeshes)
     if (sub.index_count > 0)

@@ -72,6 +72,13 @@ struct Framebuffer {
 };
 
 
+// Creates `gpu.vao` and one buffer per present attribute stream of `mesh`, bound to VAO binding
+// point = stream slot (position 0, normal 1, tangent 2, uv0 3, uv1 4, colour 5); the attribute
+// locations come from the bindings at draw time, so one upload serves any bindings.
+void uploadVertexStreams(const core::Mesh& mesh, GpuAsset& gpu);
+// Appends a buffer holding `bytes` to gpu.buffers and returns it.
+GLuint addBuffer(GpuAsset& gpu, const void* data, size_t bytes);
+
 void destroyFramebuffer(Framebuffer& f);
 // (Re)creates `f` only when its shape changes: allocation is costly on llvmpipe at atlas sizes.
 core::Status ensureFramebuffer(Framebuffer& f, int width, int height, int samples, GLenum format,
