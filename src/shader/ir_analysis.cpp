@@ -1,0 +1,655 @@
+// Analyses on duolod's SPIR-V IR: type and constant queries, the interface (inputs/outputs,
+// uniform blocks, loose uniforms, samplers), per-function CFG with a structured order, and the
+// program-dependence backward slice used to decide per-pixel → per-vertex moves (Wang et al. 2014,
+// "Automatic shader simplification using surface signal approximation").
+#include <algorithm>
+#include <cstring>
+#include <map>
+
+#include "shader/ir.hpp"
+
+namespace duolod::shader::ir {
+
+// ---------------------------------------------------------------------------------------------
+// Types and constants.
+
+TypeInfo typeInfo(const DefUse& uses, Id type_id) {
+  TypeInfo info;
+  const Instruction* type = uses.def(type_id);
+  if (!type) return info;
+  info.opcode = type->opcode;
+  switch (type->opcode) {
+    case spv::OpTypeBool:
+      info.scalar_type = type_id;
+      info.components = 1;
+      break;
+    case spv::OpTypeFloat:
+    case spv::OpTypeInt:
+      info.scalar_type = type_id;
+      info.components = 1;
+      info.width = type->operands[0];
+      break;
+    case spv::OpTypeVector: {
+      TypeInfo component = typeInfo(uses, type->operands[0]);
+      info.scalar_type = component.scalar_type;
+      info.width = component.width;
+      info.components = type->operands[1];
+      break;
+    }
+    case spv::OpTypeMatrix: {
+      TypeInfo column = typeInfo(uses, type->operands[0]);
+      info.scalar_type = column.scalar_type;
+      info.width = column.width;
+      info.columns = type->operands[1];
+      info.components = column.components * info.columns;
+      break;
+    }
+    default: break;
+  }
+  return info;
+}
+
+namespace {
+spv::Op scalarOpcode(const DefUse& uses, Id type_id) {
+  const Instruction* scalar = uses.def(typeInfo(uses, type_id).scalar_type);
+  return scalar ? scalar->opcode : spv::OpNop;
+}
+}  // namespace
+
+bool isFloatType(const DefUse& uses, Id type_id) {
+  const Instruction* type = uses.def(type_id);
+  return type && type->opcode == spv::OpTypeFloat;
+}
+bool isFloatVectorType(const DefUse& uses, Id type_id) {
+  const Instruction* type = uses.def(type_id);
+  return type && type->opcode == spv::OpTypeVector && scalarOpcode(uses, type_id) == spv::OpTypeFloat;
+}
+bool isFloatScalarOrVector(const DefUse& uses, Id type_id) {
+  return isFloatType(uses, type_id) || isFloatVectorType(uses, type_id);
+}
+bool isMatrixType(const DefUse& uses, Id type_id) {
+  const Instruction* type = uses.def(type_id);
+  return type && type->opcode == spv::OpTypeMatrix;
+}
+bool isBoolType(const DefUse& uses, Id type_id) {
+  const Instruction* type = uses.def(type_id);
+  return type && type->opcode == spv::OpTypeBool;
+}
+uint32_t componentCount(const DefUse& uses, Id type_id) { return typeInfo(uses, type_id).components; }
+Id scalarType(const DefUse& uses, Id type_id) { return typeInfo(uses, type_id).scalar_type; }
+
+std::optional<spv::StorageClass> pointerStorageClass(const DefUse& uses, Id pointer_type) {
+  const Instruction* type = uses.def(pointer_type);
+  if (!type || type->opcode != spv::OpTypePointer) return std::nullopt;
+  return static_cast<spv::StorageClass>(type->operands[0]);
+}
+Id pointeeType(const DefUse& uses, Id pointer_type) {
+  const Instruction* type = uses.def(pointer_type);
+  if (!type || type->opcode != spv::OpTypePointer) return kNoId;
+  return type->operands[1];
+}
+bool isSampledImageType(const DefUse& uses, Id type_id) {
+  const Instruction* type = uses.def(type_id);
+  return type && type->opcode == spv::OpTypeSampledImage;
+}
+
+namespace {
+bool isOpaqueType(const DefUse& uses, Id type_id) {
+  const Instruction* type = uses.def(type_id);
+  if (!type) return false;
+  switch (type->opcode) {
+    case spv::OpTypeImage:
+    case spv::OpTypeSampler:
+    case spv::OpTypeSampledImage: return true;
+    case spv::OpTypeArray:
+    case spv::OpTypeRuntimeArray: return isOpaqueType(uses, type->operands[0]);
+    default: return false;
+  }
+}
+}  // namespace
+
+bool isConstant(const DefUse& uses, Id id) {
+  const Instruction* value = uses.def(id);
+  if (!value) return false;
+  switch (value->opcode) {
+    case spv::OpConstant:
+    case spv::OpConstantTrue:
+    case spv::OpConstantFalse:
+    case spv::OpConstantComposite:
+    case spv::OpConstantNull:
+    case spv::OpSpecConstant:
+    case spv::OpSpecConstantTrue:
+    case spv::OpSpecConstantFalse:
+    case spv::OpSpecConstantComposite:
+    case spv::OpSpecConstantOp: return true;
+    default: return false;
+  }
+}
+
+std::optional<float> constantFloatValue(const DefUse& uses, Id id) {
+  std::vector<float> values = constantAsFloats(uses, id);
+  if (values.size() != 1) return std::nullopt;
+  return values[0];
+}
+
+std::optional<int64_t> constantIntValue(const DefUse& uses, Id id) {
+  const Instruction* value = uses.def(id);
+  if (!value || value->opcode != spv::OpConstant) return std::nullopt;
+  const Instruction* type = uses.def(value->type_id);
+  if (!type || type->opcode != spv::OpTypeInt || type->operands[0] != 32) return std::nullopt;
+  if (type->operands[1]) return static_cast<int64_t>(static_cast<int32_t>(value->operands[0]));
+  return static_cast<int64_t>(value->operands[0]);
+}
+
+std::vector<float> constantAsFloats(const DefUse& uses, Id id) {
+  const Instruction* value = uses.def(id);
+  if (!value) return {};
+  switch (value->opcode) {
+    case spv::OpConstantTrue: return {1.0f};
+    case spv::OpConstantFalse: return {0.0f};
+    case spv::OpConstant: {
+      const Instruction* type = uses.def(value->type_id);
+      if (!type || type->operands[0] != 32 || value->operands.size() != 1) return {};
+      if (type->opcode == spv::OpTypeFloat) {
+        float result;
+        std::memcpy(&result, &value->operands[0], sizeof result);
+        return {result};
+      }
+      if (type->opcode == spv::OpTypeInt)
+        return {type->operands[1] ? static_cast<float>(static_cast<int32_t>(value->operands[0]))
+                                  : static_cast<float>(value->operands[0])};
+      return {};
+    }
+    case spv::OpConstantNull: {
+      uint32_t count = componentCount(uses, value->type_id);
+      return std::vector<float>(count, 0.0f);
+    }
+    case spv::OpConstantComposite: {
+      std::vector<float> result;
+      for (uint32_t component : value->operands) {
+        std::vector<float> part = constantAsFloats(uses, component);
+        if (part.empty()) return {};
+        result.insert(result.end(), part.begin(), part.end());
+      }
+      return result;
+    }
+    default: return {};
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Interface, uniforms, samplers.
+
+namespace {
+template <class Visit>
+void forEachGlobalVariable(const Module& module, Visit visit) {
+  for (const Instruction& instruction : module.types_values)
+    if (instruction.opcode == spv::OpVariable) visit(instruction);
+}
+}  // namespace
+
+std::vector<InterfaceVariable> interfaceVariables(const Module& module, const DefUse& uses) {
+  std::vector<InterfaceVariable> result;
+  forEachGlobalVariable(module, [&](const Instruction& variable) {
+    auto storage = static_cast<spv::StorageClass>(variable.operands[0]);
+    if (storage != spv::StorageClassInput && storage != spv::StorageClassOutput) return;
+    InterfaceVariable entry;
+    entry.variable = variable.result_id;
+    entry.value_type = pointeeType(uses, variable.type_id);
+    entry.storage = storage;
+    entry.name = module.name(variable.result_id);
+    entry.location = uses.decoration(variable.result_id, spv::DecorationLocation);
+    if (auto builtin = uses.decoration(variable.result_id, spv::DecorationBuiltIn))
+      entry.builtin = static_cast<spv::BuiltIn>(*builtin);
+    if (!entry.builtin) {
+      // gl_PerVertex-style blocks carry BuiltIn on members; report the first member's.
+      Id value_type = entry.value_type;
+      if (const Instruction* array = uses.def(value_type); array && array->opcode == spv::OpTypeArray)
+        value_type = array->operands[0];
+      if (auto builtin = uses.memberDecoration(value_type, 0, spv::DecorationBuiltIn))
+        entry.builtin = static_cast<spv::BuiltIn>(*builtin);
+    }
+    entry.flat = uses.hasDecoration(variable.result_id, spv::DecorationFlat);
+    result.push_back(std::move(entry));
+  });
+  return result;
+}
+
+std::vector<UniformBlock> uniformBlocks(const Module& module, const DefUse& uses) {
+  std::vector<UniformBlock> result;
+  forEachGlobalVariable(module, [&](const Instruction& variable) {
+    auto storage = static_cast<spv::StorageClass>(variable.operands[0]);
+    if (storage != spv::StorageClassUniform && storage != spv::StorageClassPushConstant &&
+        storage != spv::StorageClassStorageBuffer)
+      return;
+    Id block_type = pointeeType(uses, variable.type_id);
+    const Instruction* type = uses.def(block_type);
+    if (!type || type->opcode != spv::OpTypeStruct) return;
+    UniformBlock block;
+    block.variable = variable.result_id;
+    block.block_type = block_type;
+    block.name = module.name(block_type);
+    block.instance_name = module.name(variable.result_id);
+    block.binding = uses.decoration(variable.result_id, spv::DecorationBinding);
+    for (uint32_t member = 0; member < type->operands.size(); ++member)
+      block.members.push_back({member, module.memberName(block_type, member), type->operands[member],
+                               uses.memberDecoration(block_type, member, spv::DecorationOffset)});
+    result.push_back(std::move(block));
+  });
+  return result;
+}
+
+std::vector<LooseUniform> looseUniforms(const Module& module, const DefUse& uses) {
+  std::vector<LooseUniform> result;
+  forEachGlobalVariable(module, [&](const Instruction& variable) {
+    if (variable.operands[0] != spv::StorageClassUniformConstant) return;
+    Id value_type = pointeeType(uses, variable.type_id);
+    if (isOpaqueType(uses, value_type)) return;
+    result.push_back({variable.result_id, value_type, module.name(variable.result_id),
+                      uses.decoration(variable.result_id, spv::DecorationLocation)});
+  });
+  return result;
+}
+
+std::vector<Sampler> samplers(const Module& module, const DefUse& uses) {
+  std::vector<Sampler> result;
+  forEachGlobalVariable(module, [&](const Instruction& variable) {
+    if (variable.operands[0] != spv::StorageClassUniformConstant) return;
+    Id value_type = pointeeType(uses, variable.type_id);
+    if (!isOpaqueType(uses, value_type)) return;
+    result.push_back({variable.result_id, value_type, module.name(variable.result_id),
+                      uses.decoration(variable.result_id, spv::DecorationBinding)});
+  });
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// CFG.
+
+namespace {
+std::vector<Id> branchTargets(const Instruction& terminator) {
+  switch (terminator.opcode) {
+    case spv::OpBranch: return {terminator.operands[0]};
+    case spv::OpBranchConditional: return {terminator.operands[1], terminator.operands[2]};
+    case spv::OpSwitch: {
+      std::vector<Id> targets;
+      for (size_t i = 1; i < terminator.operands.size(); ++i)
+        if (terminator.is_id[i]) targets.push_back(terminator.operands[i]);
+      return targets;
+    }
+    default: return {};
+  }
+}
+}  // namespace
+
+Cfg buildCfg(const Function& function) {
+  Cfg cfg;
+  size_t count = function.blocks.size();
+  for (size_t b = 0; b < count; ++b) {
+    cfg.blocks.push_back(function.blocks[b].id());
+    cfg.index_of[function.blocks[b].id()] = static_cast<int>(b);
+  }
+  cfg.successors.assign(count, {});
+  cfg.predecessors.assign(count, {});
+  cfg.merge_block.assign(count, -1);
+  cfg.continue_block.assign(count, -1);
+  auto indexOf = [&](Id id) {
+    auto found = cfg.index_of.find(id);
+    return found == cfg.index_of.end() ? -1 : found->second;
+  };
+  for (size_t b = 0; b < count; ++b) {
+    const Block& block = function.blocks[b];
+    if (block.instructions.empty()) continue;
+    for (Id target : branchTargets(block.terminator())) {
+      int t = indexOf(target);
+      if (t < 0) continue;
+      std::vector<int>& successors = cfg.successors[b];
+      if (std::find(successors.begin(), successors.end(), t) != successors.end()) continue;
+      successors.push_back(t);
+      cfg.predecessors[static_cast<size_t>(t)].push_back(static_cast<int>(b));
+    }
+    if (const Instruction* merge = block.mergeInstruction()) {
+      cfg.merge_block[b] = indexOf(merge->operands[0]);
+      if (merge->opcode == spv::OpLoopMerge) cfg.continue_block[b] = indexOf(merge->operands[1]);
+    }
+  }
+  // Iterative DFS over structured successors: merge first, then continue, then branch targets, so
+  // the merge block finishes first and comes last in reverse post-order.
+  std::vector<bool> visited(count, false);
+  std::vector<int> post_order;
+  auto structuredSuccessors = [&](int b) {
+    std::vector<int> list;
+    if (cfg.merge_block[static_cast<size_t>(b)] >= 0) list.push_back(cfg.merge_block[static_cast<size_t>(b)]);
+    if (cfg.continue_block[static_cast<size_t>(b)] >= 0)
+      list.push_back(cfg.continue_block[static_cast<size_t>(b)]);
+    for (int s : cfg.successors[static_cast<size_t>(b)]) list.push_back(s);
+    return list;
+  };
+  if (count > 0) {
+    struct Frame {
+      int block;
+      std::vector<int> next;
+      size_t cursor = 0;
+    };
+    std::vector<Frame> stack;
+    visited[0] = true;
+    stack.push_back({0, structuredSuccessors(0)});
+    while (!stack.empty()) {
+      Frame& frame = stack.back();
+      if (frame.cursor < frame.next.size()) {
+        int next = frame.next[frame.cursor++];
+        if (!visited[static_cast<size_t>(next)]) {
+          visited[static_cast<size_t>(next)] = true;
+          stack.push_back({next, structuredSuccessors(next)});
+        }
+        continue;
+      }
+      post_order.push_back(frame.block);
+      stack.pop_back();
+    }
+  }
+  cfg.structured_order.assign(post_order.rbegin(), post_order.rend());
+  for (size_t b = 0; b < count; ++b)
+    if (!visited[b]) cfg.structured_order.push_back(static_cast<int>(b));  // unreachable, last
+  return cfg;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Program dependence.
+
+namespace {
+
+bool isDerivativeOrImplicitLod(spv::Op op) {
+  switch (op) {
+    case spv::OpDPdx:
+    case spv::OpDPdy:
+    case spv::OpFwidth:
+    case spv::OpDPdxFine:
+    case spv::OpDPdyFine:
+    case spv::OpFwidthFine:
+    case spv::OpDPdxCoarse:
+    case spv::OpDPdyCoarse:
+    case spv::OpFwidthCoarse:
+    case spv::OpImageSampleImplicitLod:
+    case spv::OpImageSampleDrefImplicitLod:
+    case spv::OpImageSampleProjImplicitLod:
+    case spv::OpImageSampleProjDrefImplicitLod:
+    case spv::OpImageQueryLod: return true;
+    default: return false;
+  }
+}
+
+bool hasSideEffects(spv::Op op) {
+  switch (op) {
+    case spv::OpKill:
+    case spv::OpTerminateInvocation:
+    case spv::OpImageWrite:
+    case spv::OpEmitVertex:
+    case spv::OpEndPrimitive:
+    case spv::OpControlBarrier:
+    case spv::OpMemoryBarrier: return true;
+    default: return op >= spv::OpAtomicLoad && op <= spv::OpAtomicXor;
+  }
+}
+
+bool isPointerStep(spv::Op op) {
+  return op == spv::OpAccessChain || op == spv::OpInBoundsAccessChain || op == spv::OpPtrAccessChain ||
+         op == spv::OpInBoundsPtrAccessChain || op == spv::OpCopyObject;
+}
+
+// Blocks each conditional branch may decide about: S is (conservatively) control dependent on
+// the conditional block C when S is reachable from C and does not post-dominate C.
+class ControlDependence {
+ public:
+  explicit ControlDependence(const Function& function) : cfg_(buildCfg(function)) {
+    size_t count = cfg_.blocks.size();
+    // Post-dominator sets by iteration to a fixed point (functions are small).
+    std::vector<std::vector<bool>> postdom(count, std::vector<bool>(count, true));
+    for (size_t b = 0; b < count; ++b)
+      if (cfg_.successors[b].empty()) {
+        postdom[b].assign(count, false);
+        postdom[b][b] = true;
+      }
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t i = count; i-- > 0;) {
+        if (cfg_.successors[i].empty()) continue;
+        std::vector<bool> meet(count, true);
+        for (int s : cfg_.successors[i])
+          for (size_t k = 0; k < count; ++k) meet[k] = meet[k] && postdom[static_cast<size_t>(s)][k];
+        meet[i] = true;
+        if (meet != postdom[i]) {
+          postdom[i] = std::move(meet);
+          changed = true;
+        }
+      }
+    }
+    controllers_.assign(count, {});
+    for (size_t c = 0; c < count; ++c) {
+      const Block& block = function.blocks[c];
+      if (block.instructions.empty()) continue;
+      const Instruction& terminator = block.terminator();
+      if (terminator.opcode != spv::OpBranchConditional && terminator.opcode != spv::OpSwitch) continue;
+      std::vector<bool> reached(count, false);
+      std::vector<int> stack(cfg_.successors[c].begin(), cfg_.successors[c].end());
+      while (!stack.empty()) {
+        int s = stack.back();
+        stack.pop_back();
+        if (reached[static_cast<size_t>(s)]) continue;
+        reached[static_cast<size_t>(s)] = true;
+        for (int next : cfg_.successors[static_cast<size_t>(s)]) stack.push_back(next);
+      }
+      for (size_t s = 0; s < count; ++s)
+        if (reached[s] && !postdom[c][s]) controllers_[s].push_back(terminator.operands[0]);
+    }
+  }
+  // Condition / selector ids deciding whether block `label` runs.
+  const std::vector<Id>& conditionsFor(Id label) const {
+    static const std::vector<Id> none;
+    auto found = cfg_.index_of.find(label);
+    return found == cfg_.index_of.end() ? none : controllers_[static_cast<size_t>(found->second)];
+  }
+
+ private:
+  Cfg cfg_;
+  std::vector<std::vector<Id>> controllers_;
+};
+
+class Slicer {
+ public:
+  Slicer(const Module& module, const DefUse& uses) : module_(module), uses_(uses) {}
+
+  ValueSources run(Id value) {
+    push(value);
+    while (!work_.empty()) {
+      Id id = work_.back();
+      work_.pop_back();
+      visit(id);
+    }
+    return std::move(sources_);
+  }
+
+ private:
+  void push(Id id) {
+    if (id != kNoId && seen_.insert(id).second) work_.push_back(id);
+  }
+
+  const Function* functionAt(int index) const {
+    return index < 0 ? nullptr : &module_.functions[static_cast<size_t>(index)];
+  }
+
+  const ControlDependence& controlFor(int function_index) {
+    auto found = control_.find(function_index);
+    if (found != control_.end()) return found->second;
+    return control_.emplace(function_index, ControlDependence(*functionAt(function_index))).first->second;
+  }
+
+  // Adds the conditions deciding whether the instruction at `ref` runs.
+  void pushControl(const InstructionRef& ref) {
+    if (ref.function < 0 || ref.block < 0) return;
+    Id label = module_.functions[static_cast<size_t>(ref.function)].blocks[static_cast<size_t>(ref.block)].id();
+    for (Id condition : controlFor(ref.function).conditionsFor(label)) push(condition);
+  }
+
+  void classifyGlobal(const Instruction& variable) {
+    sources_.global_reads.insert(variable.result_id);
+    auto storage = static_cast<spv::StorageClass>(variable.operands[0]);
+    Id value_type = pointeeType(uses_, variable.type_id);
+    switch (storage) {
+      case spv::StorageClassInput: sources_.reads_input = true; break;
+      case spv::StorageClassUniform:
+      case spv::StorageClassPushConstant: sources_.reads_uniform = true; break;
+      case spv::StorageClassUniformConstant:
+        if (isOpaqueType(uses_, value_type)) {
+          sources_.reads_texture = true;
+        } else {
+          sources_.reads_uniform = true;
+        }
+        break;
+      case spv::StorageClassPrivate: followStores(variable); break;
+      default: sources_.reads_other = true;
+    }
+  }
+
+  // A variable read through loads: the value is whatever was stored into it (any store, any
+  // place: flow-insensitive), under the conditions deciding that store, or passed to a call that
+  // may write it.
+  void followStores(const Instruction& variable) {
+    if (variable.operands.size() >= 2) push(variable.operands[1]);  // initializer
+    std::vector<Id> pointers = {variable.result_id};
+    std::set<Id> visited_pointers;
+    while (!pointers.empty()) {
+      Id pointer = pointers.back();
+      pointers.pop_back();
+      if (!visited_pointers.insert(pointer).second) continue;
+      for (const InstructionRef& user : uses_.users(pointer)) {
+        const Instruction& instruction = *user.instruction;
+        if (isPointerStep(instruction.opcode) && instruction.operands[0] == pointer) {
+          pointers.push_back(instruction.result_id);
+        } else if (instruction.opcode == spv::OpStore && instruction.operands[0] == pointer) {
+          push(instruction.operands[1]);
+          pushControl(user);
+        } else if (instruction.opcode == spv::OpCopyMemory && instruction.operands[0] == pointer) {
+          push(instruction.operands[1]);
+          pushControl(user);
+        } else if (instruction.opcode == spv::OpFunctionCall) {
+          push(instruction.result_id);
+          pushControl(user);
+        }
+      }
+    }
+  }
+
+  // A pointer operand: walk access chains to the base variable, following index ids.
+  void visitPointer(Id pointer) {
+    const Instruction* def = uses_.def(pointer);
+    while (def && isPointerStep(def->opcode)) {
+      for (size_t i = 1; i < def->operands.size(); ++i)
+        if (def->is_id[i]) push(def->operands[i]);
+      def = uses_.def(def->operands[0]);
+    }
+    if (!def) {
+      sources_.reads_other = true;
+      return;
+    }
+    if (def->opcode == spv::OpVariable) {
+      auto storage = static_cast<spv::StorageClass>(def->operands[0]);
+      if (storage == spv::StorageClassFunction) {
+        followStores(*def);
+      } else {
+        classifyGlobal(*def);
+      }
+      return;
+    }
+    if (def->opcode == spv::OpFunctionParameter) {
+      // A pointer parameter inside a callee: the caller's variable (unknown here).
+      sources_.reads_other = true;
+      return;
+    }
+    sources_.reads_other = true;
+  }
+
+  // Everything a called function (and what it calls) reads and does, conservatively.
+  void summarizeCallee(Id function_id) {
+    if (!callees_.insert(function_id).second) return;
+    const Function* callee = module_.findFunction(function_id);
+    if (!callee) {
+      sources_.reads_other = true;
+      return;
+    }
+    for (const Block& block : callee->blocks)
+      for (const Instruction& instruction : block.instructions) {
+        if (isDerivativeOrImplicitLod(instruction.opcode)) sources_.uses_derivatives = true;
+        if (hasSideEffects(instruction.opcode)) sources_.has_side_effects = true;
+        if (instruction.opcode == spv::OpFunctionCall) summarizeCallee(instruction.operands[0]);
+        for (size_t i = 0; i < instruction.operands.size(); ++i) {
+          if (!instruction.is_id[i]) continue;
+          const Instruction* operand = uses_.def(instruction.operands[i]);
+          if (!operand || operand->opcode != spv::OpVariable) continue;
+          if (operand->operands[0] != spv::StorageClassFunction) classifyGlobal(*operand);
+        }
+      }
+  }
+
+  void visit(Id id) {
+    const InstructionRef* ref = uses_.defRef(id);
+    if (!ref) return;
+    const Instruction& instruction = *ref->instruction;
+    if (ref->function < 0) {  // module scope: constants, types, global variables
+      if (instruction.opcode == spv::OpVariable) classifyGlobal(instruction);
+      return;
+    }
+    if (instruction.opcode == spv::OpLabel || instruction.opcode == spv::OpFunction) return;
+    if (instruction.opcode == spv::OpFunctionParameter) {
+      sources_.instructions.insert(id);
+      sources_.reads_other = true;  // depends on the caller
+      return;
+    }
+    sources_.instructions.insert(id);
+    if (isDerivativeOrImplicitLod(instruction.opcode)) sources_.uses_derivatives = true;
+    if (hasSideEffects(instruction.opcode)) sources_.has_side_effects = true;
+    switch (instruction.opcode) {
+      case spv::OpLoad: visitPointer(instruction.operands[0]); return;
+      case spv::OpFunctionCall:
+        summarizeCallee(instruction.operands[0]);
+        for (size_t i = 1; i < instruction.operands.size(); ++i) {
+          const Instruction* argument = uses_.def(instruction.operands[i]);
+          if (argument && argument->type_id && pointerStorageClass(uses_, argument->type_id)) {
+            visitPointer(instruction.operands[i]);
+          } else {
+            push(instruction.operands[i]);
+          }
+        }
+        return;
+      case spv::OpPhi:
+        for (size_t i = 0; i + 1 < instruction.operands.size(); i += 2) push(instruction.operands[i]);
+        pushControl(*ref);
+        for (size_t i = 1; i < instruction.operands.size(); i += 2)
+          for (Id condition : controlFor(ref->function).conditionsFor(instruction.operands[i]))
+            push(condition);
+        return;
+      default:
+        if (isPointerStep(instruction.opcode)) {
+          visitPointer(id);
+          return;
+        }
+        for (size_t i = 0; i < instruction.operands.size(); ++i)
+          if (instruction.is_id[i]) push(instruction.operands[i]);
+    }
+  }
+
+  const Module& module_;
+  const DefUse& uses_;
+  ValueSources sources_;
+  std::set<Id> seen_, callees_;
+  std::vector<Id> work_;
+  std::map<int, ControlDependence> control_;
+};
+
+}  // namespace
+
+ValueSources backwardSlice(const Module& module, const DefUse& uses, Id value) {
+  return Slicer(module, uses).run(value);
+}
+
+}  // namespace duolod::shader::ir

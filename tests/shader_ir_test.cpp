@@ -1,0 +1,360 @@
+// duolod's SPIR-V IR: parse → emit round trip on the reference shaders (identical words), def-use,
+// CFG, type/constant queries, interface/uniform/sampler discovery, the dependence slice, and the
+// mutation helpers rules use (each mutated module must still validate).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "duolod/shader.hpp"
+#include "shader/ir.hpp"
+#include "test_support.hpp"
+
+namespace duolod::shader {
+namespace {
+
+std::string readShader(const std::string& file) {
+  std::ifstream in(test::sourcePath("shaders/" + file));
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::vector<uint32_t> compileOrDie(const std::string& source, Stage stage, const std::string& name) {
+  auto words = compileToSpirv(source, stage, name);
+  EXPECT_TRUE(words.ok()) << (words.ok() ? "" : words.error().message);
+  return words.ok() ? *words : std::vector<uint32_t>{};
+}
+
+ir::Module parseOrDie(const std::vector<uint32_t>& words) {
+  auto module = ir::parseModule(words);
+  EXPECT_TRUE(module.ok()) << (module.ok() ? "" : module.error().message);
+  return module.ok() ? *module : ir::Module{};
+}
+
+class ReferenceShaders : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ReferenceShaders, RoundTripIsWordIdenticalAndValid) {
+  for (const char* extension : {".vert", ".frag"}) {
+    std::string file = std::string(GetParam()) + extension;
+    Stage stage = std::string(extension) == ".vert" ? Stage::kVertex : Stage::kFragment;
+    std::vector<uint32_t> words = compileOrDie(readShader(file), stage, file);
+    ASSERT_FALSE(words.empty());
+    ir::Module module = parseOrDie(words);
+    std::vector<uint32_t> emitted = ir::emitModule(module);
+    EXPECT_EQ(emitted, words) << file;
+    EXPECT_EQ(ir::wordsHash(words), ir::moduleHash(module));
+    auto valid = validateSpirv(emitted, file);
+    EXPECT_TRUE(valid.ok()) << (valid.ok() ? "" : valid.error().message);
+    // Reparsing the emitted words gives the same IR.
+    EXPECT_EQ(parseOrDie(emitted), module);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Shaders, ReferenceShaders,
+                         ::testing::Values("pbr", "noise_phong", "blend", "constant"));
+
+// A small fragment shader with a branch, a loop with a constant trip count, a texture, a uniform
+// block and a loose (non-block) uniform: predictable structure to check the analyses against.
+const char* kSmallFragment = R"(#version 450 core
+layout(std140, binding = 1) uniform Material {
+  vec4 uBaseColorFactor;
+  vec4 uEmissiveFactor;
+};
+layout(binding = 2) uniform sampler2D uNormalTexture;
+layout(location = 0) in vec3 vNormal;
+layout(location = 1) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 n = normalize(vNormal);
+  float lit = max(n.z, 0.0) * 2.0;
+  if (lit > 0.5) lit = lit * uEmissiveFactor.x;
+  float sum = 0.0;
+  for (int i = 0; i < 4; ++i) sum += float(i);
+  vec4 texel = texture(uNormalTexture, vUV);
+  outColor = vec4(uBaseColorFactor.rgb * lit, 1.0) + texel * sum;
+}
+)";
+
+struct SmallShader {
+  std::vector<uint32_t> words;
+  ir::Module module;
+};
+
+SmallShader smallShader() {
+  SmallShader shader;
+  shader.words = compileOrDie(kSmallFragment, Stage::kFragment, "small.frag");
+  shader.module = parseOrDie(shader.words);
+  return shader;
+}
+
+// The id of the global (module-scope) variable named `name`.
+ir::Id variableNamed(const ir::Module& module, const std::string& name) {
+  for (const ir::Instruction& instruction : module.types_values)
+    if (instruction.opcode == spv::OpVariable && module.name(instruction.result_id) == name)
+      return instruction.result_id;
+  return ir::kNoId;
+}
+
+// The result id of the last instruction with `opcode` in the fragment entry function.
+ir::Id lastOfOpcode(const ir::Module& module, spv::Op opcode) {
+  ir::Id found = ir::kNoId;
+  for (const ir::Block& block : module.entryFunction(spv::ExecutionModelFragment)->blocks)
+    for (const ir::Instruction& instruction : block.instructions)
+      if (instruction.opcode == opcode) found = instruction.result_id;
+  return found;
+}
+
+TEST(ShaderIr, SectionsNamesAndEntryPoint) {
+  SmallShader shader = smallShader();
+  const ir::Module& module = shader.module;
+  EXPECT_EQ(module.memory_model.size(), 1u);
+  ASSERT_EQ(module.entry_points.size(), 1u);
+  EXPECT_EQ(module.entry_points[0].literalString(2), "main");
+  ASSERT_NE(module.entryFunction(spv::ExecutionModelFragment), nullptr);
+  EXPECT_EQ(module.entryFunction(spv::ExecutionModelVertex), nullptr);
+  EXPECT_EQ(module.ext_inst_imports.size(), 1u);  // GLSL.std.450
+  EXPECT_NE(variableNamed(module, "vNormal"), ir::kNoId);
+  EXPECT_NE(variableNamed(module, "uNormalTexture"), ir::kNoId);
+}
+
+TEST(ShaderIr, InterfaceUniformsAndSamplers) {
+  SmallShader shader = smallShader();
+  ir::DefUse uses(shader.module);
+  std::vector<ir::InterfaceVariable> interface = ir::interfaceVariables(shader.module, uses);
+  ASSERT_EQ(interface.size(), 3u);
+  std::map<std::string, ir::InterfaceVariable> by_name;
+  for (const auto& variable : interface) by_name[variable.name] = variable;
+  EXPECT_EQ(by_name["vNormal"].location, 0u);
+  EXPECT_EQ(by_name["vUV"].location, 1u);
+  EXPECT_EQ(by_name["vUV"].storage, spv::StorageClassInput);
+  EXPECT_EQ(by_name["outColor"].storage, spv::StorageClassOutput);
+  EXPECT_EQ(ir::componentCount(uses, by_name["vNormal"].value_type), 3u);
+  EXPECT_TRUE(ir::isFloatVectorType(uses, by_name["vUV"].value_type));
+
+  std::vector<ir::UniformBlock> blocks = ir::uniformBlocks(shader.module, uses);
+  ASSERT_EQ(blocks.size(), 1u);
+  EXPECT_EQ(blocks[0].name, "Material");
+  EXPECT_EQ(blocks[0].binding, 1u);
+  ASSERT_EQ(blocks[0].members.size(), 2u);
+  EXPECT_EQ(blocks[0].members[1].name, "uEmissiveFactor");
+  EXPECT_EQ(blocks[0].members[1].offset, 16u);  // std140: vec4 after vec4
+
+  std::vector<ir::Sampler> textures = ir::samplers(shader.module, uses);
+  ASSERT_EQ(textures.size(), 1u);
+  EXPECT_EQ(textures[0].name, "uNormalTexture");
+  EXPECT_EQ(textures[0].binding, 2u);
+  EXPECT_TRUE(ir::isSampledImageType(uses, textures[0].type));
+  EXPECT_TRUE(ir::looseUniforms(shader.module, uses).empty());
+}
+
+TEST(ShaderIr, DefUseAndConstants) {
+  SmallShader shader = smallShader();
+  ir::DefUse uses(shader.module);
+  ir::Id normal = variableNamed(shader.module, "vNormal");
+  // vNormal: one OpLoad, one OpName, one OpDecorate (Location) and the entry-point interface.
+  int loads = 0, names = 0;
+  for (const ir::InstructionRef& user : uses.users(normal)) {
+    loads += user.instruction->opcode == spv::OpLoad;
+    names += user.instruction->opcode == spv::OpName;
+  }
+  EXPECT_EQ(loads, 1);
+  EXPECT_EQ(names, 1);
+  EXPECT_EQ(uses.decoration(normal, spv::DecorationLocation), 0u);
+  ASSERT_NE(uses.def(normal), nullptr);
+  EXPECT_EQ(uses.def(normal)->opcode, spv::OpVariable);
+  EXPECT_EQ(ir::pointerStorageClass(uses, uses.def(normal)->type_id), spv::StorageClassInput);
+
+  // The constant 2.0 of `max(n.z, 0.0) * 2.0` exists and reads back.
+  bool found_two = false;
+  for (const ir::Instruction& instruction : shader.module.types_values)
+    if (instruction.opcode == spv::OpConstant && ir::constantFloatValue(uses, instruction.result_id) == 2.0f)
+      found_two = true;
+  EXPECT_TRUE(found_two);
+}
+
+TEST(ShaderIr, CfgOfBranchAndLoop) {
+  SmallShader shader = smallShader();
+  const ir::Function& main_function = *shader.module.entryFunction(spv::ExecutionModelFragment);
+  ir::Cfg cfg = ir::buildCfg(main_function);
+  ASSERT_EQ(cfg.blocks.size(), main_function.blocks.size());
+  int loop_headers = 0, selection_headers = 0;
+  for (size_t b = 0; b < main_function.blocks.size(); ++b) {
+    const ir::Instruction* merge = main_function.blocks[b].mergeInstruction();
+    if (!merge) continue;
+    if (merge->opcode == spv::OpLoopMerge) {
+      ++loop_headers;
+      EXPECT_GE(cfg.continue_block[b], 0);
+    } else {
+      ++selection_headers;
+    }
+    EXPECT_GE(cfg.merge_block[b], 0);
+  }
+  EXPECT_EQ(loop_headers, 1);
+  EXPECT_EQ(selection_headers, 1);
+  // Predecessors mirror successors.
+  for (size_t b = 0; b < cfg.successors.size(); ++b)
+    for (int s : cfg.successors[b]) {
+      const auto& predecessors = cfg.predecessors[static_cast<size_t>(s)];
+      EXPECT_NE(std::find(predecessors.begin(), predecessors.end(), static_cast<int>(b)), predecessors.end());
+    }
+  // The structured order visits every block once, entry first, each header before its merge.
+  ASSERT_EQ(cfg.structured_order.size(), cfg.blocks.size());
+  EXPECT_EQ(cfg.structured_order[0], 0);
+  std::vector<int> position(cfg.blocks.size());
+  for (size_t i = 0; i < cfg.structured_order.size(); ++i)
+    position[static_cast<size_t>(cfg.structured_order[i])] = static_cast<int>(i);
+  for (size_t b = 0; b < cfg.blocks.size(); ++b) {
+    if (cfg.merge_block[b] < 0) continue;
+    EXPECT_LT(position[b], position[static_cast<size_t>(cfg.merge_block[b])]);
+    // Every block of the construct (reached from the header without the merge) precedes the merge.
+    for (int s : cfg.successors[b]) {
+      if (s == cfg.merge_block[b]) continue;
+      EXPECT_LT(position[static_cast<size_t>(s)], position[static_cast<size_t>(cfg.merge_block[b])]);
+    }
+  }
+}
+
+TEST(ShaderIr, BackwardSliceSeparatesInterpolatedFromTextured) {
+  SmallShader shader = smallShader();
+  ir::DefUse uses(shader.module);
+  // normalize(vNormal): only an input.
+  ir::Id normalized = ir::kNoId;
+  for (const ir::Block& block : shader.module.entryFunction(spv::ExecutionModelFragment)->blocks)
+    for (const ir::Instruction& instruction : block.instructions)
+      if (instruction.opcode == spv::OpExtInst && normalized == ir::kNoId) normalized = instruction.result_id;
+  ASSERT_NE(normalized, ir::kNoId);
+  ir::ValueSources normal_sources = ir::backwardSlice(shader.module, uses, normalized);
+  EXPECT_TRUE(normal_sources.reads_input);
+  EXPECT_FALSE(normal_sources.reads_uniform);
+  EXPECT_TRUE(normal_sources.onlyInputsUniformsConstants());
+  EXPECT_TRUE(normal_sources.global_reads.count(variableNamed(shader.module, "vNormal")));
+
+  // The texture sample: depends on a texture and on derivatives (implicit LOD).
+  ir::Id sample = lastOfOpcode(shader.module, spv::OpImageSampleImplicitLod);
+  ASSERT_NE(sample, ir::kNoId);
+  ir::ValueSources sample_sources = ir::backwardSlice(shader.module, uses, sample);
+  EXPECT_TRUE(sample_sources.reads_texture);
+  EXPECT_TRUE(sample_sources.uses_derivatives);
+  EXPECT_FALSE(sample_sources.onlyInputsUniformsConstants());
+
+  // The value stored to outColor: through locals `lit` (conditionally assigned: its condition
+  // joins the slice) and `sum` (a loop), plus the texture.
+  ir::Id out_value = ir::kNoId;
+  ir::Id out_color = variableNamed(shader.module, "outColor");
+  for (const ir::Block& block : shader.module.entryFunction(spv::ExecutionModelFragment)->blocks)
+    for (const ir::Instruction& instruction : block.instructions)
+      if (instruction.opcode == spv::OpStore && instruction.operands[0] == out_color)
+        out_value = instruction.operands[1];
+  ir::ValueSources out_sources = ir::backwardSlice(shader.module, uses, out_value);
+  EXPECT_TRUE(out_sources.reads_uniform);
+  EXPECT_TRUE(out_sources.reads_input);
+  EXPECT_TRUE(out_sources.reads_texture);
+  EXPECT_GT(out_sources.instructions.size(), sample_sources.instructions.size());
+  // The comparison `lit > 0.5` decides a store into `lit`, so it is in the slice.
+  ir::Id comparison = lastOfOpcode(shader.module, spv::OpFOrdGreaterThan);
+  ASSERT_NE(comparison, ir::kNoId);
+  EXPECT_TRUE(out_sources.instructions.count(comparison));
+}
+
+TEST(ShaderIr, MutationsKeepTheModuleValid) {
+  SmallShader shader = smallShader();
+  ir::Module& module = shader.module;
+  uint32_t bound = module.bound;
+  ir::Id two = module.constantFloat(2.0f);
+  EXPECT_EQ(module.bound, bound) << "2.0 exists already: de-duplicated";
+  ir::Id seven = module.constantFloat(7.0f);
+  EXPECT_EQ(seven, bound);
+  EXPECT_EQ(module.bound, bound + 1);
+  EXPECT_EQ(module.constantFloat(7.0f), seven);
+
+  // Operation removal by hand: replace `max(n.z,0)*2.0` (the OpFMul by 2.0) with its left operand.
+  ir::DefUse uses(module);
+  ir::Id product = ir::kNoId, left = ir::kNoId;
+  for (const ir::Block& block : module.entryFunction(spv::ExecutionModelFragment)->blocks)
+    for (const ir::Instruction& instruction : block.instructions)
+      if (instruction.opcode == spv::OpFMul && instruction.operands[1] == two) {
+        product = instruction.result_id;
+        left = instruction.operands[0];
+      }
+  ASSERT_NE(product, ir::kNoId);
+  EXPECT_FALSE(uses.users(product).empty());
+  module.replaceAllUses(product, left);
+  module.removeInstructions({product});
+  ir::DefUse after(module);
+  EXPECT_EQ(after.def(product), nullptr);
+  EXPECT_TRUE(after.users(product).empty());
+  std::vector<uint32_t> words = ir::emitModule(module);
+  auto valid = validateSpirv(words, "mutated");
+  EXPECT_TRUE(valid.ok()) << (valid.ok() ? "" : valid.error().message);
+  EXPECT_NE(ir::wordsHash(words), ir::wordsHash(shader.words));
+
+  // A new loose uniform and an instruction inserted before the store to outColor that scales the
+  // stored colour by it.
+  ir::Id vec4_type = module.typeVector(module.typeFloat(), 4);
+  ir::Id scale = module.addLooseUniform(vec4_type, "uAverageScale", 7);
+  EXPECT_EQ(module.addLooseUniform(vec4_type, "uAverageScale", 7), scale);
+  ir::Id out_color = variableNamed(module, "outColor");
+  ir::Function& main_function = *module.entryFunction(spv::ExecutionModelFragment);
+  bool inserted = false;
+  for (size_t b = 0; b < main_function.blocks.size() && !inserted; ++b) {
+    auto& list = main_function.blocks[b].instructions;
+    for (size_t i = 0; i < list.size(); ++i) {
+      if (list[i].opcode != spv::OpStore || list[i].operands[0] != out_color) continue;
+      ir::Id original = list[i].operands[1];
+      ir::Id loaded = module.allocateId(), scaled = module.allocateId();
+      std::vector<ir::Instruction> code = {
+          ir::makeInstruction(module, spv::OpLoad, vec4_type, loaded, {scale}),
+          ir::makeInstruction(module, spv::OpFMul, vec4_type, scaled, {original, loaded})};
+      EXPECT_EQ(code[1].is_id, (std::vector<bool>{true, true}));
+      list[i].operands[1] = scaled;
+      module.insertBefore({0, static_cast<int>(b), static_cast<int>(i)}, std::move(code));
+      inserted = true;
+      break;
+    }
+  }
+  ASSERT_TRUE(inserted);
+  words = ir::emitModule(module);
+  valid = validateSpirv(words, "with uniform");
+  EXPECT_TRUE(valid.ok()) << (valid.ok() ? "" : valid.error().message);
+  ir::DefUse final_uses(module);
+  std::vector<ir::LooseUniform> loose = ir::looseUniforms(module, final_uses);
+  ASSERT_EQ(loose.size(), 1u);
+  EXPECT_EQ(loose[0].name, "uAverageScale");
+  EXPECT_EQ(loose[0].location, 7u);
+}
+
+TEST(ShaderIr, ExtInstOperandsAreClassified) {
+  SmallShader shader = smallShader();
+  ir::Id import = shader.module.ext_inst_imports[0].result_id;
+  ir::Id float_type = shader.module.typeFloat();
+  ir::Instruction call = ir::makeInstruction(shader.module, spv::OpExtInst, float_type,
+                                             shader.module.allocateId(), {import, 4 /* FAbs */, 12});
+  EXPECT_EQ(call.is_id, (std::vector<bool>{true, false, true}));
+}
+
+TEST(ShaderIr, MalformedWordsGiveErrorsNotCrashes) {
+  SmallShader shader = smallShader();
+  EXPECT_FALSE(ir::parseModule(std::vector<uint32_t>{}).ok());
+  EXPECT_FALSE(ir::parseModule(std::vector<uint32_t>{1, 2, 3, 4, 5}).ok());
+  // Truncations at every length must fail cleanly (or parse a shorter valid prefix).
+  for (size_t length = 5; length < shader.words.size(); length += 7) {
+    std::vector<uint32_t> prefix(shader.words.begin(), shader.words.begin() + static_cast<std::ptrdiff_t>(length));
+    auto module = ir::parseModule(prefix);
+    if (module.ok()) {
+      EXPECT_EQ(ir::emitModule(*module), prefix);
+    }
+  }
+  // The second instruction's word count set to zero.
+  std::vector<uint32_t> broken = shader.words;
+  size_t second = 5 + (broken[5] >> 16);
+  broken[second] &= 0xffffu;
+  auto module = ir::parseModule(broken);
+  EXPECT_FALSE(module.ok());
+  if (!module.ok()) {
+    EXPECT_NE(module.error().message.find("word"), std::string::npos) << module.error().message;
+  }
+}
+
+}  // namespace
+}  // namespace duolod::shader
