@@ -1,0 +1,270 @@
+// Operation removal, op(a, b) → a | b (Sitthi-Amorn et al. 2011, "Genetic programming for shader
+// simplification"; Liang et al. §4.1): an arithmetic operation or a GLSL.std.450 call with two or
+// more value operands is replaced by one of its operands, when that operand has the result's type
+// (or is a scalar of the result's component type, then splatted: `v * s → s` gives vec(s)).
+// dot(a, b) cannot become a (float from vec3), so such a pair is never offered.
+//
+// Two kinds of value are never touched, because changing them breaks more than the image quality:
+//   - what decides whether a loop ends (a conditional branch inside a loop, with its backward
+//     slice): `i + 1 → i` would make the loop run forever;
+//   - in the vertex stage, what is written to gl_PerVertex / Position: moving the geometry is the
+//     mesh simplifier's business, not the shader's.
+// After the replacement the operation and whatever only it used are deleted, so the readable
+// module shrinks too.
+#include <glslang/SPIRV/GLSL.std.450.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <unordered_set>
+
+#include "shader/rules_internal.hpp"
+
+namespace duolod::shader {
+namespace {
+
+bool isRemovableArithmetic(spv::Op opcode) {
+  switch (opcode) {
+    case spv::OpFAdd: case spv::OpFSub: case spv::OpFMul: case spv::OpFDiv: case spv::OpFMod:
+    case spv::OpFRem: case spv::OpIAdd: case spv::OpISub: case spv::OpIMul: case spv::OpSDiv:
+    case spv::OpUDiv: case spv::OpSMod: case spv::OpUMod: case spv::OpSRem:
+    case spv::OpVectorTimesScalar: case spv::OpMatrixTimesScalar: case spv::OpVectorTimesMatrix:
+    case spv::OpMatrixTimesVector: case spv::OpMatrixTimesMatrix: case spv::OpDot:
+    case spv::OpOuterProduct: case spv::OpBitwiseAnd: case spv::OpBitwiseOr:
+    case spv::OpBitwiseXor: case spv::OpShiftLeftLogical: case spv::OpShiftRightLogical:
+    case spv::OpShiftRightArithmetic: case spv::OpSelect: case spv::OpExtInst:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// The value operands of an operation: its id operands, without OpExtInst's instruction-set id.
+std::vector<ir::Id> valueOperands(const ir::Instruction& instruction) {
+  std::vector<ir::Id> ids = instruction.idOperands();
+  if (instruction.opcode == spv::OpExtInst && !ids.empty()) ids.erase(ids.begin());
+  return ids;
+}
+
+// How an operand can stand in for the result.
+enum class Substitute { kNone, kSame, kSplat };
+
+Substitute substituteFor(const ir::DefUse& uses, const ir::Instruction& operation,
+                         ir::Id operand) {
+  const ir::Instruction* definition = uses.def(operand);
+  if (!definition || definition->type_id == ir::kNoId) return Substitute::kNone;
+  ir::Id operand_type = definition->type_id;
+  if (operand_type == operation.type_id) return Substitute::kSame;
+  ir::TypeInfo result = ir::typeInfo(uses, operation.type_id);
+  ir::TypeInfo source = ir::typeInfo(uses, operand_type);
+  if (result.opcode == spv::OpTypeVector && source.components == 1 &&
+      source.opcode != spv::OpTypeVector && operand_type == result.scalar_type)
+    return Substitute::kSplat;
+  return Substitute::kNone;
+}
+
+// Ids (in `function`) that must not change: the backward slices of the conditions of conditional
+// branches and switches inside loops, and everything in the functions those slices call.
+void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
+                           const ir::Function& function, std::unordered_set<ir::Id>& protect) {
+  ir::Cfg cfg = ir::buildCfg(function);
+  std::vector<bool> in_loop(cfg.blocks.size(), false);
+  for (size_t header = 0; header < cfg.blocks.size(); ++header) {
+    const ir::Instruction* merge = function.blocks[header].mergeInstruction();
+    if (!merge || merge->opcode != spv::OpLoopMerge) continue;
+    int merge_block = cfg.merge_block[header];
+    std::vector<int> stack = {static_cast<int>(header)};
+    std::vector<bool> seen(cfg.blocks.size(), false);
+    while (!stack.empty()) {
+      int block = stack.back();
+      stack.pop_back();
+      if (block == merge_block || seen[static_cast<size_t>(block)]) continue;
+      seen[static_cast<size_t>(block)] = true;
+      in_loop[static_cast<size_t>(block)] = true;
+      for (int next : cfg.successors[static_cast<size_t>(block)]) stack.push_back(next);
+    }
+  }
+  std::vector<ir::Id> callees;
+  for (size_t block = 0; block < cfg.blocks.size(); ++block) {
+    if (!in_loop[block]) continue;
+    const ir::Instruction& terminator = function.blocks[block].terminator();
+    if (terminator.opcode != spv::OpBranchConditional && terminator.opcode != spv::OpSwitch)
+      continue;
+    ir::ValueSources slice = ir::backwardSlice(module, uses, terminator.operands[0]);
+    for (ir::Id id : slice.instructions) {
+      protect.insert(id);
+      const ir::Instruction* definition = uses.def(id);
+      if (definition && definition->opcode == spv::OpFunctionCall)
+        callees.push_back(definition->operands[0]);
+    }
+  }
+  std::set<ir::Id> visited;
+  while (!callees.empty()) {
+    ir::Id callee_id = callees.back();
+    callees.pop_back();
+    const ir::Function* callee = module.findFunction(callee_id);
+    if (!visited.insert(callee_id).second || !callee) continue;
+    for (const ir::Block& block : callee->blocks)
+      for (const ir::Instruction& instruction : block.instructions) {
+        if (instruction.hasResult()) protect.insert(instruction.result_id);
+        if (instruction.opcode == spv::OpFunctionCall) callees.push_back(instruction.operands[0]);
+      }
+  }
+}
+
+// Ids the vertex stage writes into its position (gl_PerVertex members or a Position builtin).
+void protectVertexPosition(const ir::Module& module, const ir::DefUse& uses,
+                           std::unordered_set<ir::Id>& protect) {
+  std::set<ir::Id> position_variables;
+  for (const ir::InterfaceVariable& variable : ir::interfaceVariables(module, uses))
+    if (variable.storage == spv::StorageClassOutput && variable.builtin)
+      position_variables.insert(variable.variable);
+  auto basePointer = [&](ir::Id pointer) {
+    const ir::Instruction* definition = uses.def(pointer);
+    while (definition && (definition->opcode == spv::OpAccessChain ||
+                          definition->opcode == spv::OpInBoundsAccessChain))
+      definition = uses.def(definition->operands[0]);
+    return definition ? definition->result_id : ir::kNoId;
+  };
+  for (const ir::Function& function : module.functions)
+    for (const ir::Block& block : function.blocks)
+      for (const ir::Instruction& instruction : block.instructions)
+        if (instruction.opcode == spv::OpStore &&
+            position_variables.count(basePointer(instruction.operands[0]))) {
+          ir::ValueSources slice = ir::backwardSlice(module, uses, instruction.operands[1]);
+          protect.insert(slice.instructions.begin(), slice.instructions.end());
+        }
+}
+
+std::unordered_set<ir::Id> protectedValues(const ir::Module& module, const ir::DefUse& uses,
+                                           Stage stage) {
+  std::unordered_set<ir::Id> protect;
+  for (const ir::Function& function : module.functions)
+    protectLoopConditions(module, uses, function, protect);
+  if (stage == Stage::kVertex) protectVertexPosition(module, uses, protect);
+  return protect;
+}
+
+bool isGlslStd450(const ir::DefUse& uses, const ir::Instruction& instruction) {
+  if (instruction.opcode != spv::OpExtInst) return true;
+  const ir::Instruction* import = uses.def(instruction.operands[0]);
+  return import && import->opcode == spv::OpExtInstImport &&
+         import->literalString(0) == "GLSL.std.450";
+}
+
+// For one operation: the kept-operand choices (index among valueOperands) that are type-correct,
+// one per distinct operand id.
+std::vector<uint32_t> keptOperandChoices(const ir::DefUse& uses,
+                                         const ir::Instruction& instruction) {
+  std::vector<uint32_t> choices;
+  if (!isRemovableArithmetic(instruction.opcode) || !instruction.hasResult() ||
+      !isGlslStd450(uses, instruction))
+    return choices;
+  std::vector<ir::Id> operands = valueOperands(instruction);
+  if (operands.size() < 2) return choices;
+  std::set<ir::Id> offered;
+  for (size_t index = 0; index < operands.size(); ++index)
+    if (substituteFor(uses, instruction, operands[index]) != Substitute::kNone &&
+        offered.insert(operands[index]).second)
+      choices.push_back(static_cast<uint32_t>(index));
+  return choices;
+}
+
+// A readable name of the operation for descriptions ("mul", "mix"); the number when unnamed.
+std::string operationName(const ir::Instruction& instruction) {
+  static const std::map<uint32_t, const char*> kExtNames = {
+      {GLSLstd450Pow, "pow"},       {GLSLstd450Atan2, "atan"},   {GLSLstd450FMin, "min"},
+      {GLSLstd450FMax, "max"},      {GLSLstd450SMin, "min"},     {GLSLstd450SMax, "max"},
+      {GLSLstd450UMin, "min"},      {GLSLstd450UMax, "max"},     {GLSLstd450FClamp, "clamp"},
+      {GLSLstd450SClamp, "clamp"},  {GLSLstd450UClamp, "clamp"}, {GLSLstd450FMix, "mix"},
+      {GLSLstd450Step, "step"},     {GLSLstd450SmoothStep, "smoothstep"},
+      {GLSLstd450Fma, "fma"},       {GLSLstd450Cross, "cross"},  {GLSLstd450Reflect, "reflect"},
+      {GLSLstd450Refract, "refract"}, {GLSLstd450Distance, "distance"},
+      {GLSLstd450FaceForward, "faceforward"}, {GLSLstd450Ldexp, "ldexp"}};
+  static const std::map<spv::Op, const char*> kOpNames = {
+      {spv::OpFAdd, "add"}, {spv::OpIAdd, "add"}, {spv::OpFSub, "sub"}, {spv::OpISub, "sub"},
+      {spv::OpFMul, "mul"}, {spv::OpIMul, "mul"}, {spv::OpVectorTimesScalar, "mul"},
+      {spv::OpMatrixTimesScalar, "mul"}, {spv::OpVectorTimesMatrix, "mul"},
+      {spv::OpMatrixTimesVector, "mul"}, {spv::OpMatrixTimesMatrix, "mul"},
+      {spv::OpFDiv, "div"}, {spv::OpSDiv, "div"}, {spv::OpUDiv, "div"}, {spv::OpFMod, "mod"},
+      {spv::OpSMod, "mod"}, {spv::OpUMod, "mod"}, {spv::OpFRem, "rem"}, {spv::OpSRem, "rem"},
+      {spv::OpBitwiseAnd, "and"}, {spv::OpBitwiseOr, "or"}, {spv::OpBitwiseXor, "xor"},
+      {spv::OpShiftLeftLogical, "shl"}, {spv::OpShiftRightLogical, "shr"},
+      {spv::OpShiftRightArithmetic, "shr"}, {spv::OpSelect, "select"}, {spv::OpDot, "dot"},
+      {spv::OpOuterProduct, "outerProduct"}};
+  if (instruction.opcode == spv::OpExtInst) {
+    auto found = kExtNames.find(instruction.operands[1]);
+    return found != kExtNames.end() ? found->second
+                                    : "GLSL.std.450 #" + std::to_string(instruction.operands[1]);
+  }
+  auto found = kOpNames.find(instruction.opcode);
+  return found != kOpNames.end() ? found->second
+                                 : "op " + std::to_string(static_cast<uint32_t>(instruction.opcode));
+}
+
+}  // namespace
+
+std::vector<RuleSite> findOperationRemovalSites(const ShaderProgram& program, const RuleContext&) {
+  std::vector<RuleSite> sites;
+  for (Stage stage : {Stage::kVertex, Stage::kFragment}) {
+    const ir::Module& module = stageModule(program, stage);
+    ir::DefUse uses(module);
+    std::unordered_set<ir::Id> protect = protectedValues(module, uses, stage);
+    for (const ir::Function& function : module.functions)
+      for (const ir::Block& block : function.blocks)
+        for (const ir::Instruction& instruction : block.instructions) {
+          if (protect.count(instruction.result_id)) continue;
+          std::vector<ir::Id> operands = valueOperands(instruction);
+          for (uint32_t choice : keptOperandChoices(uses, instruction)) {
+            RuleSite site{.kind = RuleKind::kOperationRemoval,
+                          .stage = stage,
+                          .target = instruction.result_id,
+                          .choice = choice,
+                          .description = {}};
+            site.description = stageName(stage) + ": " + valueName(module, instruction.result_id) +
+                               " = " + operationName(instruction) + "(...) → " +
+                               valueName(module, operands[choice]);
+            sites.push_back(std::move(site));
+          }
+        }
+  }
+  return sites;
+}
+
+core::Result<ShaderProgram> applyOperationRemoval(const ShaderProgram& program,
+                                                  const RuleSite& site, const RuleContext&) {
+  const ir::Module& original = stageModule(program, site.stage);
+  ir::DefUse uses(original);
+  std::optional<ir::InstructionPosition> position = original.findPosition(site.target);
+  if (!position) return siteError(site, "the operation is no longer in the module");
+  const ir::Instruction& operation = original.functions[static_cast<size_t>(position->function)]
+                                         .blocks[static_cast<size_t>(position->block)]
+                                         .instructions[static_cast<size_t>(position->index)];
+  std::vector<uint32_t> choices = keptOperandChoices(uses, operation);
+  if (std::find(choices.begin(), choices.end(), site.choice) == choices.end())
+    return siteError(site, "operand " + std::to_string(site.choice) +
+                               " cannot replace the result (type or operation changed)");
+  if (protectedValues(original, uses, site.stage).count(site.target))
+    return siteError(site, "the value decides a loop's exit or the vertex position");
+  ir::Id kept = valueOperands(operation)[site.choice];
+  Substitute substitute = substituteFor(uses, operation, kept);
+  ir::Id result_type = operation.type_id;
+  uint32_t components = ir::componentCount(uses, result_type);
+
+  ShaderProgram rewritten = program;
+  ir::Module& module = stageModule(rewritten, site.stage);
+  ir::Id replacement = kept;
+  if (substitute == Substitute::kSplat) {
+    replacement = module.allocateId();
+    std::vector<uint32_t> constituents(components, kept);
+    module.insertBefore(*position, {ir::makeInstruction(module, spv::OpCompositeConstruct,
+                                                        result_type, replacement,
+                                                        std::move(constituents))});
+  }
+  module.replaceAllUses(site.target, replacement);
+  module.removeInstructions({site.target});
+  removeDeadPureInstructions(module);
+  return rewritten;
+}
+
+}  // namespace duolod::shader

@@ -1,0 +1,75 @@
+// Private to the rule implementations (src/shader/rule_*.cpp): one find/apply pair per rule, which
+// rules.cpp's enumerateSites / applyRule dispatch to, and the few helpers every rule shares.
+//
+// Contract of every pair:
+//   find*  returns the sites of that rule in `program` (any order: enumerateSites sorts them), each
+//          with kind, stage, target, choice and a description in words;
+//   apply* returns the rewritten program, or an Error when the site no longer applies (its target
+//          was removed by an earlier rule, or changed shape). It does not validate and does not
+//          touch `history` (applyRule does both).
+#pragma once
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "shader/ir.hpp"
+#include "shader/rules.hpp"
+
+namespace duolod::shader {
+
+// ---- the rules (files: rule_operation_removal.cpp, rule_move_to_parameter.cpp,
+// rule_per_vertex.cpp, rule_texture.cpp, rule_loop.cpp) ----
+std::vector<RuleSite> findOperationRemovalSites(const ShaderProgram& program,
+                                                const RuleContext& context);
+core::Result<ShaderProgram> applyOperationRemoval(const ShaderProgram& program,
+                                                  const RuleSite& site, const RuleContext& context);
+
+std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
+                                               const RuleContext& context);
+core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program,
+                                                 const RuleSite& site, const RuleContext& context);
+
+std::vector<RuleSite> findPerVertexSites(const ShaderProgram& program, const RuleContext& context);
+core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const RuleSite& site,
+                                           const RuleContext& context);
+
+std::vector<RuleSite> findTextureAverageSites(const ShaderProgram& program,
+                                              const RuleContext& context);
+core::Result<ShaderProgram> applyTextureAverage(const ShaderProgram& program,
+                                                const RuleSite& site, const RuleContext& context);
+
+std::vector<RuleSite> findTextureMipSites(const ShaderProgram& program, const RuleContext& context);
+core::Result<ShaderProgram> applyTextureMip(const ShaderProgram& program, const RuleSite& site,
+                                            const RuleContext& context);
+
+std::vector<RuleSite> findLoopTruncationSites(const ShaderProgram& program,
+                                              const RuleContext& context);
+core::Result<ShaderProgram> applyLoopTruncation(const ShaderProgram& program, const RuleSite& site,
+                                                const RuleContext& context);
+
+// ---- shared helpers (rules.cpp) ----
+
+// The module a site rewrites: the vertex or the fragment stage (other stages are not simplified).
+const ir::Module& stageModule(const ShaderProgram& program, Stage stage);
+ir::Module& stageModule(ShaderProgram& program, Stage stage);
+// "vertex" / "fragment".
+std::string stageName(Stage stage);
+
+// The error for a site that does not apply to `program` (any more): names the rule, stage,
+// target id and the reason.
+core::Error siteError(const RuleSite& site, const std::string& reason);
+
+// A readable name for a value in descriptions: its OpName, else "%<id>".
+std::string valueName(const ir::Module& module, ir::Id id);
+
+// True for opcodes whose result depends only on their operands and that have no side effects
+// (arithmetic, conversions, composites, GLSL.std.450 calls, image *sampling*): safe to delete
+// once unused.
+bool isPureOpcode(spv::Op opcode);
+
+// Removes, repeatedly, pure instructions (isPureOpcode) whose results nobody uses any more, so a
+// rule's now-dead operands disappear from the readable module too. Returns how many were removed.
+size_t removeDeadPureInstructions(ir::Module& module);
+
+}  // namespace duolod::shader
