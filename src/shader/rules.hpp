@@ -73,7 +73,8 @@ struct RuleSite {
   Stage stage = Stage::kFragment;  // the module rewritten (kPerVertex: the fragment value moved)
   ir::Id target = ir::kNoId;       // the instruction's result id (the sample, the operation, the
                                    // value moved; for loops the header block's label id)
-  uint32_t choice = 0;  // kOperationRemoval: index of the kept operand among the id operands;
+  uint32_t choice = 0;  // kOperationRemoval: index of the kept operand among the id operands
+                        // (for OpExtInst: after the instruction-set id);
                         // kLoopTruncation: iterations kept; kTextureMip: levels coarser; else 0
   std::string description;  // in words, with source names: "fbm loop: 4 → 2 iterations"
   bool operator==(const RuleSite& other) const {
