@@ -72,17 +72,9 @@ void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
   for (size_t header = 0; header < cfg.blocks.size(); ++header) {
     const ir::Instruction* merge = function.blocks[header].mergeInstruction();
     if (!merge || merge->opcode != spv::OpLoopMerge) continue;
-    int merge_block = cfg.merge_block[header];
-    std::vector<int> stack = {static_cast<int>(header)};
-    std::vector<bool> seen(cfg.blocks.size(), false);
-    while (!stack.empty()) {
-      int block = stack.back();
-      stack.pop_back();
-      if (block == merge_block || seen[static_cast<size_t>(block)]) continue;
-      seen[static_cast<size_t>(block)] = true;
-      in_loop[static_cast<size_t>(block)] = true;
-      for (int next : cfg.successors[static_cast<size_t>(block)]) stack.push_back(next);
-    }
+    std::vector<bool> blocks = loopBlocks(cfg, static_cast<int>(header));
+    for (size_t block = 0; block < blocks.size(); ++block)
+      if (blocks[block]) in_loop[block] = true;
   }
   std::vector<ir::Id> callees;
   for (size_t block = 0; block < cfg.blocks.size(); ++block) {

@@ -151,6 +151,20 @@ bool isPureOpcode(spv::Op opcode) {
   }
 }
 
+std::vector<bool> loopBlocks(const ir::Cfg& cfg, int header) {
+  std::vector<bool> in_loop(cfg.blocks.size(), false);
+  int merge_block = cfg.merge_block[static_cast<size_t>(header)];
+  std::vector<int> stack = {header};
+  while (!stack.empty()) {
+    int block = stack.back();
+    stack.pop_back();
+    if (block == merge_block || in_loop[static_cast<size_t>(block)]) continue;
+    in_loop[static_cast<size_t>(block)] = true;
+    for (int next : cfg.successors[static_cast<size_t>(block)]) stack.push_back(next);
+  }
+  return in_loop;
+}
+
 size_t removeDeadPureInstructions(ir::Module& module) {
   size_t removed_total = 0;
   for (;;) {
@@ -205,7 +219,8 @@ std::vector<RuleSite> enumerateSites(const ShaderProgram& program, const RuleCon
   using Finder = std::vector<RuleSite> (*)(const ShaderProgram&, const RuleContext&);
   // Indexed by RuleKind; nullptr: not implemented in this build.
   const std::array<Finder, kRuleKindCount> finders = {
-      &findOperationRemovalSites, nullptr, nullptr, nullptr, nullptr, nullptr};
+      &findOperationRemovalSites, nullptr, nullptr,
+      &findTextureAverageSites,   &findTextureMipSites, &findLoopTruncationSites};
   std::vector<RuleSite> sites;
   for (int kind = 0; kind < kRuleKindCount; ++kind) {
     if (!context.enabled[static_cast<size_t>(kind)] || !finders[static_cast<size_t>(kind)])
@@ -241,9 +256,9 @@ core::Result<ShaderProgram> applyRule(const ShaderProgram& program, const RuleSi
     case RuleKind::kOperationRemoval: result = applyOperationRemoval(program, site, context); break;
     case RuleKind::kMoveToParameter: break;
     case RuleKind::kPerVertex: break;
-    case RuleKind::kTextureAverage: break;
-    case RuleKind::kTextureMip: break;
-    case RuleKind::kLoopTruncation: break;
+    case RuleKind::kTextureAverage: result = applyTextureAverage(program, site, context); break;
+    case RuleKind::kTextureMip: result = applyTextureMip(program, site, context); break;
+    case RuleKind::kLoopTruncation: result = applyLoopTruncation(program, site, context); break;
   }
   if (!result.ok()) return result;
   result->history.push_back(site.description.empty() ? std::string(ruleName(site.kind))

@@ -68,6 +68,10 @@ std::string valueName(const ir::Module& module, ir::Id id);
 // once unused.
 bool isPureOpcode(spv::Op opcode);
 
+// The blocks of the loop whose header is block `header` of `cfg`: every block reachable from the
+// header without passing through its merge block (flags indexed like cfg.blocks).
+std::vector<bool> loopBlocks(const ir::Cfg& cfg, int header);
+
 // Removes, repeatedly, pure instructions (isPureOpcode) whose results nobody uses any more, so a
 // rule's now-dead operands disappear from the readable module too. Returns how many were removed.
 size_t removeDeadPureInstructions(ir::Module& module);
