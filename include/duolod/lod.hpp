@@ -1,0 +1,248 @@
+// duolod lod: the parts of the joint mesh + shader LOD of Liang et al., "Automatic Mesh and Shader
+// Level of Detail" (IEEE TVCG) that do not depend on how candidates are made: the distance levels
+// and their error bounds (§3.1, eq. 3/4), the pair search over sorted mesh and shader candidates
+// (§5.3, Algorithm 2) and its 2D brute-force counterpart, the smoothest path through the levels'
+// pair sets (§6.1, Algorithm 3, eq. 5), merging inefficient levels (§6.2), and the HTML report.
+//
+// Everything that renders is a callback (an evaluator), so the optimizers drive these functions
+// with real renders and the tests drive them with hand-made tables.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "duolod/core.hpp"
+#include "duolod/metric.hpp"
+#include "duolod/render.hpp"
+
+namespace duolod::lod {
+
+// ---------------------------------------------------------------------------------------------
+// Levels and bounds (§3.1, §3.3, §7).
+
+enum class LevelSpacing {
+  kLinear,     // d_i evenly spaced in [d_near, d_far] ("divide the distance into N levels", §3.3)
+  kGeometric,  // d_i in geometric progression: equal steps in projected size
+};
+
+struct LevelOptions {
+  // d_near, d_far, Q and e_max of eq. (4). The defaults (e_max = 0.1, Q = 0.5) are the most common
+  // values of the paper's Table 1; tableOneBound() has the per-asset rows.
+  metric::BoundConfig bound;
+  int level_count = 10;  // N: the paper's default (§7)
+  LevelSpacing spacing = LevelSpacing::kLinear;
+  render::Display display;
+  // Screen width / height: screen coverage is a fraction of the screen's area (as MSFT_lod loaders
+  // such as Babylon.js use it).
+  float screen_aspect = 16.0f / 9.0f;
+};
+
+// One row of Table 1: the bound the paper used for that asset.
+struct AssetBoundRow {
+  std::string_view asset;
+  float e_max = 0;
+  float q = 0;
+};
+std::span<const AssetBoundRow> tableOneBounds();
+// The row for `asset` (case-insensitive: "dragon", "imrod", "couch", "rocket", "statue").
+std::optional<AssetBoundRow> tableOneBound(std::string_view asset);
+
+struct DistanceLevel {
+  int index = 0;
+  double distance = 0;         // d_i, in asset units from the bounding-sphere centre
+  int footprint_px = 0;        // side of the square image the object covers (render::footprintPixels)
+  double per_pixel_bound = 0;  // e_a(d_i), eq. (4)
+  // π/4·footprint²: the pixels of the bounding sphere's disc. An estimate of s_d (eq. 3) before any
+  // image exists; the optimizers use the reference's measured coverage (metric::ImageError).
+  double disc_coverage_px = 0;
+  double screen_coverage = 0;  // disc pixels / screen pixels, in [0, 1]
+};
+
+// The N levels between d_near and d_far (level 0 at d_near, where e_a = 0: the original). Requires
+// level_count >= 1 and d_far > d_near (checked: bad options are an Error).
+core::Result<std::vector<DistanceLevel>> distanceLevels(const core::Sphere& bounds,
+                                                        const LevelOptions& options);
+// eq. (3): the largest ε_a a pair may have at this level, e_a(d_i)·s_d.
+inline double errorBound(const DistanceLevel& level, double coverage_px) {
+  return level.per_pixel_bound * coverage_px;
+}
+// Fraction of the screen area covered by the bounding sphere's disc at `distance`.
+double screenCoverage(const core::Sphere& bounds, double distance, const render::Display& display,
+                      float screen_aspect);
+
+// ---------------------------------------------------------------------------------------------
+// Pair search (§5.3, Algorithm 2). Mesh candidates are indexed 0 (the original M_0) .. K−1 (the
+// coarsest); shader candidates by their own index, visited in the order SortByError gives.
+
+struct PairEvaluation {
+  double error = 0;  // ε_a of eq. (1)/(6) against the supersampled original at d_i
+  double cost = 0;   // t = Cost(f(M, S, d_i)), measured or predicted (any unit, the same for all)
+};
+// Renders (or predicts) the pair (M_mesh, S_shader) at the level being searched.
+using PairEvaluator = std::function<core::Result<PairEvaluation>(int mesh, int shader)>;
+
+struct EvaluatedPair {
+  int mesh = 0;
+  int shader = 0;       // the shader candidate's own index
+  int shader_rank = 0;  // its position in the SortByError order
+  double error = 0;
+  double cost = 0;
+  bool within_bound = false;  // eq. (3)
+};
+
+struct PairSearchOptions {
+  double error_bound = 0;        // e_a(d_i)·s_{d_i} (errorBound())
+  double time_tolerance = 0.05;  // T: keep pairs with (t_n − t_0)/t_0 < T
+};
+
+struct PairSearchResult {
+  std::vector<EvaluatedPair> visited;  // every evaluation in order: the search path of Fig. 2
+  std::vector<EvaluatedPair> optimal;  // within the bound and within T of the cheapest, cheapest first
+  int evaluations = 0;
+};
+
+// SortByError (Algorithm 1, line 6): shader indices ordered by increasing error on M_0 at d_i
+// (ties keep index order).
+std::vector<int> sortByError(std::span<const double> error_on_original_mesh);
+
+// Algorithm 2: from (M_{K−1}, S_0), step to a finer mesh while the pair breaks the bound, else
+// record it and step to the next shader. At most K + L evaluations. An evaluator error stops the
+// search and is returned.
+core::Result<PairSearchResult> searchPairs(int mesh_count, std::span<const int> shader_order,
+                                           const PairEvaluator& evaluate,
+                                           const PairSearchOptions& options);
+// The 2D brute force the paper compares with: all K·L pairs.
+core::Result<PairSearchResult> searchPairsBruteForce(int mesh_count,
+                                                     std::span<const int> shader_order,
+                                                     const PairEvaluator& evaluate,
+                                                     const PairSearchOptions& options);
+
+// ---------------------------------------------------------------------------------------------
+// Smoothest path (§6.1, Algorithm 3).
+
+// A directed graph with non-negative weights, as adjacency lists.
+struct WeightedGraph {
+  struct Edge {
+    int to = 0;
+    double weight = 0;
+  };
+  std::vector<std::vector<Edge>> out_edges;  // per node
+  int addNode() {
+    out_edges.emplace_back();
+    return static_cast<int>(out_edges.size()) - 1;
+  }
+  void addEdge(int from, int to, double weight) { out_edges[from].push_back({to, weight}); }
+};
+
+struct ShortestPath {
+  std::vector<int> nodes;  // source .. target; empty when the target is unreachable
+  double length = 0;
+};
+// Dijkstra (1959) with a binary heap. Weights must be >= 0 (asserted: they are image errors).
+ShortestPath dijkstra(const WeightedGraph& graph, int source, int target);
+
+// Transition error ε_t of eq. (5): the pair `from` of level `level` and the pair `to` of level
+// level + 1, both rendered at d_{level+1}.
+using TransitionEvaluator = std::function<core::Result<double>(
+    int level, const EvaluatedPair& from, const EvaluatedPair& to)>;
+
+struct TransitionEdge {
+  int level = 0;  // from level → level + 1
+  int from = 0;   // index into level_pairs[level]
+  int to = 0;     // index into level_pairs[level + 1]
+  double error = 0;
+};
+struct SmoothPath {
+  std::vector<int> choice;         // per level, the index of the chosen pair in its set
+  std::vector<double> transition;  // per level i < N−1, ε_t(i) along the path
+  double total_transition = 0;
+  std::vector<TransitionEdge> edges;  // the whole graph G, for the report
+  int evaluations = 0;
+};
+// Algorithm 3: builds G over the pair sets of adjacent levels (every set must be non-empty) and
+// returns the path with the minimum total transition error.
+core::Result<SmoothPath> smoothestPath(std::span<const std::vector<EvaluatedPair>> level_pairs,
+                                       const TransitionEvaluator& transition_error);
+
+// ---------------------------------------------------------------------------------------------
+// Merging inefficient levels (§6.2).
+
+// Cost(f(M_l, S_l, d_i)) of level l's chosen pair at distance level i, and of the original pair
+// (M_0, S_0) at level i (t_0 in §6.2).
+using LevelCostEvaluator = std::function<core::Result<double>(int pair_level, int distance_level)>;
+using OriginalCostEvaluator = std::function<core::Result<double>(int distance_level)>;
+
+struct MergeDecision {
+  int level = 0;
+  int previous = 0;         // the kept level before it, whose pair would cover d_i if dropped
+  double previous_cost = 0;  // t_{i−1}: the previous kept pair at d_i
+  double cost = 0;           // t_i
+  double original_cost = 0;  // t_0
+  double gain = 0;           // (t_{i−1} − t_i)/t_0
+  bool dropped = false;
+};
+struct MergeResult {
+  std::vector<int> kept_levels;  // always starts with level 0
+  std::vector<MergeDecision> decisions;  // one per level >= 1
+};
+// Drops level i when (t_{i−1} − t_i)/t_0 < W, walking from level 1 outwards; after a drop, the
+// previous kept level is compared with the next one.
+core::Result<MergeResult> mergeInefficientLevels(int level_count, const LevelCostEvaluator& cost,
+                                                 const OriginalCostEvaluator& original_cost,
+                                                 double min_gain = 0.04 /* W */);
+
+// ---------------------------------------------------------------------------------------------
+// The HTML report (self-contained: inline CSS and SVG, images as PNG data URIs). Plain data, so an
+// optimizer fills it as it goes; absent parts are left out.
+
+struct ReportImage {
+  std::string caption;
+  core::ImageRGBA8 image;
+};
+struct ReportLevel {
+  int index = 0;
+  double distance = 0;
+  double screen_coverage = 0;
+  size_t triangles = 0;
+  std::string shader_summary;  // in words, e.g. "Phong per vertex, noise 2 octaves"
+  double error = 0;            // ε_a
+  double error_bound = 0;      // e_a·s_d
+  double transition_error = 0; // ε_t to the next level
+  double predicted_cost = 0;
+  double measured_cost = 0;
+  std::vector<ReportImage> images;  // e.g. wireframe, level render, reference
+};
+struct ReportSeries {
+  std::string name;  // e.g. "joint", "mesh only"
+  std::vector<double> x, y;
+};
+struct ReportPlot {
+  std::string title, x_label, y_label;
+  std::vector<ReportSeries> series;
+};
+struct ReportSearch {
+  std::string title;  // e.g. "level 3, d = 4.2"
+  int mesh_count = 0, shader_count = 0;
+  PairSearchResult result;
+};
+struct ReportTransitions {
+  std::vector<std::vector<EvaluatedPair>> level_pairs;
+  SmoothPath path;
+};
+struct ReportData {
+  std::string title;
+  std::vector<std::pair<std::string, std::string>> facts;  // asset, display, bound, timings...
+  std::vector<ReportLevel> levels;
+  std::vector<ReportPlot> plots;
+  std::vector<ReportSearch> searches;
+  std::optional<ReportTransitions> transitions;
+};
+std::string renderReportHtml(const ReportData& data);
+// Writes renderReportHtml() atomically.
+core::Status writeReport(const ReportData& data, const std::string& path);
+
+}  // namespace duolod::lod
