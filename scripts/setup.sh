@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libmeshoptimizer-dev gltfpack
   assimp-testmodels  # real (and deliberately broken) OBJ/PLY/glTF files for the robustness tests
+  chromium    # headless screenshot test of report.html
 )
 
 missing=()
@@ -29,4 +30,18 @@ if ((${#missing[@]})); then
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 else
   echo "duolod setup: all packages present"
+fi
+
+# The Khronos glTF-Validator (npm `gltf-validator`, a JS library) for scripts/validate-gltf.js, in
+# the gitignored .tools/ folder of the checkout. Tests that need it skip loudly without it.
+tools_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/.tools"
+if ! command -v npm >/dev/null; then
+  echo "duolod setup: WARNING: no node/npm (Node.js >= 18 from nodejs.org or Debian's nodejs+npm):" \
+       "the glTF validation tests will skip"
+elif [ ! -f "$tools_dir/node_modules/gltf-validator/package.json" ]; then
+  echo "duolod setup: fetching gltf-validator from npm into $tools_dir"
+  mkdir -p "$tools_dir"
+  npm install --prefix "$tools_dir" --no-audit --no-fund --silent gltf-validator@2.0.0-dev.3.10
+else
+  echo "duolod setup: gltf-validator present"
 fi

@@ -46,7 +46,8 @@ TEST(LodDijkstra, ZeroWeightsAndACycle) {
 std::vector<EvaluatedPair> pairsWithCosts(std::vector<double> costs) {
   std::vector<EvaluatedPair> pairs;
   for (size_t i = 0; i < costs.size(); ++i)
-    pairs.push_back({.mesh = static_cast<int>(i), .shader = 0, .cost = costs[i], .within_bound = true});
+    pairs.push_back(
+        {.mesh = static_cast<int>(i), .shader = 0, .cost = costs[i], .within_bound = true});
   return pairs;
 }
 
@@ -80,8 +81,10 @@ TEST(LodSmoothestPath, HandMadeThreeLevels) {
 
 TEST(LodSmoothestPath, SingleLevelAndErrors) {
   std::vector<std::vector<EvaluatedPair>> one = {pairsWithCosts({3, 1, 2})};
-  lod::TransitionEvaluator never = [](int, const EvaluatedPair&, const EvaluatedPair&)
-      -> core::Result<double> { return core::Error{"not called"}; };
+  lod::TransitionEvaluator never = [](int, const EvaluatedPair&,
+                                      const EvaluatedPair&) -> core::Result<double> {
+    return core::Error{"not called"};
+  };
   auto path = lod::smoothestPath(one, never);
   ASSERT_TRUE(path.ok());
   EXPECT_EQ(path->choice.size(), 1u);
@@ -96,8 +99,8 @@ TEST(LodSmoothestPath, SingleLevelAndErrors) {
   auto failed = lod::smoothestPath(two, never);
   ASSERT_FALSE(failed.ok());
   EXPECT_NE(failed.error().message.find("not called"), std::string::npos);
-  lod::TransitionEvaluator negative = [](int, const EvaluatedPair&, const EvaluatedPair&)
-      -> core::Result<double> { return -1.0; };
+  lod::TransitionEvaluator negative =
+      [](int, const EvaluatedPair&, const EvaluatedPair&) -> core::Result<double> { return -1.0; };
   EXPECT_FALSE(lod::smoothestPath(two, negative).ok());
 }
 
@@ -172,7 +175,8 @@ TEST(LodMerge, DropsLevelsThatGainLessThanW) {
       {0, 0, 88, 84},
       {0, 0, 0, 70},
   };
-  lod::LevelCostEvaluator pair_cost = [&](int pair_level, int distance_level) -> core::Result<double> {
+  lod::LevelCostEvaluator pair_cost = [&](int pair_level,
+                                          int distance_level) -> core::Result<double> {
     return cost[pair_level][distance_level];
   };
   lod::OriginalCostEvaluator original = [](int) -> core::Result<double> { return 100.0; };

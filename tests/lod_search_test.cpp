@@ -23,7 +23,7 @@ TEST(LodLevels, LinearLevelsSpanNearToFarWithTheBoundOfEquation4) {
   ASSERT_EQ(levels->size(), 10u);
   EXPECT_DOUBLE_EQ(levels->front().distance, 2.0);
   EXPECT_DOUBLE_EQ(levels->back().distance, 20.0);
-  EXPECT_DOUBLE_EQ((*levels)[1].distance, 4.0);  // steps of (20 − 2)/9
+  EXPECT_DOUBLE_EQ((*levels)[1].distance, 4.0);     // steps of (20 − 2)/9
   EXPECT_EQ(levels->front().per_pixel_bound, 0.0);  // the original's level: no error allowed
   EXPECT_NEAR(levels->back().per_pixel_bound, 0.1, 1e-7);
   // eq. (4) at level 3: ((8 − 2)/18)^0.5 · 0.1.
@@ -98,8 +98,8 @@ Table separableTable(int mesh_count, int shader_count) {
   table.cost = table.error;
   for (int m = 0; m < mesh_count; ++m)
     for (int s = 0; s < shader_count; ++s) {
-      table.error[m][s] = m * 1.0 + s * 2.0;             // monotone in both
-      table.cost[m][s] = 100.0 - 3.0 * m - 5.0 * s;      // simpler is cheaper
+      table.error[m][s] = m * 1.0 + s * 2.0;         // monotone in both
+      table.cost[m][s] = 100.0 - 3.0 * m - 5.0 * s;  // simpler is cheaper
     }
   return table;
 }
@@ -115,12 +115,14 @@ TEST(LodSearch, WalksTheBoundaryOfAHandMadeTable) {
   // s=0: m ≤ 3; s=1: m ≤ 1; s=2: none. Costs 100 − 3m − 5s: boundary (3,0)=91, (1,1)=92.
   Table table = separableTable(4, 3);
   auto order = identityOrder(3);
-  auto result = lod::searchPairs(4, order, table.evaluator(), {.error_bound = 4.0, .time_tolerance = 0.0});
+  auto result =
+      lod::searchPairs(4, order, table.evaluator(), {.error_bound = 4.0, .time_tolerance = 0.0});
   ASSERT_TRUE(result.ok()) << result.error().message;
   // Path: (3,0) ok → (3,1)=5 no → (2,1)=4 no → (1,1)=3 ok → (1,2)=5 no → (0,2)=4 no → stop.
   std::vector<std::pair<int, int>> path;
   for (const EvaluatedPair& p : result->visited) path.push_back({p.mesh, p.shader});
-  EXPECT_EQ(path, (std::vector<std::pair<int, int>>{{3, 0}, {3, 1}, {2, 1}, {1, 1}, {1, 2}, {0, 2}}));
+  EXPECT_EQ(path,
+            (std::vector<std::pair<int, int>>{{3, 0}, {3, 1}, {2, 1}, {1, 1}, {1, 2}, {0, 2}}));
   EXPECT_EQ(result->evaluations, 6);
   EXPECT_EQ(table.calls, 6);
   ASSERT_EQ(result->optimal.size(), 1u);
@@ -129,14 +131,16 @@ TEST(LodSearch, WalksTheBoundaryOfAHandMadeTable) {
   EXPECT_DOUBLE_EQ(result->optimal[0].cost, 91.0);
 
   // With T = 2%, (1,1) at 92 is within (92 − 91)/91 = 1.1% of the best and joins the set.
-  auto tolerant = lod::searchPairs(4, order, table.evaluator(), {.error_bound = 4.0, .time_tolerance = 0.02});
+  auto tolerant =
+      lod::searchPairs(4, order, table.evaluator(), {.error_bound = 4.0, .time_tolerance = 0.02});
   ASSERT_TRUE(tolerant.ok());
   ASSERT_EQ(tolerant->optimal.size(), 2u);
   EXPECT_EQ(tolerant->optimal[1].mesh, 1);
   EXPECT_EQ(tolerant->optimal[1].shader, 1);
 
   // The brute force finds the same optimum with all 12 evaluations.
-  auto brute = lod::searchPairsBruteForce(4, order, table.evaluator(), {.error_bound = 4.0, .time_tolerance = 0.0});
+  auto brute = lod::searchPairsBruteForce(4, order, table.evaluator(),
+                                          {.error_bound = 4.0, .time_tolerance = 0.0});
   ASSERT_TRUE(brute.ok());
   EXPECT_EQ(brute->evaluations, 12);
   ASSERT_EQ(brute->optimal.size(), 1u);

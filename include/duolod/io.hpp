@@ -4,8 +4,11 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "duolod/core.hpp"
 
@@ -35,6 +38,44 @@ core::Result<core::Asset> readOff(const std::string& path, const LoadOptions& op
 // or .glb (everything embedded) by extension.
 core::Status writeGltf(const core::Asset& asset, const std::string& path);
 core::Status writeObj(const core::Asset& asset, const std::string& path);
+
+// The LOD chain as one glTF (.gltf or .glb): one node and mesh per level, all sharing the asset's
+// materials and textures. Node 0 (level 0) lists the coarser nodes in its MSFT_lod extension and
+// `extras.MSFT_screencoverage` holds one value per level: the screen-area fraction below which the
+// next level takes over (the last is 0). Only node 0 is in the scene. Requires one coverage per
+// level, decreasing; `level_meshes` replace asset.mesh.
+core::Status writeGltfLodChain(const core::Asset& asset, std::span<const core::Mesh> level_meshes,
+                               std::span<const double> screen_coverage, const std::string& path);
+
+// lod.json, the policy the runtime (include/duolod/runtime.hpp) reads; see that header for the
+// fields it needs. Costs are in the unit `cost_unit` names; absent values are written as null.
+struct LodJsonLevel {
+  int level = 0;
+  double distance = 0;          // d_i the level was optimized at
+  double switch_distance = 0;   // from here on this level is used (0 for level 0)
+  double screen_coverage = 1;   // screen-area fraction at switch_distance (1 for level 0)
+  size_t triangles = 0, vertices = 0;
+  std::string mesh_file;
+  std::string shader_summary;   // in words
+  std::vector<std::pair<std::string, std::string>> shader_files;  // kind -> file name
+  double error = 0, error_bound = 0;        // ε_a and e_a(d_i)·s_d (eq. 3)
+  std::optional<double> transition_error;   // ε_t to the next level (eq. 5); none for the last
+  std::optional<double> predicted_cost, measured_cost;
+};
+struct LodJsonDocument {
+  std::string asset_name, asset_source;
+  core::Sphere bounds;
+  float fov_y_deg = 45, screen_aspect = 16.0f / 9.0f;
+  int screen_height_px = 1080;
+  double d_near = 0, d_far = 0, q = 0, e_max = 0;  // eq. (4)
+  double time_tolerance = 0, merge_min_gain = 0;   // T (Algorithm 2), W (§6.2)
+  std::string optimizer, cost_source, cost_unit;   // e.g. "separate", "measured", "ms"
+  std::vector<LodJsonLevel> levels;
+};
+std::string lodJsonText(const LodJsonDocument& document);
+// Checks what the runtime relies on (levels present, switch distances increasing, coverages in
+// [0, 1] decreasing) and writes atomically.
+core::Status writeLodJson(const LodJsonDocument& document, const std::string& path);
 
 // Images.
 core::Result<core::ImageRGBA8> readImage(const std::string& path);  // PNG, JPEG, ... via stb

@@ -53,8 +53,8 @@ std::optional<AssetBoundRow> tableOneBound(std::string_view asset);
 
 struct DistanceLevel {
   int index = 0;
-  double distance = 0;         // d_i, in asset units from the bounding-sphere centre
-  int footprint_px = 0;        // side of the square image the object covers (render::footprintPixels)
+  double distance = 0;   // d_i, in asset units from the bounding-sphere centre
+  int footprint_px = 0;  // side of the square image the object covers (render::footprintPixels)
   double per_pixel_bound = 0;  // e_a(d_i), eq. (4)
   // π/4·footprint²: the pixels of the bounding sphere's disc. An estimate of s_d (eq. 3) before any
   // image exists; the optimizers use the reference's measured coverage (metric::ImageError).
@@ -101,7 +101,8 @@ struct PairSearchOptions {
 
 struct PairSearchResult {
   std::vector<EvaluatedPair> visited;  // every evaluation in order: the search path of Fig. 2
-  std::vector<EvaluatedPair> optimal;  // within the bound and within T of the cheapest, cheapest first
+  std::vector<EvaluatedPair>
+      optimal;  // within the bound and within T of the cheapest, cheapest first
   int evaluations = 0;
 };
 
@@ -147,8 +148,8 @@ ShortestPath dijkstra(const WeightedGraph& graph, int source, int target);
 
 // Transition error ε_t of eq. (5): the pair `from` of level `level` and the pair `to` of level
 // level + 1, both rendered at d_{level+1}.
-using TransitionEvaluator = std::function<core::Result<double>(
-    int level, const EvaluatedPair& from, const EvaluatedPair& to)>;
+using TransitionEvaluator = std::function<core::Result<double>(int level, const EvaluatedPair& from,
+                                                               const EvaluatedPair& to)>;
 
 struct TransitionEdge {
   int level = 0;  // from level → level + 1
@@ -178,7 +179,7 @@ using OriginalCostEvaluator = std::function<core::Result<double>(int distance_le
 
 struct MergeDecision {
   int level = 0;
-  int previous = 0;         // the kept level before it, whose pair would cover d_i if dropped
+  int previous = 0;          // the kept level before it, whose pair would cover d_i if dropped
   double previous_cost = 0;  // t_{i−1}: the previous kept pair at d_i
   double cost = 0;           // t_i
   double original_cost = 0;  // t_0
@@ -186,7 +187,7 @@ struct MergeDecision {
   bool dropped = false;
 };
 struct MergeResult {
-  std::vector<int> kept_levels;  // always starts with level 0
+  std::vector<int> kept_levels;          // always starts with level 0
   std::vector<MergeDecision> decisions;  // one per level >= 1
 };
 // Drops level i when (t_{i−1} − t_i)/t_0 < W, walking from level 1 outwards; after a drop, the
@@ -208,10 +209,10 @@ struct ReportLevel {
   double distance = 0;
   double screen_coverage = 0;
   size_t triangles = 0;
-  std::string shader_summary;  // in words, e.g. "Phong per vertex, noise 2 octaves"
-  double error = 0;            // ε_a
-  double error_bound = 0;      // e_a·s_d
-  double transition_error = 0; // ε_t to the next level
+  std::string shader_summary;   // in words, e.g. "Phong per vertex, noise 2 octaves"
+  double error = 0;             // ε_a
+  double error_bound = 0;       // e_a·s_d
+  double transition_error = 0;  // ε_t to the next level
   double predicted_cost = 0;
   double measured_cost = 0;
   std::vector<ReportImage> images;  // e.g. wireframe, level render, reference

@@ -1,11 +1,10 @@
 // glTF 2.0 writer (Khronos glTF 2.0 specification §5 for the JSON schema, §4.4 for GLB): one mesh
 // with a primitive per submesh, metallic-roughness materials, PNG textures, written as .gltf with a
 // .bin and PNG files beside it, or as a single .glb. Every file goes through writeFileAtomic.
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "duolod/io.hpp"
 
@@ -37,8 +36,8 @@ class GltfBuilder {
   int addFloatAccessor(const std::vector<T>& stream, const char* type, bool with_bounds) {
     int components = static_cast<int>(sizeof(T) / sizeof(float));
     int view = addView(stream.data(), stream.size() * sizeof(T), kArrayBuffer);
-    json accessor = {{"bufferView", view}, {"componentType", kFloat},
-                     {"count", stream.size()}, {"type", type}};
+    json accessor = {
+        {"bufferView", view}, {"componentType", kFloat}, {"count", stream.size()}, {"type", type}};
     if (with_bounds) {  // required for POSITION (glTF §5.1.1)
       std::vector<float> lo(components, INFINITY), hi(components, -INFINITY);
       for (const T& v : stream)
@@ -56,8 +55,10 @@ class GltfBuilder {
 
   int addIndexAccessor(const uint32_t* indices, size_t count) {
     int view = addView(indices, count * 4, kElementArrayBuffer);
-    accessors_.push_back({{"bufferView", view}, {"componentType", kUnsignedInt},
-                          {"count", count}, {"type", "SCALAR"}});
+    accessors_.push_back({{"bufferView", view},
+                          {"componentType", kUnsignedInt},
+                          {"count", count},
+                          {"type", "SCALAR"}});
     return static_cast<int>(accessors_.size()) - 1;
   }
 
@@ -67,8 +68,9 @@ class GltfBuilder {
 };
 
 json materialJson(const core::Material& m) {
-  json pbr = {{"baseColorFactor", {m.base_color_factor.x, m.base_color_factor.y,
-                                   m.base_color_factor.z, m.base_color_factor.w}},
+  json pbr = {{"baseColorFactor",
+               {m.base_color_factor.x, m.base_color_factor.y, m.base_color_factor.z,
+                m.base_color_factor.w}},
               {"metallicFactor", m.metallic_factor},
               {"roughnessFactor", m.roughness_factor}};
   if (m.base_color_texture >= 0) pbr["baseColorTexture"] = {{"index", m.base_color_texture}};
@@ -99,13 +101,17 @@ bool sameFile(const std::string& a, const std::string& b) {
   return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
 }
 
-}  // namespace
-
-core::Status writeGltf(const core::Asset& asset, const std::string& path) {
+// Writes `meshes` (one node each) with the asset's materials and textures. With `screen_coverage`
+// non-empty, node 0 chains the others through MSFT_lod and only node 0 is in the scene.
+core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::Mesh> meshes,
+                               std::span<const double> screen_coverage, const std::string& path) {
   if (sameFile(path, asset.source_path))
     return Error{path + ": refusing to overwrite the asset's own source file"};
-  if (auto valid = core::validateMesh(asset.mesh); !valid)
-    return Error{path + ": cannot write an invalid mesh: " + valid.error().message};
+  for (size_t i = 0; i < meshes.size(); ++i)
+    if (auto valid = core::validateMesh(meshes[i]); !valid)
+      return Error{path + ": cannot write an invalid mesh" +
+                   (meshes.size() > 1 ? " (level " + std::to_string(i) + ")" : std::string()) +
+                   ": " + valid.error().message};
   fs::path target(path);
   std::string extension = target.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
@@ -113,25 +119,44 @@ core::Status writeGltf(const core::Asset& asset, const std::string& path) {
   if (!binary && extension != ".gltf")
     return Error{path + ": glTF output needs a .gltf or .glb extension"};
 
-  const core::Mesh& mesh = asset.mesh;
   GltfBuilder builder;
-  json attributes = {{"POSITION", builder.addFloatAccessor(mesh.positions, "VEC3", true)}};
-  if (!mesh.normals.empty()) attributes["NORMAL"] = builder.addFloatAccessor(mesh.normals, "VEC3", false);
-  if (!mesh.tangents.empty())
-    attributes["TANGENT"] = builder.addFloatAccessor(mesh.tangents, "VEC4", false);
-  if (!mesh.uv0.empty()) attributes["TEXCOORD_0"] = builder.addFloatAccessor(mesh.uv0, "VEC2", false);
-  if (!mesh.uv1.empty()) attributes["TEXCOORD_1"] = builder.addFloatAccessor(mesh.uv1, "VEC2", false);
-  if (!mesh.colors.empty()) attributes["COLOR_0"] = builder.addFloatAccessor(mesh.colors, "VEC4", false);
+  json gltf_meshes = json::array(), nodes = json::array();
+  for (size_t level = 0; level < meshes.size(); ++level) {
+    const core::Mesh& mesh = meshes[level];
+    json attributes = {{"POSITION", builder.addFloatAccessor(mesh.positions, "VEC3", true)}};
+    if (!mesh.normals.empty())
+      attributes["NORMAL"] = builder.addFloatAccessor(mesh.normals, "VEC3", false);
+    if (!mesh.tangents.empty())
+      attributes["TANGENT"] = builder.addFloatAccessor(mesh.tangents, "VEC4", false);
+    if (!mesh.uv0.empty())
+      attributes["TEXCOORD_0"] = builder.addFloatAccessor(mesh.uv0, "VEC2", false);
+    if (!mesh.uv1.empty())
+      attributes["TEXCOORD_1"] = builder.addFloatAccessor(mesh.uv1, "VEC2", false);
+    if (!mesh.colors.empty())
+      attributes["COLOR_0"] = builder.addFloatAccessor(mesh.colors, "VEC4", false);
 
-  json primitives = json::array();
-  for (const core::Submesh& sub : mesh.submeshes) {
-    if (sub.index_count == 0) continue;
-    json primitive = {{"attributes", attributes},
-                      {"indices", builder.addIndexAccessor(mesh.indices.data() + sub.first_index,
-                                                           sub.index_count)},
-                      {"mode", 4}};
-    if (sub.material < asset.materials.size()) primitive["material"] = sub.material;
-    primitives.push_back(primitive);
+    json primitives = json::array();
+    for (const core::Submesh& sub : mesh.submeshes) {
+      if (sub.index_count == 0) continue;
+      json primitive = {{"attributes", attributes},
+                        {"indices", builder.addIndexAccessor(mesh.indices.data() + sub.first_index,
+                                                             sub.index_count)},
+                        {"mode", 4}};
+      if (sub.material < asset.materials.size()) primitive["material"] = sub.material;
+      primitives.push_back(primitive);
+    }
+    std::string name = target.stem().string();
+    if (meshes.size() > 1) name += "_LOD" + std::to_string(level);
+    gltf_meshes.push_back({{"primitives", primitives}, {"name", name}});
+    nodes.push_back({{"mesh", level}, {"name", name}});
+  }
+  const bool lod_chain = !screen_coverage.empty();
+  if (lod_chain && meshes.size() > 1) {
+    // MSFT_lod: the finest node lists the coarser ones in order of decreasing detail.
+    json ids = json::array();
+    for (size_t level = 1; level < meshes.size(); ++level) ids.push_back(level);
+    nodes[0]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
+    nodes[0]["extras"] = {{"MSFT_screencoverage", screen_coverage}};
   }
 
   json materials = json::array();
@@ -146,8 +171,8 @@ core::Status writeGltf(const core::Asset& asset, const std::string& path) {
     if (image.pixels.empty()) image = {1, 1, {255, 255, 255, 255}};  // keep indices stable
     std::vector<uint8_t> png = encodePng(image);
     if (binary) {
-      images.push_back({{"bufferView", builder.addView(png.data(), png.size(), 0)},
-                        {"mimeType", "image/png"}});
+      images.push_back(
+          {{"bufferView", builder.addView(png.data(), png.size(), 0)}, {"mimeType", "image/png"}});
     } else {
       std::string name = target.stem().string() + "_texture" + std::to_string(t) + ".png";
       images.push_back({{"uri", name}});
@@ -160,18 +185,19 @@ core::Status writeGltf(const core::Asset& asset, const std::string& path) {
       {"asset", {{"version", "2.0"}, {"generator", "duolod " DUOLOD_VERSION}}},
       {"scene", 0},
       {"scenes", {{{"nodes", {0}}}}},
-      {"nodes", {{{"mesh", 0}, {"name", target.stem().string()}}}},
-      {"meshes", {{{"primitives", primitives}, {"name", target.stem().string()}}}},
+      {"nodes", nodes},
+      {"meshes", gltf_meshes},
       {"accessors", builder.accessors_},
       {"bufferViews", builder.views_},
   };
+  if (lod_chain && meshes.size() > 1) document["extensionsUsed"] = {"MSFT_lod"};
   if (!materials.empty()) document["materials"] = materials;
   if (!textures.empty()) {
     document["textures"] = textures;
     document["images"] = images;
     // Trilinear, repeat: what duolod renders with.
-    document["samplers"] = {{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497},
-                             {"wrapT", 10497}}};
+    document["samplers"] = {
+        {{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 10497}, {"wrapT", 10497}}};
   }
   while (builder.bin_.size() % 4) builder.bin_.push_back(0);
 
@@ -206,11 +232,35 @@ core::Status writeGltf(const core::Asset& asset, const std::string& path) {
     for (const auto& [file, bytes] : side_files)
       if (fs::exists(file, ec) &&
           fs::weakly_canonical(fs::path(file).parent_path(), ec) == source_folder)
-        return Error{path + ": would replace " + file + " beside the source asset; write elsewhere"};
+        return Error{path + ": would replace " + file +
+                     " beside the source asset; write elsewhere"};
   }
   for (const auto& [file, bytes] : side_files)
     if (auto written = writeFileAtomic(file, bytes); !written) return written;
   return writeFileAtomic(path, document.dump(2));
+}
+
+}  // namespace
+
+core::Status writeGltf(const core::Asset& asset, const std::string& path) {
+  return writeGltfDocument(asset, std::span<const core::Mesh>(&asset.mesh, 1), {}, path);
+}
+
+core::Status writeGltfLodChain(const core::Asset& asset, std::span<const core::Mesh> level_meshes,
+                               std::span<const double> screen_coverage, const std::string& path) {
+  if (level_meshes.empty()) return Error{path + ": a LOD chain needs at least one level"};
+  if (screen_coverage.size() != level_meshes.size())
+    return Error{path + ": " + std::to_string(level_meshes.size()) +
+                 " levels need as many screen " + "coverage values, got " +
+                 std::to_string(screen_coverage.size())};
+  for (size_t i = 0; i < screen_coverage.size(); ++i) {
+    if (!(screen_coverage[i] >= 0 && screen_coverage[i] <= 1))
+      return Error{path + ": screen coverage " + std::to_string(i) + " is not in [0, 1]"};
+    if (i > 0 && screen_coverage[i] > screen_coverage[i - 1])
+      return Error{path + ": screen coverage must decrease from level to level (level " +
+                   std::to_string(i) + ")"};
+  }
+  return writeGltfDocument(asset, level_meshes, screen_coverage, path);
 }
 
 }  // namespace duolod::io

@@ -27,10 +27,14 @@ bool equalsIgnoringCase(std::string_view a, std::string_view b) {
          });
 }
 
-double discPixels(int footprint_px) { return kPi / 4.0 * double(footprint_px) * footprint_px; }
+double discPixels(int footprint_px) {
+  return kPi / 4.0 * double(footprint_px) * footprint_px;
+}
 }  // namespace
 
-std::span<const AssetBoundRow> tableOneBounds() { return kTableOne; }
+std::span<const AssetBoundRow> tableOneBounds() {
+  return kTableOne;
+}
 
 std::optional<AssetBoundRow> tableOneBound(std::string_view asset) {
   for (const AssetBoundRow& row : kTableOne)
@@ -59,8 +63,9 @@ core::Result<std::vector<DistanceLevel>> distanceLevels(const core::Sphere& boun
                        std::to_string(bound.q) + ", e_max = " + std::to_string(bound.e_max)};
   if (options.display.height_px < 1 || !(options.display.fov_y_deg > 0) ||
       !(options.display.fov_y_deg < 180) || !(options.screen_aspect > 0))
-    return core::Error{"LOD levels: the display needs height >= 1 px, 0 < fov < 180 degrees and a "
-                       "positive aspect"};
+    return core::Error{
+        "LOD levels: the display needs height >= 1 px, 0 < fov < 180 degrees and a "
+        "positive aspect"};
 
   std::vector<DistanceLevel> levels(options.level_count);
   const int last = options.level_count - 1;

@@ -18,7 +18,8 @@ core::Result<MergeResult> mergeInefficientLevels(int level_count, const LevelCos
   for (int level = 1; level < level_count; ++level) {
     MergeDecision decision{.level = level, .previous = result.kept_levels.back()};
     auto previous_cost = cost(decision.previous, level);
-    if (!previous_cost) return fail("cost of the previous level's pair", level, previous_cost.error());
+    if (!previous_cost)
+      return fail("cost of the previous level's pair", level, previous_cost.error());
     auto own_cost = cost(level, level);
     if (!own_cost) return fail("cost of the level's pair", level, own_cost.error());
     auto reference_cost = original_cost(level);

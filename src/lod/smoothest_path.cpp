@@ -56,9 +56,11 @@ core::Result<SmoothPath> smoothestPath(std::span<const std::vector<EvaluatedPair
   const int source = graph.addNode();
   std::vector<std::vector<int>> node_of(level_pairs.size());
   for (size_t level = 0; level < level_pairs.size(); ++level)
-    for (size_t p = 0; p < level_pairs[level].size(); ++p) node_of[level].push_back(graph.addNode());
+    for (size_t p = 0; p < level_pairs[level].size(); ++p)
+      node_of[level].push_back(graph.addNode());
   const int sink = graph.addNode();
-  std::vector<int> level_of_node(graph.out_edges.size(), -1), pair_of_node(graph.out_edges.size(), -1);
+  std::vector<int> level_of_node(graph.out_edges.size(), -1),
+      pair_of_node(graph.out_edges.size(), -1);
   for (size_t level = 0; level < level_pairs.size(); ++level)
     for (size_t p = 0; p < node_of[level].size(); ++p) {
       level_of_node[node_of[level][p]] = static_cast<int>(level);
@@ -92,7 +94,8 @@ core::Result<SmoothPath> smoothestPath(std::span<const std::vector<EvaluatedPair
   // Line 15.
   ShortestPath path = dijkstra(graph, source, sink);
   assert(path.nodes.size() == level_pairs.size() + 2);  // every level is reachable
-  for (size_t k = 1; k + 1 < path.nodes.size(); ++k) result.choice.push_back(pair_of_node[path.nodes[k]]);
+  for (size_t k = 1; k + 1 < path.nodes.size(); ++k)
+    result.choice.push_back(pair_of_node[path.nodes[k]]);
   for (const TransitionEdge& edge : result.edges)
     if (edge.from == result.choice[edge.level] && edge.to == result.choice[edge.level + 1])
       result.transition.push_back(edge.error);

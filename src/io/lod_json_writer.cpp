@@ -1,0 +1,95 @@
+// lod.json: the LOD policy of Liang et al., "Automatic Mesh and Shader Level of Detail" (per level
+// the switch distance d_i of §3.1, the bound of eq. 3/4, absolute and transition errors of eq. 1/5,
+// predicted and measured cost), in the schema include/duolod/runtime.hpp reads.
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "duolod/io.hpp"
+
+namespace duolod::io {
+namespace {
+using nlohmann::ordered_json;
+
+ordered_json optionalNumber(const std::optional<double>& value) {
+  return value ? ordered_json(*value) : ordered_json(nullptr);
+}
+
+core::Status checkDocument(const LodJsonDocument& document, const std::string& path) {
+  if (document.levels.empty()) return core::Error{path + ": lod.json needs at least one level"};
+  for (size_t i = 0; i < document.levels.size(); ++i) {
+    const LodJsonLevel& level = document.levels[i];
+    std::string where = path + ": levels[" + std::to_string(i) + "]";
+    if (!std::isfinite(level.switch_distance) || level.switch_distance < 0)
+      return core::Error{where + ".switch_distance must be a non-negative number"};
+    if (!(level.screen_coverage >= 0 && level.screen_coverage <= 1))
+      return core::Error{where + ".screen_coverage must be in [0, 1]"};
+    if (i == 0) continue;
+    const LodJsonLevel& previous = document.levels[i - 1];
+    if (!(level.switch_distance > previous.switch_distance))
+      return core::Error{where + ".switch_distance must exceed the previous level's"};
+    if (level.screen_coverage > previous.screen_coverage)
+      return core::Error{where + ".screen_coverage must not exceed the previous level's"};
+  }
+  return core::okStatus();
+}
+
+}  // namespace
+
+std::string lodJsonText(const LodJsonDocument& document) {
+  ordered_json levels = ordered_json::array();
+  for (const LodJsonLevel& level : document.levels) {
+    ordered_json files = ordered_json::object();
+    for (const auto& [kind, file] : level.shader_files) files[kind] = file;
+    levels.push_back({
+        {"level", level.level},
+        {"distance", level.distance},
+        {"switch_distance", level.switch_distance},
+        {"screen_coverage", level.screen_coverage},
+        {"triangles", level.triangles},
+        {"vertices", level.vertices},
+        {"mesh", level.mesh_file},
+        {"shader", {{"summary", level.shader_summary}, {"files", files}}},
+        {"error",
+         {{"absolute", level.error},
+          {"bound", level.error_bound},
+          {"transition", optionalNumber(level.transition_error)}}},
+        {"cost",
+         {{"predicted", optionalNumber(level.predicted_cost)},
+          {"measured", optionalNumber(level.measured_cost)}}},
+    });
+  }
+  const core::Sphere& sphere = document.bounds;
+  ordered_json root = {
+      {"format", "duolod-lod"},
+      {"version", 1},
+      {"generator", "duolod " DUOLOD_VERSION},
+      {"asset",
+       {{"name", document.asset_name},
+        {"source", document.asset_source},
+        {"bounding_sphere",
+         {{"center", {sphere.center.x, sphere.center.y, sphere.center.z}},
+          {"radius", sphere.radius}}}}},
+      {"display",
+       {{"fov_y_deg", document.fov_y_deg},
+        {"height_px", document.screen_height_px},
+        {"aspect", document.screen_aspect}}},
+      {"bound",
+       {{"d_near", document.d_near},
+        {"d_far", document.d_far},
+        {"q", document.q},
+        {"e_max", document.e_max},
+        {"time_tolerance", document.time_tolerance},
+        {"merge_min_gain", document.merge_min_gain}}},
+      {"optimizer", document.optimizer},
+      {"cost", {{"source", document.cost_source}, {"unit", document.cost_unit}}},
+      {"levels", levels},
+  };
+  return root.dump(2) + "\n";
+}
+
+core::Status writeLodJson(const LodJsonDocument& document, const std::string& path) {
+  if (auto valid = checkDocument(document, path); !valid) return valid;
+  return writeFileAtomic(path, lodJsonText(document));
+}
+
+}  // namespace duolod::io
