@@ -14,8 +14,8 @@ TEST(RuntimeJson, ParsesValuesEscapesAndNesting) {
   JsonValue root;
   std::string error;
   ASSERT_TRUE(JsonValue::parse(
-      R"( {"a": [1, -2.5e1, true, false, null], "s": "x\"\\\/\n\u00e9\ud83d\ude00", "o": {}} )", root,
-      &error))
+      R"( {"a": [1, -2.5e1, true, false, null], "s": "x\"\\\/\n\u00e9\ud83d\ude00", "o": {}} )",
+      root, &error))
       << error;
   ASSERT_TRUE(root.isObject());
   const JsonValue* a = root.find("a");
@@ -32,8 +32,8 @@ TEST(RuntimeJson, ParsesValuesEscapesAndNesting) {
 }
 
 TEST(RuntimeJson, RejectsMalformedInputWithAnOffset) {
-  for (const char* bad : {"", "{", "[1,]", "{\"a\" 1}", "01x", "\"open", "tru", "[1] 2", "{\"a\":-}",
-                          "\"\\q\"", "\"\\u12\""}) {
+  for (const char* bad : {"", "{", "[1,]", "{\"a\" 1}", "01x", "\"open", "tru", "[1] 2",
+                          "{\"a\":-}", "\"\\q\"", "\"\\u12\""}) {
     JsonValue root;
     std::string error;
     EXPECT_FALSE(JsonValue::parse(bad, root, &error)) << bad;
@@ -86,13 +86,16 @@ TEST(RuntimePolicy, BadPoliciesNameTheField) {
            {R"({"format": "duolod-lod", "version": 1, "levels": [{"screen_coverage": 1}]})",
             "levels[0].switch_distance"},
            {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
-               "screen_coverage": 2}]})", "levels[0].screen_coverage"},
+               "screen_coverage": 2}]})",
+            "levels[0].screen_coverage"},
            {R"({"format": "duolod-lod", "version": 1, "levels": [
                {"switch_distance": 5, "screen_coverage": 1},
-               {"switch_distance": 5, "screen_coverage": 0.5}]})", "levels[1].switch_distance"},
+               {"switch_distance": 5, "screen_coverage": 0.5}]})",
+            "levels[1].switch_distance"},
            {R"({"format": "duolod-lod", "version": 1, "levels": [
                {"switch_distance": 0, "screen_coverage": 0.1},
-               {"switch_distance": 5, "screen_coverage": 0.5}]})", "levels[1].screen_coverage"},
+               {"switch_distance": 5, "screen_coverage": 0.5}]})",
+            "levels[1].screen_coverage"},
            {R"({"format": )", "offset"},
        }) {
     runtime::Policy policy;
@@ -168,7 +171,8 @@ TEST(RuntimeSelect, CrossFadeWeightRisesAcrossTheBand) {
   EXPECT_NEAR(three_quarters.fade, 0.25f, 1e-6);  // level 0 keeps a quarter
   // The drawn level's weight and the faded one's always sum to 1, and the blend is continuous
   // across the switch (level 1's share just before 10 equals its share just after).
-  runtime::Selection before = selector.selectByDistance(9.999), after = selector.selectByDistance(10.001);
+  runtime::Selection before = selector.selectByDistance(9.999),
+                     after = selector.selectByDistance(10.001);
   EXPECT_NEAR(before.fade, 1.0f - after.fade, 3e-3);
   EXPECT_EQ(selector.selectByDistance(15).fade_level, -1);
 }

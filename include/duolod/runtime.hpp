@@ -66,8 +66,9 @@ class JsonValue {
   // Parses `text`; on failure returns false and sets `error` to "offset N: reason".
   static bool parse(std::string_view text, JsonValue& out, std::string* error) {
     Parser parser{text, 0, {}};
-    bool ok = parser.value(out, 0) && (parser.skipSpace(), parser.at == text.size() ||
-                                       parser.fail("unexpected text after the JSON value"));
+    bool ok = parser.value(out, 0) &&
+              (parser.skipSpace(),
+               parser.at == text.size() || parser.fail("unexpected text after the JSON value"));
     if (!ok && error) *error = "offset " + std::to_string(parser.at) + ": " + parser.message;
     return ok;
   }
@@ -78,13 +79,15 @@ class JsonValue {
     size_t at;
     std::string message;
 
-    static constexpr int kMaxDepth = 64;  // deeper input is refused rather than overflowing the stack
+    static constexpr int kMaxDepth =
+        64;  // deeper input is refused rather than overflowing the stack
     bool fail(const char* reason) {
       message = reason;
       return false;
     }
     void skipSpace() {
-      while (at < text.size() && (text[at] == ' ' || text[at] == '\t' || text[at] == '\n' || text[at] == '\r'))
+      while (at < text.size() &&
+             (text[at] == ' ' || text[at] == '\t' || text[at] == '\n' || text[at] == '\r'))
         ++at;
     }
     bool literal(std::string_view word) {
@@ -160,10 +163,14 @@ class JsonValue {
       for (int i = 0; i < 4; ++i) {
         char h = text[at++];
         code <<= 4;
-        if (h >= '0' && h <= '9') code |= h - '0';
-        else if (h >= 'a' && h <= 'f') code |= h - 'a' + 10;
-        else if (h >= 'A' && h <= 'F') code |= h - 'A' + 10;
-        else return fail("invalid \\u escape");
+        if (h >= '0' && h <= '9')
+          code |= h - '0';
+        else if (h >= 'a' && h <= 'f')
+          code |= h - 'a' + 10;
+        else if (h >= 'A' && h <= 'F')
+          code |= h - 'A' + 10;
+        else
+          return fail("invalid \\u escape");
       }
       return true;
     }
@@ -181,12 +188,26 @@ class JsonValue {
         if (at >= text.size()) break;
         char e = text[at++];
         switch (e) {
-          case '"': case '\\': case '/': out.push_back(e); break;
-          case 'b': out.push_back('\b'); break;
-          case 'f': out.push_back('\f'); break;
-          case 'n': out.push_back('\n'); break;
-          case 'r': out.push_back('\r'); break;
-          case 't': out.push_back('\t'); break;
+          case '"':
+          case '\\':
+          case '/':
+            out.push_back(e);
+            break;
+          case 'b':
+            out.push_back('\b');
+            break;
+          case 'f':
+            out.push_back('\f');
+            break;
+          case 'n':
+            out.push_back('\n');
+            break;
+          case 'r':
+            out.push_back('\r');
+            break;
+          case 't':
+            out.push_back('\t');
+            break;
           case 'u': {
             uint32_t code = 0;
             if (!hex4(code)) return false;
@@ -200,7 +221,8 @@ class JsonValue {
             appendUtf8(out, code);
             break;
           }
-          default: return fail("invalid escape in string");
+          default:
+            return fail("invalid escape in string");
         }
       }
       return fail("unterminated string");
@@ -214,7 +236,10 @@ class JsonValue {
         out.items_.emplace_back();
         if (!value(out.items_.back(), depth + 1)) return false;
         skipSpace();
-        if (at < text.size() && text[at] == ',') { ++at; continue; }
+        if (at < text.size() && text[at] == ',') {
+          ++at;
+          continue;
+        }
         if (at < text.size() && text[at] == ']') return ++at, true;
         return fail("expected ',' or ']' in array");
       }
@@ -235,7 +260,10 @@ class JsonValue {
         out.members_.emplace_back(std::move(name), JsonValue{});
         if (!value(out.members_.back().second, depth + 1)) return false;
         skipSpace();
-        if (at < text.size() && text[at] == ',') { ++at; continue; }
+        if (at < text.size() && text[at] == ',') {
+          ++at;
+          continue;
+        }
         if (at < text.size() && text[at] == '}') return ++at, true;
         return fail("expected ',' or '}' in object");
       }
@@ -259,7 +287,8 @@ struct Level {
   uint64_t triangles = 0;
   std::string mesh;            // file name, relative to lod.json
   std::string shader_summary;  // in words
-  std::map<std::string, std::string> shader_files;  // kind ("spirv_frag", "glsl450_frag", ...) → file
+  std::map<std::string, std::string>
+      shader_files;  // kind ("spirv_frag", "glsl450_frag", ...) → file
 };
 
 struct Policy {
@@ -279,7 +308,8 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
   if (!format || format->string() != "duolod-lod")
     return fail("lod.json: \"format\" must be \"duolod-lod\"");
   const JsonValue* version = root.find("version");
-  if (!version || version->number(-1) != 1) return fail("lod.json: unsupported \"version\" (expected 1)");
+  if (!version || version->number(-1) != 1)
+    return fail("lod.json: unsupported \"version\" (expected 1)");
   const JsonValue* levels = root.find("levels");
   if (!levels || !levels->isArray() || levels->items().empty())
     return fail("lod.json: \"levels\" must be a non-empty array");
@@ -290,7 +320,8 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
     if (!entry.isObject()) return fail(where + " must be an object");
     const JsonValue* distance = entry.find("switch_distance");
     const JsonValue* coverage = entry.find("screen_coverage");
-    if (!distance || !distance->isNumber() || !std::isfinite(distance->number()) || distance->number() < 0)
+    if (!distance || !distance->isNumber() || !std::isfinite(distance->number()) ||
+        distance->number() < 0)
       return fail(where + ".switch_distance must be a non-negative number");
     if (!coverage || !coverage->isNumber() || !(coverage->number() >= 0 && coverage->number() <= 1))
       return fail(where + ".screen_coverage must be a number in [0, 1]");
@@ -301,7 +332,8 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
       level.triangles = static_cast<uint64_t>(std::max(0.0, triangles->number()));
     if (const JsonValue* mesh = entry.find("mesh")) level.mesh = mesh->string();
     if (const JsonValue* shader = entry.find("shader")) {
-      if (const JsonValue* summary = shader->find("summary")) level.shader_summary = summary->string();
+      if (const JsonValue* summary = shader->find("summary"))
+        level.shader_summary = summary->string();
       if (const JsonValue* files = shader->find("files"))
         for (const auto& [kind, file] : files->members()) level.shader_files[kind] = file.string();
     }
@@ -357,9 +389,9 @@ struct SelectorOptions {
 };
 
 struct Selection {
-  int level = 0;         // the level to draw
-  int fade_level = -1;   // the level to blend in (dithered), or -1
-  float fade = 0;        // weight of fade_level in [0, 1]; the drawn level takes 1 − fade
+  int level = 0;        // the level to draw
+  int fade_level = -1;  // the level to blend in (dithered), or -1
+  float fade = 0;       // weight of fade_level in [0, 1]; the drawn level takes 1 − fade
 };
 
 class LevelSelector {
@@ -399,13 +431,16 @@ class LevelSelector {
     Selection selection{.level = current_};
     if (options_.fade_band <= 0) return selection;
     for (size_t k = 1; k < count; ++k) {
-      double low = threshold(k) * (1 - options_.fade_band), high = threshold(k) * (1 + options_.fade_band);
+      double low = threshold(k) * (1 - options_.fade_band),
+             high = threshold(k) * (1 + options_.fade_band);
       if (farness <= low || farness >= high) continue;
       // Weight of level k rises from 0 at `low` to 1 at `high`.
       float weight_far = static_cast<float>((farness - low) / (high - low));
       const int near_level = static_cast<int>(k) - 1, far_level = static_cast<int>(k);
-      if (current_ == near_level) selection = {current_, far_level, weight_far};
-      else if (current_ == far_level) selection = {current_, near_level, 1.0f - weight_far};
+      if (current_ == near_level)
+        selection = {current_, far_level, weight_far};
+      else if (current_ == far_level)
+        selection = {current_, near_level, 1.0f - weight_far};
       break;
     }
     return selection;
