@@ -291,6 +291,248 @@ void main() { outColor = vec4(vUV, 0.25, 1.0) * uBaseColorFactor; }
 }
 
 // ------------------------------------------------------------------------------------------------
+// Texture average and texture mip
+
+const char* kTextureFragment = R"(#version 450 core
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(location = 0) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() { outColor = texture(uBaseColorTexture, vUV); }
+)";
+
+RuleContext greyAverages() {
+  RuleContext context;
+  context.texture_averages[0] = {0.5f, 0.5f, 0.5f, 1.0f};
+  return context;
+}
+
+// The OpImageSample* instruction of the fragment stage (the test shaders have one).
+const ir::Instruction* fragmentSample(const ir::Module& module) {
+  for (const ir::Block& block : module.entryFunction(spv::ExecutionModelFragment)->blocks)
+    for (const ir::Instruction& instruction : block.instructions)
+      if (instruction.opcode == spv::OpImageSampleImplicitLod) return &instruction;
+  return nullptr;
+}
+
+TEST(ShaderRules, TextureAverageStoresTheAverageConstant) {
+  ShaderProgram program = programOrDie(kQuadVertex, kTextureFragment);
+  // No average known for binding 0: not offered.
+  EXPECT_TRUE(sitesOfKind(enumerateSites(program, {}), RuleKind::kTextureAverage).empty());
+  RuleContext context;
+  context.texture_averages[0] = {0.25f, 0.5f, 0.75f, 1.0f};
+  std::vector<RuleSite> sites =
+      sitesOfKind(enumerateSites(program, context), RuleKind::kTextureAverage);
+  ASSERT_EQ(sites.size(), 1u);
+  EXPECT_NE(sites[0].description.find("uBaseColorTexture"), std::string::npos);
+  ShaderProgram averaged = applyOrDie(program, sites[0], context);
+  ir::DefUse uses(averaged.fragment);
+  EXPECT_EQ(ir::constantAsFloats(uses, storedOutput(averaged.fragment)),
+            (std::vector<float>{0.25f, 0.5f, 0.75f, 1.0f}));
+  EXPECT_EQ(fragmentSample(averaged.fragment), nullptr);
+  EXPECT_EQ(countOpcode(averaged.fragment, spv::OpLoad), 0u);  // the sampler and uv loads went too
+  // The sample is gone: a mip site on it is stale now.
+  std::vector<RuleSite> mip = sitesOfKind(enumerateSites(program, context), RuleKind::kTextureMip);
+  ASSERT_EQ(mip.size(), 3u);
+  auto stale = applyRule(averaged, mip[0], context);
+  ASSERT_FALSE(stale.ok());
+  EXPECT_NE(stale.error().message.find("no longer"), std::string::npos) << stale.error().message;
+}
+
+// The Bias / Lod operand id of a sample (the first after the image-operand mask), or kNoId.
+ir::Id lodOperand(const ir::Instruction& sample, uint32_t bit) {
+  if (sample.operands.size() < 3 || !(sample.operands[2] & bit)) return ir::kNoId;
+  return sample.operands[3];
+}
+
+TEST(ShaderRules, TextureMipAddsOrExtendsTheLodBias) {
+  ShaderProgram program = programOrDie(kQuadVertex, kTextureFragment);
+  std::vector<RuleSite> sites = sitesOfKind(enumerateSites(program, {}), RuleKind::kTextureMip);
+  ASSERT_EQ(sites.size(), 3u);
+  EXPECT_EQ(sites[1].choice, 2u);
+  ShaderProgram coarser = applyOrDie(program, sites[1]);
+  const ir::Instruction* sample = fragmentSample(coarser.fragment);
+  ASSERT_NE(sample, nullptr);
+  EXPECT_EQ(sample->result_id, sites[1].target);  // ids stay stable
+  ir::DefUse uses(coarser.fragment);
+  EXPECT_EQ(ir::constantFloatValue(uses, lodOperand(*sample, spv::ImageOperandsBiasMask)), 2.0f);
+  // Applied again (composable): the bias becomes bias + 1 computed in the shader.
+  ShaderProgram twice = applyOrDie(coarser, sites[0]);
+  const ir::Instruction* again = fragmentSample(twice.fragment);
+  ir::DefUse twice_uses(twice.fragment);
+  const ir::Instruction* sum = twice_uses.def(lodOperand(*again, spv::ImageOperandsBiasMask));
+  ASSERT_NE(sum, nullptr);
+  EXPECT_EQ(sum->opcode, spv::OpFAdd);
+
+  // An existing bias and an offset: the bias is extended, the offset kept after it.
+  ShaderProgram biased = programOrDie(kQuadVertex, R"(#version 450 core
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(location = 0) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() { outColor = textureOffset(uBaseColorTexture, vUV, ivec2(1, 0), 0.5); }
+)");
+  std::vector<RuleSite> biased_sites =
+      sitesOfKind(enumerateSites(biased, {}), RuleKind::kTextureMip);
+  ASSERT_EQ(biased_sites.size(), 3u);
+  ShaderProgram biased_coarser = applyOrDie(biased, biased_sites[0]);
+  const ir::Instruction* offset_sample = fragmentSample(biased_coarser.fragment);
+  ASSERT_NE(offset_sample, nullptr);
+  EXPECT_EQ(offset_sample->operands[2],
+            uint32_t(spv::ImageOperandsBiasMask | spv::ImageOperandsConstOffsetMask));
+  EXPECT_EQ(offset_sample->operands.size(), 5u);
+
+  // Explicit LOD in the vertex stage: the Lod grows.
+  ShaderProgram vertex_lod = programOrDie(R"(#version 450 core
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(location = 0) in vec3 inPosition;
+layout(location = 0) out vec2 vUV;
+void main() {
+  vUV = textureLod(uBaseColorTexture, inPosition.xy, 1.0).xy;
+  gl_Position = vec4(inPosition, 1.0);
+}
+)", R"(#version 450 core
+layout(location = 0) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() { outColor = vec4(vUV, 0.0, 1.0); }
+)");
+  std::vector<RuleSite> vertex_sites =
+      sitesOfKind(enumerateSites(vertex_lod, {}), RuleKind::kTextureMip, Stage::kVertex);
+  ASSERT_EQ(vertex_sites.size(), 3u);
+  applyOrDie(vertex_lod, vertex_sites[2]);
+}
+
+// A 32×32 checkerboard of 4-texel black and white cells: mip levels 0-2 keep pure cells, level 3
+// and coarser are grey (each texel covers 2×2 cells).
+core::ImageRGBA8 checkerTexture() {
+  core::ImageRGBA8 image{.width = 32, .height = 32, .pixels = {}};
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      uint8_t value = ((x / 4 + y / 4) % 2) ? 255 : 0;
+      image.pixels.insert(image.pixels.end(), {value, value, value, 255});
+    }
+  return image;
+}
+
+// Largest difference of a channel from `value` over the image's red channel, and the spread.
+int maxDeviation(const core::ImageRGBA8& image, int value) {
+  int worst = 0;
+  for (size_t i = 0; i < image.pixels.size(); i += 4)
+    worst = std::max(worst, std::abs(int(image.pixels[i]) - value));
+  return worst;
+}
+
+TEST_F(RuleRender, TextureAverageAndMipRenderGrey) {
+  core::ImageRGBA8 texture = checkerTexture();
+  core::Asset asset = quadAsset({1, 1, 1, 1}, &texture);
+  ShaderProgram program = programOrDie(kQuadVertex, kTextureFragment);
+  RuleContext context = greyAverages();
+  std::vector<RuleSite> sites = enumerateSites(program, context);
+  const int size = 32;  // one texel per pixel: mip level 0 without a bias
+  core::ImageRGBA8 original = renderQuad(program, asset, size);
+  ASSERT_EQ(original.pixels.size(), size_t(size * size * 4));
+  EXPECT_GE(maxDeviation(original, 128), 127);  // black and white cells
+
+  std::vector<RuleSite> average = sitesOfKind(sites, RuleKind::kTextureAverage);
+  ASSERT_EQ(average.size(), 1u);
+  EXPECT_LE(maxDeviation(renderQuad(applyOrDie(program, average[0], context), asset, size), 128), 1);
+
+  std::vector<RuleSite> mip = sitesOfKind(sites, RuleKind::kTextureMip);
+  ASSERT_EQ(mip.size(), 3u);
+  ASSERT_EQ(mip[0].choice, 1u);
+  ASSERT_EQ(mip[2].choice, 3u);
+  // One level coarser still shows pure cells; three levels coarser is the 2×2-cell average.
+  EXPECT_GE(maxDeviation(renderQuad(applyOrDie(program, mip[0]), asset, size), 128), 126);
+  EXPECT_LE(maxDeviation(renderQuad(applyOrDie(program, mip[2]), asset, size), 128), 2);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Loop truncation
+
+// A fragment stage summing 0.1 per iteration of `loop_header` (which declares i).
+std::string countingFragment(const std::string& loop_header) {
+  return "#version 450 core\nlayout(location = 0) in vec2 vUV;\n"
+         "layout(location = 0) out vec4 outColor;\nvoid main() {\n  float sum = 0.0;\n  " +
+         loop_header + " sum += 0.1;\n  outColor = vec4(sum, sum, sum, 1.0);\n}\n";
+}
+
+struct LoopCase {
+  const char* header;
+  uint32_t trip_count;
+};
+
+TEST(ShaderRules, LoopTripCountsOfCountedLoops) {
+  const LoopCase cases[] = {
+      {"for (int i = 0; i < 4; ++i)", 4},
+      {"for (int i = 10; i > 0; i -= 3)", 4},  // 10, 7, 4, 1
+      {"for (uint i = 0u; i <= 5u; i++)", 6},
+      {"for (int i = 2; 9 > i; i += 2)", 4},   // bound on the left: 2, 4, 6, 8
+      {"for (int i = 0; i != 12; i += 4)", 3},
+      {"for (int i = 0; i < 40; ++i)", 40},
+  };
+  for (const LoopCase& loop : cases) {
+    ShaderProgram program = programOrDie(kQuadVertex, countingFragment(loop.header));
+    std::vector<RuleSite> sites =
+        sitesOfKind(enumerateSites(program, {}), RuleKind::kLoopTruncation);
+    ASSERT_FALSE(sites.empty()) << loop.header;
+    // Short loops offer every shorter count; long ones powers of two and three quarters.
+    std::vector<uint32_t> choices;
+    for (const RuleSite& site : sites) choices.push_back(site.choice);
+    std::vector<uint32_t> expected;
+    if (loop.trip_count <= 8) {
+      for (uint32_t k = 1; k < loop.trip_count; ++k) expected.push_back(k);
+    } else {
+      expected = {1, 2, 4, 8, 16, 30, 32};
+    }
+    EXPECT_EQ(choices, expected) << loop.header;
+    EXPECT_NE(sites[0].description.find(std::to_string(loop.trip_count) + " → 1 iterations"),
+              std::string::npos)
+        << sites[0].description;
+    // Truncating twice: the second site now asks for more than the loop runs.
+    ShaderProgram once = applyOrDie(program, sites[0]);
+    if (sites.size() > 1) {
+      EXPECT_FALSE(applyRule(once, sites[1], {}).ok()) << loop.header;
+    }
+  }
+}
+
+TEST(ShaderRules, LoopsWithoutACertainTripCountAreNotOffered) {
+  const char* headers[] = {
+      "for (int i = 0; i < int(vUV.x * 8.0); ++i)",         // bound not a constant
+      "for (int i = 0; i < 4; i += int(vUV.y) + 1)",         // step not a constant
+      "for (int i = 0; i < 4; ++i) { if (vUV.x > 0.5) ++i; }",  // counter written in the body
+      "for (int i = 0; i < 3000000; ++i)",                   // beyond the simulated trip limit
+  };
+  for (const char* header : headers) {
+    ShaderProgram program = programOrDie(kQuadVertex, countingFragment(header));
+    EXPECT_TRUE(sitesOfKind(enumerateSites(program, {}), RuleKind::kLoopTruncation).empty())
+        << header;
+  }
+}
+
+TEST_F(RuleRender, LoopTruncationRendersFewerIterations) {
+  core::Asset asset = quadAsset({1, 1, 1, 1}, nullptr);
+  for (const char* header : {"for (int i = 0; i < 4; ++i)", "for (int i = 10; i > 0; i -= 3)"}) {
+    ShaderProgram program = programOrDie(kQuadVertex, countingFragment(header));
+    std::vector<RuleSite> sites =
+        sitesOfKind(enumerateSites(program, {}), RuleKind::kLoopTruncation);
+    ASSERT_EQ(sites.size(), 3u);
+    ASSERT_EQ(sites[1].choice, 2u);
+    // 4 × 0.1 before, 2 × 0.1 after.
+    EXPECT_LE(maxDeviation(renderQuad(program, asset, 8), 102), 1) << header;
+    EXPECT_LE(maxDeviation(renderQuad(applyOrDie(program, sites[1]), asset, 8), 51), 1) << header;
+  }
+}
+
+TEST(ShaderRules, NoisePhongOctaveLoopIsTruncatable) {
+  ShaderProgram program =
+      programOrDie(readShader("noise_phong.vert"), readShader("noise_phong.frag"));
+  std::vector<RuleSite> sites =
+      sitesOfKind(enumerateSites(program, {}), RuleKind::kLoopTruncation);
+  ASSERT_EQ(sites.size(), 3u);  // glslang keeps the loop (no unrolling without optimisation)
+  EXPECT_NE(sites[0].description.find("octave in fbm: 4 → 1"), std::string::npos)
+      << sites[0].description;
+}
+
+// ------------------------------------------------------------------------------------------------
 // Determinism, stale sites, the reference shaders
 
 TEST(ShaderRules, EnumerationIsDeterministicAndStaleSitesFailCleanly) {
