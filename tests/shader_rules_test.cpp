@@ -599,6 +599,13 @@ TEST_P(ReferenceShaderRules, EverySiteAppliesAndValidates) {
     summary += " " + std::string(ruleName(static_cast<RuleKind>(kind))) + " " +
                std::to_string(counts[static_cast<size_t>(kind)]) + ";";
   std::printf("%s\n", summary.c_str());
+  // One example description per rule, to read in the log.
+  std::array<bool, kRuleKindCount> shown{};
+  for (const RuleSite& site : sites)
+    if (!shown[static_cast<size_t>(site.kind)]) {
+      shown[static_cast<size_t>(site.kind)] = true;
+      std::printf("  e.g. %s\n", site.description.c_str());
+    }
   EXPECT_GT(counts[static_cast<size_t>(RuleKind::kOperationRemoval)], 0);
 }
 

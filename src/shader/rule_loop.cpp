@@ -214,8 +214,7 @@ std::vector<int64_t> iterationChoices(int64_t trips) {
 }
 
 std::string loopLabel(const ir::Module& module, const CountedLoop& loop) {
-  std::string function = module.name(module.functions[static_cast<size_t>(loop.function)].id());
-  function = function.substr(0, function.find('('));
+  std::string function = functionName(module, static_cast<size_t>(loop.function));
   return "loop over " + valueName(module, loop.counter) +
          (function.empty() ? std::string() : " in " + function);
 }

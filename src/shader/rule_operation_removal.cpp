@@ -202,20 +202,23 @@ std::vector<RuleSite> findOperationRemovalSites(const ShaderProgram& program, co
     const ir::Module& module = stageModule(program, stage);
     ir::DefUse uses(module);
     std::unordered_set<ir::Id> protect = protectedValues(module, uses, stage);
-    for (const ir::Function& function : module.functions)
-      for (const ir::Block& block : function.blocks)
+    for (size_t f = 0; f < module.functions.size(); ++f)
+      for (const ir::Block& block : module.functions[f].blocks)
         for (const ir::Instruction& instruction : block.instructions) {
           if (protect.count(instruction.result_id)) continue;
           std::vector<ir::Id> operands = valueOperands(instruction);
+          std::string call = operationName(instruction) + "(";
+          for (size_t i = 0; i < operands.size(); ++i)
+            call += (i ? ", " : "") + describeValue(module, uses, operands[i]);
+          call += ")";
           for (uint32_t choice : keptOperandChoices(uses, instruction)) {
             RuleSite site{.kind = RuleKind::kOperationRemoval,
                           .stage = stage,
                           .target = instruction.result_id,
                           .choice = choice,
                           .description = {}};
-            site.description = stageName(stage) + ": " + valueName(module, instruction.result_id) +
-                               " = " + operationName(instruction) + "(...) → " +
-                               valueName(module, operands[choice]);
+            site.description = stageName(stage) + " " + functionName(module, f) + ": " + call +
+                               " → " + describeValue(module, uses, operands[choice]);
             sites.push_back(std::move(site));
           }
         }

@@ -6,6 +6,7 @@
 #include <spirv-tools/optimizer.hpp>
 
 #include <algorithm>
+#include <optional>
 #include <unordered_map>
 
 #include "shader/rules_internal.hpp"
@@ -100,6 +101,38 @@ core::Error siteError(const RuleSite& site, const std::string& reason) {
 std::string valueName(const ir::Module& module, ir::Id id) {
   std::string name = module.name(id);
   return name.empty() ? "%" + std::to_string(id) : name;
+}
+
+std::string describeValue(const ir::Module& module, const ir::DefUse& uses, ir::Id id) {
+  if (std::string name = module.name(id); !name.empty()) return name;
+  const ir::Instruction* definition = uses.def(id);
+  if (!definition) return valueName(module, id);
+  if (std::optional<float> value = ir::constantFloatValue(uses, id)) {
+    std::string text = std::to_string(*value);
+    text.erase(text.find_last_not_of('0') + 1);
+    if (!text.empty() && text.back() == '.') text += '0';
+    return text;
+  }
+  if (definition->opcode == spv::OpLoad) {
+    const ir::Instruction* pointer = uses.def(definition->operands[0]);
+    if (pointer && pointer->opcode == spv::OpVariable) return valueName(module, pointer->result_id);
+    // A uniform-block member: block.member with a constant member index.
+    if (pointer && pointer->opcode == spv::OpAccessChain && pointer->operands.size() == 2) {
+      const ir::Instruction* block = uses.def(pointer->operands[0]);
+      std::optional<int64_t> member = ir::constantIntValue(uses, pointer->operands[1]);
+      if (block && member) {
+        ir::Id struct_type = ir::pointeeType(uses, block->type_id);
+        std::string name = module.memberName(struct_type, static_cast<uint32_t>(*member));
+        if (!name.empty()) return name;
+      }
+    }
+  }
+  return valueName(module, id);
+}
+
+std::string functionName(const ir::Module& module, size_t function_index) {
+  std::string name = module.name(module.functions[function_index].id());
+  return name.substr(0, name.find('('));
 }
 
 bool isPureOpcode(spv::Op opcode) {
