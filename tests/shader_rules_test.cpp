@@ -578,6 +578,7 @@ TEST_P(ReferenceShaderRules, EverySiteAppliesAndValidates) {
   for (uint32_t binding = 0; binding < 8; ++binding)
     context.texture_averages[binding] = {0.5f, 0.4f, 0.3f, 1.0f};
   std::vector<RuleSite> sites = enumerateSites(program, context);
+  EXPECT_EQ(sites, enumerateSites(program, context));
   std::array<int, kRuleKindCount> counts{};
   for (const RuleSite& site : sites) {
     ++counts[static_cast<size_t>(site.kind)];
