@@ -122,6 +122,52 @@ core::Result<PairSearchResult> searchPairsBruteForce(int mesh_count,
                                                      const PairEvaluator& evaluate,
                                                      const PairSearchOptions& options);
 
+// Pair evaluation by real renders: ε_a of eq. (6) against the supersampled original (M_0, S_0) at
+// one level's distance over the view × light domain (§7), and a cost that is either measured (wall
+// clock around the render, median of repeats; §7 "Cost") or given by a prediction callback.
+// Results are cached per (mesh, shader): Algorithm 2 and the brute force share them.
+struct RenderedPairOptions {
+  int supersample = 4;  // k of the reference f̄ (eq. 1)
+  render::Display display;  // fixes the footprint s_d the images are rendered at
+  render::DomainOptions domain;
+  // Measured cost: > 0 renders each pair this many extra times and takes the median wall clock in
+  // milliseconds. 0: cost comes from `predicted_cost` (required then).
+  int timing_repeats = 0;
+  std::function<double(int mesh, int shader)> predicted_cost;
+};
+
+class RenderedPairEvaluator {
+ public:
+  // `meshes[k]` are uploaded meshes M_0 (the original) .. M_{K−1}; `shaders[s]` compiled programs,
+  // shaders[0] the original S_0. Renders the reference (M_0, S_0) at `distance`.
+  static core::Result<RenderedPairEvaluator> create(
+      render::Renderer& renderer, std::vector<render::Renderer::AssetId> meshes,
+      std::vector<render::Renderer::ProgramId> shaders, const core::Sphere& bounds, double distance,
+      RenderedPairOptions options);
+
+  core::Result<PairEvaluation> evaluate(int mesh, int shader);
+  PairEvaluator evaluator() {
+    return [this](int mesh, int shader) { return evaluate(mesh, shader); };
+  }
+  // s_d of eq. (3): the reference's mean covered pixels per sample.
+  double coveragePixels() const { return coverage_px_; }
+  int footprintPixels() const { return footprint_px_; }
+  int renderedPairs() const { return rendered_pairs_; }  // cache misses
+
+ private:
+  RenderedPairEvaluator() = default;
+  render::Renderer* renderer_ = nullptr;
+  std::vector<render::Renderer::AssetId> meshes_;
+  std::vector<render::Renderer::ProgramId> shaders_;
+  std::vector<render::Sample> samples_;
+  render::ImageBatchF reference_;
+  RenderedPairOptions options_;
+  double coverage_px_ = 0;
+  int footprint_px_ = 0;
+  int rendered_pairs_ = 0;
+  std::vector<std::optional<PairEvaluation>> cache_;  // [mesh * shader_count + shader]
+};
+
 // ---------------------------------------------------------------------------------------------
 // Smoothest path (§6.1, Algorithm 3).
 
