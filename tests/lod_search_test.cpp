@@ -183,6 +183,45 @@ TEST(LodSearch, EvaluatorErrorsPropagateAndBadInputIsRejected) {
   EXPECT_FALSE(lod::searchPairs(2, {}, failing, {}).ok());
 }
 
+// Where monotonicity fails the walk can miss what the brute force finds: this is why the paper
+// reports both (and why the brute force exists here). Mesh 1 is an outlier: worse than mesh 2.
+TEST(LodSearch, NonMonotoneTableShowsTheWalksAssumption) {
+  Table table;
+  table.error = {{0.0, 3.0}, {9.0, 9.0}, {1.0, 9.0}, {9.0, 9.0}};  // [mesh][shader]
+  table.cost = {{10.0, 8.0}, {9.0, 7.0}, {6.0, 5.0}, {5.0, 4.0}};
+  auto order = identityOrder(2);
+  lod::PairSearchOptions options{.error_bound = 2.0, .time_tolerance = 0.0};
+  auto walk = lod::searchPairs(4, order, table.evaluator(), options);
+  auto brute = lod::searchPairsBruteForce(4, order, table.evaluator(), options);
+  ASSERT_TRUE(walk.ok() && brute.ok());
+  // Walk: (3,0) over → (2,0) within → (2,1) over → (1,1) over → (0,1) over: optimum (2,0) at 6.
+  ASSERT_EQ(walk->optimal.size(), 1u);
+  EXPECT_EQ(walk->optimal[0].mesh, 2);
+  EXPECT_EQ(walk->evaluations, 5);
+  ASSERT_EQ(brute->optimal.size(), 1u);
+  EXPECT_EQ(brute->optimal[0].mesh, 2);  // here both agree: the outlier is never the optimum
+  // Make (0,1) feasible and the cheapest: the walk still reaches it, stepping down past the
+  // outlier (1,1).
+  table.error[0][1] = 1.5;
+  table.cost[0][1] = 1.0;
+  walk = lod::searchPairs(4, order, table.evaluator(), options);
+  brute = lod::searchPairsBruteForce(4, order, table.evaluator(), options);
+  ASSERT_TRUE(walk.ok() && brute.ok());
+  EXPECT_EQ(brute->optimal[0].mesh, 0);
+  EXPECT_EQ(brute->optimal[0].shader, 1);
+  EXPECT_EQ(walk->optimal[0].mesh, 0);
+  // But an infeasible coarse mesh before a feasible one with a later shader is never revisited:
+  // with (3,1) feasible and cheapest, the walk has already left mesh 3 at shader 0.
+  table.error[3][1] = 0.5;
+  table.cost[3][1] = 0.5;
+  walk = lod::searchPairs(4, order, table.evaluator(), options);
+  brute = lod::searchPairsBruteForce(4, order, table.evaluator(), options);
+  ASSERT_TRUE(walk.ok() && brute.ok());
+  EXPECT_EQ(brute->optimal[0].mesh, 3);
+  EXPECT_EQ(brute->optimal[0].shader, 1);
+  EXPECT_NE(walk->optimal[0].mesh, 3) << "the walk cannot find a pair its assumption rules out";
+}
+
 // On random monotone tables (error increasing, cost decreasing along both axes) the walk finds the
 // brute force's optimum, evaluating at most K + L pairs where the brute force evaluates K·L.
 TEST(LodSearch, MatchesBruteForceOnRandomMonotoneTablesInLinearEvaluations) {
