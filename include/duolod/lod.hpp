@@ -146,6 +146,8 @@ class RenderedPairEvaluator {
       RenderedPairOptions options);
 
   core::Result<PairEvaluation> evaluate(int mesh, int shader);
+  // A PairEvaluator calling evaluate() on this object: valid while it stays where it is (a moved
+  // evaluator must hand out a new one).
   PairEvaluator evaluator() {
     return [this](int mesh, int shader) { return evaluate(mesh, shader); };
   }
