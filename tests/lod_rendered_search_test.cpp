@@ -120,6 +120,22 @@ TEST(LodRenderedSearch, WaterBottleWalkAgreesWithBruteForceInFewerRenders) {
   EXPECT_EQ(tight_walk->optimal[0].shader, order[0]);
   EXPECT_EQ(tight_brute->optimal[0].mesh, 3);
   EXPECT_LE(tight_walk->evaluations, int(meshes.size()) + 2);
+
+  // Measured cost: wall clock in milliseconds (only its presence is checked: tests never assert
+  // on time), errors identical to the predicted-cost evaluator's, and a needed cost is enforced.
+  lod::RenderedPairOptions timed_options;
+  timed_options.timing_repeats = 3;
+  auto timed = lod::RenderedPairEvaluator::create(renderer, mesh_ids, shader_ids, sphere,
+                                                  level.distance, timed_options);
+  ASSERT_TRUE(timed) << timed.error().message;
+  auto timed_pair = timed->evaluate(5, 0);
+  ASSERT_TRUE(timed_pair) << timed_pair.error().message;
+  EXPECT_GT(timed_pair->cost, 0.0);
+  EXPECT_DOUBLE_EQ(timed_pair->error, evaluator->evaluate(5, 0)->error);
+  EXPECT_FALSE(timed->evaluate(6, 0).ok());  // no such mesh
+  EXPECT_FALSE(lod::RenderedPairEvaluator::create(renderer, mesh_ids, shader_ids, sphere,
+                                                  level.distance, lod::RenderedPairOptions{})
+                   .ok());
 }
 
 }  // namespace
