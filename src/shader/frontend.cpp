@@ -3,6 +3,7 @@
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
 #include <glslang/SPIRV/GlslangToSpv.h>
+#include <glslang/SPIRV/spirv.hpp>
 #include <spirv-tools/libspirv.hpp>
 
 #include <filesystem>
@@ -65,9 +66,30 @@ class FileIncluder : public glslang::TShader::Includer {
   std::vector<std::string> dirs_;
 };
 
+// glslang's log without its closing summary ("ERROR: 2 compilation errors.  No code generated.").
 std::string trimLog(std::string log) {
-  while (!log.empty() && (log.back() == '\n' || log.back() == ' ')) log.pop_back();
-  return log;
+  std::string kept;
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("compilation errors.") != std::string::npos) continue;
+    if (line.find("compilation terminated") != std::string::npos) continue;
+    while (!line.empty() && (line.back() == ' ' || line.back() == '\r')) line.pop_back();
+    if (line.empty()) continue;
+    if (!kept.empty()) kept += "\n";
+    kept += line;
+  }
+  return kept;
+}
+
+// glslang emits a module without OpEntryPoint when an HLSL entry point name matches nothing.
+bool hasEntryPoint(const std::vector<uint32_t>& words) {
+  for (size_t i = 5; i < words.size();) {
+    uint32_t count = words[i] >> 16;
+    if ((words[i] & 0xffffu) == static_cast<uint32_t>(spv::OpEntryPoint)) return true;
+    if (count == 0) return false;
+    i += count;
+  }
+  return false;
 }
 
 }  // namespace
@@ -83,6 +105,8 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   shader.setStringsWithLengthsAndNames(&text, nullptr, &name, 1);
   shader.setEntryPoint(options.entry_point.c_str());
   std::string preamble;
+  // `#include` works as in C without the user naming the extension glslang requires for it.
+  if (options.language == Language::kGlsl) preamble += "#extension GL_GOOGLE_include_directive : enable\n";
   for (const auto& [key, value] : options.defines) preamble += "#define " + key + " " + value + "\n";
   shader.setPreamble(preamble.c_str());
   bool hlsl = options.language == Language::kHlsl;
@@ -103,6 +127,9 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   glslang::TProgram program;
   program.addShader(&shader);
   if (!program.link(messages)) return Error{file_name + ": link: " + trimLog(program.getInfoLog())};
+  // glslang only warns, and emits an empty function, when the entry point matches nothing.
+  if (std::string(program.getInfoLog()).find("Entry point not found") != std::string::npos)
+    return Error{file_name + ": entry point '" + options.entry_point + "' not found"};
   std::vector<uint32_t> words;
   glslang::SpvOptions spv_options;
   spv_options.generateDebugInfo = false;
@@ -112,6 +139,7 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   glslang::GlslangToSpv(*program.getIntermediate(language), words, &logger, &spv_options);
   std::string log = logger.getAllMessages();
   if (words.empty()) return Error{file_name + ": SPIR-V generation failed: " + log};
+  if (!hasEntryPoint(words)) return Error{file_name + ": the module has no entry point"};
   return words;
 }
 
