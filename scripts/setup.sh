@@ -45,3 +45,28 @@ elif [ ! -f "$tools_dir/node_modules/gltf-validator/package.json" ]; then
 else
   echo "duolod setup: gltf-validator present"
 fi
+
+# Third-party shaders for the shader round-trip test (issue 4): three.js MeshPhysicalMaterial and
+# the glTF Sample Viewer PBR shader, fetched from npm into build-deps/npm (gitignored) and turned
+# into GLSL 450 files by scripts/thirdparty_shaders.mjs. Optional: the test skips loudly without them.
+npm_cache="$(cd "$(dirname "$0")/.." && pwd)/build-deps/npm"
+three_version=0.187.0
+gltf_viewer_version=1.1.0
+if command -v npm >/dev/null && command -v node >/dev/null; then
+  mkdir -p "$npm_cache"
+  if [ ! -f "$npm_cache/three-$three_version.tgz" ] ||
+     [ ! -f "$npm_cache/khronosgroup-gltf-viewer-$gltf_viewer_version.tgz" ]; then
+    echo "duolod setup: fetching three@$three_version and @khronosgroup/gltf-viewer@$gltf_viewer_version"
+    (cd "$npm_cache" && npm pack --silent "three@$three_version" "@khronosgroup/gltf-viewer@$gltf_viewer_version" >/dev/null)
+    rm -rf "$npm_cache/three" "$npm_cache/gltf-viewer"
+  fi
+  if [ ! -d "$npm_cache/three/package" ] || [ ! -d "$npm_cache/gltf-viewer/package" ]; then
+    mkdir -p "$npm_cache/three" "$npm_cache/gltf-viewer"
+    tar xzf "$npm_cache/three-$three_version.tgz" -C "$npm_cache/three"
+    tar xzf "$npm_cache/khronosgroup-gltf-viewer-$gltf_viewer_version.tgz" -C "$npm_cache/gltf-viewer"
+  fi
+  # Cheap (about a second), so always re-run: the extracted files follow the script.
+  node "$(dirname "$0")/thirdparty_shaders.mjs" "$npm_cache" >/dev/null
+else
+  echo "duolod setup: WARNING: no node/npm: the third-party shader round-trip tests will skip"
+fi

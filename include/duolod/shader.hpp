@@ -1,5 +1,6 @@
-// duolod shader: the GLSL/HLSL front end (glslang → SPIR-V for OpenGL). The SPIR-V IR, rules,
-// cost model and searches build on this.
+// duolod shader: the GLSL/HLSL front end (glslang → SPIR-V for OpenGL), validation, the clean-up
+// of evaluation copies (SPIRV-Tools passes) and cross-compilation to GLSL 450, GLSL ES 300 and HLSL
+// (SPIRV-Cross). The SPIR-V IR (src/shader/ir.hpp), rules, cost model and searches build on this.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +19,10 @@ struct CompileOptions {
   std::string entry_point = "main";
   std::vector<std::string> include_dirs;  // for #include "..."
   std::vector<std::pair<std::string, std::string>> defines;
+  // Let glslang assign locations to stage inputs/outputs and loose uniforms, and bindings to
+  // samplers and blocks, that the source leaves unqualified (WebGL-style shaders). Always on for
+  // HLSL. The assignment follows declaration order, so stages must declare varyings alike.
+  bool auto_map_locations = false;
 };
 
 // Compiles one stage to SPIR-V for OpenGL 4.5 (ARB_gl_spirv), with debug names kept and no
@@ -29,5 +34,35 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
 
 // Validates a module with SPIRV-Tools for SPV_ENV_OPENGL_4_5; the error names what is wrong.
 core::Status validateSpirv(const std::vector<uint32_t>& words, const std::string& what);
+
+// ---- cross-compilation (SPIRV-Cross) ----
+
+enum class Target {
+  kGlsl450,    // #version 450 core, explicit locations and bindings kept
+  kGlslEs300,  // #version 300 es, highp defaults (ES 3.0 has no binding qualifiers)
+  kHlsl50,     // HLSL shader model 5.0, entry point "main"
+};
+const char* targetName(Target target);
+
+// Emits source for `target` from a SPIR-V module (use the unoptimised module: names are kept, so
+// the output reads like the input). `what` names the module in errors.
+core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Target target,
+                                       const std::string& what);
+// Re-compiles emitted source with glslang as a check: GLSL 450 to SPIR-V (validated), GLSL ES 300
+// with the ES profile, HLSL with the HLSL front end (entry "main"). The error names `what`.
+core::Status checkCrossCompiled(const std::string& source, Target target, Stage stage,
+                                const std::string& what);
+
+// ---- evaluation copy ----
+
+enum class OptimizationLevel {
+  kCleanup,      // dead code, dead constants, constant folding, CFG clean-up
+  kPerformance,  // SPIRV-Tools' performance recipe (inlining, SSA, folding, dead code...)
+};
+// Runs SPIRV-Tools' public passes on a copy meant for rendering and timing (never for the
+// readable output), then validates the result. Errors name `what`.
+core::Result<std::vector<uint32_t>> optimizeForEvaluation(
+    const std::vector<uint32_t>& words, const std::string& what,
+    OptimizationLevel level = OptimizationLevel::kPerformance);
 
 }  // namespace duolod::shader

@@ -114,8 +114,8 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
                      glslang::EShClientOpenGL, 450);
   shader.setEnvClient(glslang::EShClientOpenGL, glslang::EShTargetOpenGL_450);
   shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_0);
-  if (hlsl) {
-    // HLSL has no explicit locations/bindings by default; let glslang assign them.
+  if (hlsl || options.auto_map_locations) {
+    // HLSL (and WebGL-style GLSL) has no explicit locations/bindings; let glslang assign them.
     shader.setAutoMapLocations(true);
     shader.setAutoMapBindings(true);
   }

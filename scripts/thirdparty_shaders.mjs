@@ -1,0 +1,151 @@
+// Extracts two third-party PBR shaders into plain GLSL 450 core files for duolod's shader round-trip
+// test (tests/shader_roundtrip_test.cpp):
+//   three.js MeshPhysicalMaterial (npm `three`): ShaderLib/meshphysical.glsl.js with every
+//     `#include <chunk>` expanded from ShaderChunk/*.glsl.js, light counts substituted and
+//     `#pragma unroll_loop` loops unrolled the way three's WebGLProgram does, and the prefix three
+//     generates at run time (built-in uniforms/attributes, GLSL 3 macros, tone mapping and output
+//     encoding functions) written out for one configuration;
+//   glTF Sample Viewer PBR (npm `@khronosgroup/gltf-viewer`): primitive.vert and pbr.frag taken from
+//     the bundled JS strings, their `#include <x.glsl>` expanded, with the defines the viewer sets for
+//     a textured metallic-roughness material with one punctual light.
+// The result keeps the shaders' own names; locations and bindings are left to glslang's
+// auto-mapping (CompileOptions::auto_map_locations), since neither source declares any.
+//
+// usage: node scripts/thirdparty_shaders.mjs NPM_CACHE_DIR   (writes NPM_CACHE_DIR/extracted/*)
+import { mkdirSync, readFileSync, writeFileSync, renameSync } from 'node:fs';
+import { join } from 'node:path';
+import { pathToFileURL } from 'node:url';
+
+const cache = process.argv[2];
+if (!cache) {
+  console.error('usage: node thirdparty_shaders.mjs NPM_CACHE_DIR');
+  process.exit(2);
+}
+const out = join(cache, 'extracted');
+mkdirSync(out, { recursive: true });
+
+// SPIR-V has no bool uniforms (OpTypeBool cannot be externally visible): an int stands in, and a
+// macro keeps every use of the name reading a bool.
+function boolUniformsToInt(text) {
+  return text.replace(/^([ \t]*)uniform bool (\w+);/gm,
+    (match, indent, name) => `${indent}uniform int ${name}Flag;\n${indent}#define ${name} (${name}Flag != 0)`);
+}
+
+function writeAtomic(name, text) {
+  text = boolUniformsToInt(text);
+  const path = join(out, name);
+  writeFileSync(path + '.tmp', text);
+  renameSync(path + '.tmp', path);
+  console.log(`thirdparty_shaders: wrote ${path} (${text.split('\n').length} lines)`);
+}
+
+function expandIncludes(text, lookup, pattern, stack = []) {
+  return text.replace(pattern, (match, name) => {
+    const chunk = lookup(name);
+    if (chunk === undefined) throw new Error(`cannot resolve #include <${name}> (from ${stack.join(' > ') || 'main'})`);
+    if (stack.includes(name)) throw new Error(`recursive #include <${name}>`);
+    return expandIncludes(chunk, lookup, pattern, [...stack, name]);
+  });
+}
+
+// ---- three.js MeshPhysicalMaterial --------------------------------------------------------------
+
+async function threePhysical() {
+  const shaders = join(cache, 'three', 'package', 'src', 'renderers', 'shaders');
+  const { ShaderChunk } = await import(pathToFileURL(join(shaders, 'ShaderChunk.js')).href);
+  const physical = await import(pathToFileURL(join(shaders, 'ShaderLib', 'meshphysical.glsl.js')).href);
+  const includePattern = /^[ \t]*#include +<([\w\d./]+)>/gm;  // three's WebGLProgram pattern
+  // One directional and one point light, nothing else (three's replaceLightNums).
+  const lights = {
+    NUM_SUN_LIGHTS: 0, NUM_DIR_LIGHTS: 1, NUM_SPOT_LIGHTS: 0, NUM_SPOT_LIGHT_MAPS: 0,
+    NUM_SPOT_LIGHT_COORDS: 0, NUM_RECT_AREA_LIGHTS: 0, NUM_POINT_LIGHTS: 1, NUM_HEMI_LIGHTS: 0,
+    NUM_SUN_LIGHT_SHADOWS: 0, NUM_DIR_LIGHT_SHADOWS: 0, NUM_SPOT_LIGHT_SHADOWS_WITH_MAPS: 0,
+    NUM_SPOT_LIGHT_SHADOWS: 0, NUM_POINT_LIGHT_SHADOWS: 0, NUM_LIGHT_PROBE_GRIDS: 0,
+    NUM_CLIPPING_PLANES: 0, UNION_CLIPPING_PLANES: 0,
+  };
+  const unrollPattern = /#pragma unroll_loop_start\s+for\s*\(\s*int\s+i\s*=\s*(\d+)\s*;\s*i\s*<\s*(\d+)\s*;\s*i\s*\+\+\s*\)\s*{([\s\S]+?)}\s+#pragma unroll_loop_end/g;
+  function prepare(text) {
+    text = expandIncludes(text, (name) => ShaderChunk[name], includePattern);
+    // Longest names first so NUM_SPOT_LIGHT_SHADOWS_WITH_MAPS is not cut by NUM_SPOT_LIGHT_SHADOWS.
+    for (const name of Object.keys(lights).sort((a, b) => b.length - a.length))
+      text = text.replace(new RegExp(name, 'g'), String(lights[name]));
+    return text.replace(unrollPattern, (match, start, end, body) => {
+      let unrolled = '';
+      for (let i = parseInt(start); i < parseInt(end); i++)
+        unrolled += body.replace(/\[\s*i\s*\]/g, `[ ${i} ]`).replace(/UNROLLED_LOOP_INDEX/g, String(i));
+      return unrolled;
+    });
+  }
+  // The material features this configuration exercises (three's prefix defines): textures for
+  // colour, normal (tangent space), roughness, metalness, emissive, ambient occlusion; clearcoat
+  // and sheen; ACES tone mapping; sRGB output.
+  const features = [
+    '#define PHYSICAL', '#define USE_MAP', '#define MAP_UV uv', '#define USE_NORMALMAP',
+    '#define USE_NORMALMAP_TANGENTSPACE', '#define NORMALMAP_UV uv', '#define USE_ROUGHNESSMAP',
+    '#define ROUGHNESSMAP_UV uv', '#define USE_METALNESSMAP', '#define METALNESSMAP_UV uv',
+    '#define USE_EMISSIVEMAP', '#define EMISSIVEMAP_UV uv', '#define USE_AOMAP', '#define AOMAP_UV uv',
+    '#define USE_CLEARCOAT', '#define USE_SHEEN', '#define USE_UV',
+  ];
+  const vertexPrefix = [
+    '#version 450 core', '#define SHADER_TYPE MeshPhysicalMaterial', '#define SHADER_NAME MeshPhysicalMaterial',
+    ...features, '#define attribute in', '#define varying out', '#define texture2D texture',
+    'uniform mat4 modelMatrix;', 'uniform mat4 modelViewMatrix;', 'uniform mat4 projectionMatrix;',
+    'uniform mat4 viewMatrix;', 'uniform mat3 normalMatrix;', 'uniform vec3 cameraPosition;',
+    'uniform bool isOrthographic;', 'in vec3 position;', 'in vec3 normal;', 'in vec2 uv;', '',
+  ].join('\n');
+  const fragmentPrefix = [
+    '#version 450 core', '#define SHADER_TYPE MeshPhysicalMaterial', '#define SHADER_NAME MeshPhysicalMaterial',
+    ...features, '#define varying in', 'layout(location = 0) out highp vec4 pc_fragColor;',
+    '#define gl_FragColor pc_fragColor', '#define texture2D texture', '#define textureCube texture',
+    '#define TONE_MAPPING', 'uniform mat4 viewMatrix;', 'uniform vec3 cameraPosition;',
+    'uniform bool isOrthographic;', '',
+  ].join('\n');
+  // three appends these after its tone-mapping and colour-space chunks (WebGLProgram).
+  const fragmentFunctions = [
+    'vec3 toneMapping( vec3 color ) { return ACESFilmicToneMapping( color ); }',
+    'vec4 linearToOutputTexel( vec4 value ) { return sRGBTransferOETF( value ); }',
+    'float luminance( const in vec3 rgb ) { const vec3 weights = vec3( 0.2126, 0.7152, 0.0722 ); return dot( weights, rgb ); }',
+    '',
+  ].join('\n');
+  const fragmentChunks = expandIncludes('#include <tonemapping_pars_fragment>\n#include <colorspace_pars_fragment>\n',
+    (name) => ShaderChunk[name], includePattern);
+  writeAtomic('three_physical.vert', vertexPrefix + prepare(physical.vertex));
+  writeAtomic('three_physical.frag', fragmentPrefix + fragmentChunks + fragmentFunctions + prepare(physical.fragment));
+}
+
+// ---- glTF Sample Viewer ------------------------------------------------------------------------
+
+function gltfViewer() {
+  const bundle = readFileSync(join(cache, 'gltf-viewer', 'package', 'dist', 'gltf-viewer.module.js'), 'utf8');
+  // `var NAME = "...";` string literals, read as JavaScript (JSON cannot read every JS escape).
+  const strings = {};
+  for (const match of bundle.matchAll(/^var (\w+) = ("(?:[^"\\\n]|\\.)*");/gm))
+    strings[match[1]] = Function(`"use strict"; return (${match[2]});`)();
+  // The viewer's `shaderSources.set("file", variable)` table maps include names to those strings.
+  const sources = {};
+  for (const match of bundle.matchAll(/shaderSources\.set\("([\w.]+)",\s*(\w+)\)/g)) sources[match[1]] = strings[match[2]];
+  for (const needed of ['primitive.vert', 'pbr.frag'])
+    if (sources[needed] === undefined) throw new Error(`gltf-viewer bundle: ${needed} not found`);
+  const includePattern = /^[ \t]*#include <([\w\d./]+)>/gm;
+  // The defines the viewer sets for a primitive with normals, tangents and UVs and a textured
+  // metallic-roughness material, opaque, with one punctual light and KHR_materials_emissive_strength.
+  const defines = [
+    '#define HAS_NORMAL_VEC3 1', '#define HAS_TANGENT_VEC4 1', '#define HAS_TEXCOORD_0_VEC2 1',
+    '#define MATERIAL_METALLICROUGHNESS 1', '#define HAS_BASE_COLOR_MAP 1', '#define HAS_NORMAL_MAP 1',
+    '#define HAS_METALLIC_ROUGHNESS_MAP 1', '#define HAS_OCCLUSION_MAP 1', '#define HAS_EMISSIVE_MAP 1',
+    '#define MATERIAL_EMISSIVE_STRENGTH 1', '#define ALPHAMODE_OPAQUE 0', '#define ALPHAMODE_MASK 1',
+    '#define ALPHAMODE_BLEND 2', '#define ALPHAMODE ALPHAMODE_OPAQUE', '#define USE_PUNCTUAL 1',
+    '#define LIGHT_COUNT 1', '#define TONEMAP_KHR_PBR_NEUTRAL 1', '#define LINEAR_OUTPUT 0', '',
+  ].join('\n');
+  const expand = (name) => expandIncludes(sources[name], (include) => sources[include], includePattern);
+  const fragment = expand('pbr.frag');
+  // The viewer numbers its debug views and sets DEBUG to DEBUG_NONE for normal rendering.
+  const debugNames = [...new Set(fragment.match(/\bDEBUG_\w+/g) || [])].filter((name) => name !== 'DEBUG_NONE').sort();
+  const debugDefines = ['#define DEBUG_NONE 0', ...debugNames.map((name, i) => `#define ${name} ${i + 1}`),
+    '#define DEBUG DEBUG_NONE', ''].join('\n');
+  writeAtomic('gltf_viewer_pbr.vert', '#version 450 core\n' + defines + expand('primitive.vert'));
+  writeAtomic('gltf_viewer_pbr.frag', '#version 450 core\n' + defines + debugDefines + fragment);
+}
+
+await threePhysical();
+gltfViewer();

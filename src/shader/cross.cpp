@@ -1,0 +1,115 @@
+// SPIR-V → GLSL 450 / GLSL ES 300 / HLSL 5.0 through SPIRV-Cross's C++ API (Debian
+// libspirv-cross-c-shared-dev static libraries), with explicit options, and the re-compile check of
+// what it emits through glslang.
+#include <glslang/Public/ResourceLimits.h>
+#include <glslang/Public/ShaderLang.h>
+#include <spirv_glsl.hpp>
+#include <spirv_hlsl.hpp>
+
+#include <exception>
+
+#include "duolod/shader.hpp"
+
+namespace duolod::shader {
+namespace {
+using core::Error;
+
+EShLanguage glslangStage(Stage stage) {
+  switch (stage) {
+    case Stage::kVertex: return EShLangVertex;
+    case Stage::kTessControl: return EShLangTessControl;
+    case Stage::kTessEvaluation: return EShLangTessEvaluation;
+    case Stage::kGeometry: return EShLangGeometry;
+    case Stage::kFragment: return EShLangFragment;
+  }
+  return EShLangVertex;
+}
+
+void setGlslOptions(spirv_cross::CompilerGLSL& compiler, Target target) {
+  spirv_cross::CompilerGLSL::Options options;
+  options.vulkan_semantics = false;
+  options.separate_shader_objects = false;
+  options.emit_line_directives = false;
+  options.force_zero_initialized_variables = false;
+  if (target == Target::kGlslEs300) {
+    options.es = true;
+    options.version = 300;
+    // highp everywhere: the ES output must compute what the desktop one does.
+    options.fragment.default_float_precision = spirv_cross::CompilerGLSL::Options::Highp;
+    options.fragment.default_int_precision = spirv_cross::CompilerGLSL::Options::Highp;
+  } else {
+    options.es = false;
+    options.version = 450;
+    options.enable_420pack_extension = true;
+  }
+  compiler.set_common_options(options);
+}
+
+}  // namespace
+
+const char* targetName(Target target) {
+  switch (target) {
+    case Target::kGlsl450: return "GLSL 450";
+    case Target::kGlslEs300: return "GLSL ES 300";
+    case Target::kHlsl50: return "HLSL 5.0";
+  }
+  return "?";
+}
+
+core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Target target,
+                                       const std::string& what) {
+  // SPIRV-Cross reports unsupported constructs by throwing CompilerError.
+  try {
+    if (target == Target::kHlsl50) {
+      spirv_cross::CompilerHLSL compiler(words);
+      spirv_cross::CompilerHLSL::Options hlsl;
+      hlsl.shader_model = 50;
+      // HLSL has no gl_PointSize; writes of 1.0 (the only size D3D draws) are dropped rather than
+      // failing the whole shader (the glTF Sample Viewer's vertex shader writes it).
+      hlsl.point_size_compat = true;
+      hlsl.use_entry_point_name = false;  // "main", which checkCrossCompiled expects
+      compiler.set_hlsl_options(hlsl);
+      spirv_cross::CompilerGLSL::Options common;
+      common.vertex.flip_vert_y = false;
+      common.vertex.fixup_clipspace = false;  // keep OpenGL's clip space; the reader's engine maps it
+      compiler.set_common_options(common);
+      return compiler.compile();
+    }
+    spirv_cross::CompilerGLSL compiler(words);
+    setGlslOptions(compiler, target);
+    return compiler.compile();
+  } catch (const std::exception& error) {
+    return Error{what + ": SPIRV-Cross (" + targetName(target) + "): " + error.what()};
+  }
+}
+
+core::Status checkCrossCompiled(const std::string& source, Target target, Stage stage,
+                                const std::string& what) {
+  std::string name = what + " (" + targetName(target) + ")";
+  if (target == Target::kGlsl450 || target == Target::kHlsl50) {
+    CompileOptions options;
+    options.language = target == Target::kHlsl50 ? Language::kHlsl : Language::kGlsl;
+    // SPIRV-Cross writes no location for loose (non-block) uniforms, which OpenGL GLSL resolves by
+    // name but glslang's SPIR-V path insists on: let glslang number them for the check.
+    options.auto_map_locations = true;
+    auto words = compileToSpirv(source, stage, name, options);
+    if (!words.ok()) return words.error();
+    return validateSpirv(*words, name);
+  }
+  // GLSL ES 300 has no SPIR-V path for OpenGL: parse and link with the ES profile.
+  static_cast<void>(compileToSpirv("", stage, "init", {}));  // initialises glslang once
+  EShLanguage language = glslangStage(stage);
+  glslang::TShader shader(language);
+  const char* text = source.c_str();
+  const char* file = name.c_str();
+  shader.setStringsWithLengthsAndNames(&text, nullptr, &file, 1);
+  shader.setEnvInput(glslang::EShSourceGlsl, language, glslang::EShClientNone, 0);
+  if (!shader.parse(GetDefaultResources(), 300, EEsProfile, false, false, EShMsgDefault))
+    return Error{name + ": " + shader.getInfoLog()};
+  glslang::TProgram program;
+  program.addShader(&shader);
+  if (!program.link(EShMsgDefault)) return Error{name + ": link: " + program.getInfoLog()};
+  return core::okStatus();
+}
+
+}  // namespace duolod::shader
