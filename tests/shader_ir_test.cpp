@@ -356,5 +356,52 @@ TEST(ShaderIr, MalformedWordsGiveErrorsNotCrashes) {
   }
 }
 
+// Corrupted modules (deterministic word flips of a real one) never crash the parser or any
+// analysis: the parser either rejects them or hands over a module every query survives.
+TEST(ShaderIr, CorruptedModulesNeverCrashTheAnalyses) {
+  std::vector<uint32_t> original = compileOrDie(readShader("noise_phong.frag"), Stage::kFragment, "noise_phong.frag");
+  ASSERT_FALSE(original.empty());
+  uint64_t state = 0x9e3779b97f4a7c15ull;  // fixed seed: the same corruptions every run
+  auto next = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<uint32_t>(state >> 33);
+  };
+  int parsed = 0, rejected = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<uint32_t> words = original;
+    int flips = 1 + static_cast<int>(next() % 3);
+    for (int f = 0; f < flips; ++f) {
+      size_t at = 5 + next() % (words.size() - 5);
+      // Small values hit ids, opcodes and counts; random ones anything.
+      words[at] = (next() % 2) ? next() % 64 : next();
+    }
+    auto module = ir::parseModule(words);
+    if (!module.ok()) {
+      ++rejected;
+      continue;
+    }
+    ++parsed;
+    ir::DefUse uses(*module);
+    ir::interfaceVariables(*module, uses);
+    ir::uniformBlocks(*module, uses);
+    ir::looseUniforms(*module, uses);
+    ir::samplers(*module, uses);
+    for (const ir::Instruction& instruction : module->types_values) {
+      ir::typeInfo(uses, instruction.result_id);
+      ir::constantAsFloats(uses, instruction.result_id);
+    }
+    for (const ir::Function& function : module->functions) {
+      ir::buildCfg(function);
+      for (const ir::Block& block : function.blocks)
+        for (const ir::Instruction& instruction : block.instructions)
+          if (instruction.hasResult() && next() % 64 == 0) ir::backwardSlice(*module, uses, instruction.result_id);
+    }
+    EXPECT_TRUE(ir::parseModule(ir::emitModule(*module)).ok()) << "trial " << trial;
+  }
+  EXPECT_GT(parsed, 0);
+  EXPECT_GT(rejected, 0);
+  std::printf("[ corrupted ] %d parsed, %d rejected\n", parsed, rejected);
+}
+
 }  // namespace
 }  // namespace duolod::shader

@@ -124,8 +124,7 @@ struct ModuleBuilder {
         function->parameters.push_back(std::move(instruction));
         return;
       case spv::OpLabel:
-        if (block && !block->instructions.empty() &&
-            !isTerminator(block->instructions.back().opcode))
+        if (block && (block->instructions.empty() || !isTerminator(block->instructions.back().opcode)))
           return fail("block " + std::to_string(block->id()) + " has no terminator");
         function->blocks.emplace_back();
         block = &function->blocks.back();

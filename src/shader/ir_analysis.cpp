@@ -13,10 +13,15 @@ namespace duolod::shader::ir {
 // ---------------------------------------------------------------------------------------------
 // Types and constants.
 
-TypeInfo typeInfo(const DefUse& uses, Id type_id) {
+namespace {
+// Nesting limit for type and constant walks: a valid module's types are acyclic and shallow; a
+// malformed one (ids referring to themselves) must not recurse forever.
+constexpr int kMaxNesting = 64;
+
+TypeInfo typeInfoAt(const DefUse& uses, Id type_id, int depth) {
   TypeInfo info;
   const Instruction* type = uses.def(type_id);
-  if (!type) return info;
+  if (!type || depth > kMaxNesting) return info;
   info.opcode = type->opcode;
   switch (type->opcode) {
     case spv::OpTypeBool:
@@ -30,14 +35,14 @@ TypeInfo typeInfo(const DefUse& uses, Id type_id) {
       info.width = type->operands[0];
       break;
     case spv::OpTypeVector: {
-      TypeInfo component = typeInfo(uses, type->operands[0]);
+      TypeInfo component = typeInfoAt(uses, type->operands[0], depth + 1);
       info.scalar_type = component.scalar_type;
       info.width = component.width;
       info.components = type->operands[1];
       break;
     }
     case spv::OpTypeMatrix: {
-      TypeInfo column = typeInfo(uses, type->operands[0]);
+      TypeInfo column = typeInfoAt(uses, type->operands[0], depth + 1);
       info.scalar_type = column.scalar_type;
       info.width = column.width;
       info.columns = type->operands[1];
@@ -48,6 +53,9 @@ TypeInfo typeInfo(const DefUse& uses, Id type_id) {
   }
   return info;
 }
+}  // namespace
+
+TypeInfo typeInfo(const DefUse& uses, Id type_id) { return typeInfoAt(uses, type_id, 0); }
 
 namespace {
 spv::Op scalarOpcode(const DefUse& uses, Id type_id) {
@@ -94,15 +102,15 @@ bool isSampledImageType(const DefUse& uses, Id type_id) {
 }
 
 namespace {
-bool isOpaqueType(const DefUse& uses, Id type_id) {
+bool isOpaqueType(const DefUse& uses, Id type_id, int depth = 0) {
   const Instruction* type = uses.def(type_id);
-  if (!type) return false;
+  if (!type || depth > kMaxNesting) return false;
   switch (type->opcode) {
     case spv::OpTypeImage:
     case spv::OpTypeSampler:
     case spv::OpTypeSampledImage: return true;
     case spv::OpTypeArray:
-    case spv::OpTypeRuntimeArray: return isOpaqueType(uses, type->operands[0]);
+    case spv::OpTypeRuntimeArray: return isOpaqueType(uses, type->operands[0], depth + 1);
     default: return false;
   }
 }
@@ -141,9 +149,10 @@ std::optional<int64_t> constantIntValue(const DefUse& uses, Id id) {
   return static_cast<int64_t>(value->operands[0]);
 }
 
-std::vector<float> constantAsFloats(const DefUse& uses, Id id) {
+namespace {
+std::vector<float> constantAsFloatsAt(const DefUse& uses, Id id, int depth) {
   const Instruction* value = uses.def(id);
-  if (!value) return {};
+  if (!value || depth > kMaxNesting) return {};
   switch (value->opcode) {
     case spv::OpConstantTrue: return {1.0f};
     case spv::OpConstantFalse: return {0.0f};
@@ -167,7 +176,7 @@ std::vector<float> constantAsFloats(const DefUse& uses, Id id) {
     case spv::OpConstantComposite: {
       std::vector<float> result;
       for (uint32_t component : value->operands) {
-        std::vector<float> part = constantAsFloats(uses, component);
+        std::vector<float> part = constantAsFloatsAt(uses, component, depth + 1);
         if (part.empty()) return {};
         result.insert(result.end(), part.begin(), part.end());
       }
@@ -176,6 +185,9 @@ std::vector<float> constantAsFloats(const DefUse& uses, Id id) {
     default: return {};
   }
 }
+}  // namespace
+
+std::vector<float> constantAsFloats(const DefUse& uses, Id id) { return constantAsFloatsAt(uses, id, 0); }
 
 // ---------------------------------------------------------------------------------------------
 // Interface, uniforms, samplers.
@@ -543,7 +555,11 @@ class Slicer {
   // A pointer operand: walk access chains to the base variable, following index ids.
   void visitPointer(Id pointer) {
     const Instruction* def = uses_.def(pointer);
-    while (def && isPointerStep(def->opcode)) {
+    for (int steps = 0; def && isPointerStep(def->opcode); ++steps) {
+      if (steps > kMaxNesting) {  // a malformed module's chain that loops
+        sources_.reads_other = true;
+        return;
+      }
       for (size_t i = 1; i < def->operands.size(); ++i)
         if (def->is_id[i]) push(def->operands[i]);
       def = uses_.def(def->operands[0]);
