@@ -143,8 +143,73 @@ function gltfViewer() {
   const debugNames = [...new Set(fragment.match(/\bDEBUG_\w+/g) || [])].filter((name) => name !== 'DEBUG_NONE').sort();
   const debugDefines = ['#define DEBUG_NONE 0', ...debugNames.map((name, i) => `#define ${name} ${i + 1}`),
     '#define DEBUG DEBUG_NONE', ''].join('\n');
-  writeAtomic('gltf_viewer_pbr.vert', '#version 450 core\n' + defines + expand('primitive.vert'));
+  const vertex = expand('primitive.vert');
+  writeAtomic('gltf_viewer_pbr.vert', '#version 450 core\n' + defines + vertex);
   writeAtomic('gltf_viewer_pbr.frag', '#version 450 core\n' + defines + debugDefines + fragment);
+  writeAtomic('gltf_viewer_pbr_duolod.vert', '#version 450 core\n' + duolodInterface + defines + adaptVertex(vertex));
+  writeAtomic('gltf_viewer_pbr_duolod.frag', '#version 450 core\n' + duolodInterface + defines + debugDefines + adaptFragment(fragment));
+}
+
+// ---- the adapter onto duolod's renderer interface (shaders/INTERFACE.md) ----------------------
+// The viewer's uniforms become expressions of duolod's Frame/Material blocks, its attributes and
+// textures get duolod's locations and bindings, and its light array becomes duolod's one light
+// (directional, from the light position towards the object's centre: the interface has no
+// distance falloff, the viewer's point lights do). Uniforms the interface lacks keep their
+// declarations and read 0, the GL default (uv set 0, no transform).
+
+const duolodInterface = `layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(std140, binding = 1) uniform Material {
+  vec4 uBaseColorFactor; vec4 uEmissiveFactor; vec4 uMaterialParams; vec4 uTextureFlags; vec4 uTextureFlags2;
+};
+`;
+
+// `uniform T name;` → `#define name (expression)`, on its own line (the viewer's GLSL is minified).
+function uniformToExpression(text, name, expression) {
+  const pattern = new RegExp(`uniform\\s+\\w+\\s+${name}\\s*;`);
+  if (!pattern.test(text)) throw new Error(`gltf-viewer adapter: no uniform ${name}`);
+  return text.replace(pattern, `\n#define ${name} (${expression})\n`);
+}
+
+function qualify(text, declaration, qualifier) {
+  const pattern = new RegExp(`(^|[;\\s])(${declaration.replace(/ /g, '\\s+')}\\s*;)`, 'm');
+  if (!pattern.test(text)) throw new Error(`gltf-viewer adapter: no declaration ${declaration}`);
+  return text.replace(pattern, `$1${qualifier} $2`);
+}
+
+function adaptVertex(text) {
+  text = uniformToExpression(text, 'u_ViewProjectionMatrix', 'uProjection * uView');
+  text = uniformToExpression(text, 'u_ModelMatrix', 'uModel');
+  text = uniformToExpression(text, 'u_NormalMatrix', 'uNormalMatrix');
+  const attributes = [['in vec3 a_position', 0], ['in vec3 a_normal', 1], ['in vec4 a_tangent', 2],
+    ['in vec2 a_texcoord_0', 3]];
+  for (const [declaration, location] of attributes) text = qualify(text, declaration, `layout(location = ${location})`);
+  return text;
+}
+
+function adaptFragment(text) {
+  const expressions = {
+    u_Camera: 'uCameraPosition.xyz', u_BaseColorFactor: 'uBaseColorFactor', u_EmissiveFactor: 'uEmissiveFactor.rgb',
+    u_MetallicFactor: 'uMaterialParams.x', u_RoughnessFactor: 'uMaterialParams.y', u_NormalScale: 'uMaterialParams.z',
+    u_OcclusionStrength: 'uMaterialParams.w', u_EmissiveStrength: '1.0', u_Exposure: '1.0',
+  };
+  for (const [name, expression] of Object.entries(expressions)) text = uniformToExpression(text, name, expression);
+  const samplers = [['u_BaseColorSampler', 0], ['u_MetallicRoughnessSampler', 1], ['u_NormalSampler', 2],
+    ['u_OcclusionSampler', 3], ['u_EmissiveSampler', 4]];
+  for (const [name, binding] of samplers) text = qualify(text, `uniform sampler2D ${name}`, `layout(binding = ${binding})`);
+  text = qualify(text, 'out vec4 g_finalColor', 'layout(location = 0)');
+  const lights = /uniform\s+Light\s+u_Lights\s*\[\s*LIGHT_COUNT\s*\+\s*1\s*\]\s*;/;
+  if (!lights.test(text)) throw new Error('gltf-viewer adapter: no u_Lights array');
+  return text.replace(lights, `
+Light duolodLight() {
+  vec3 center = (uModel * vec4(uObjectInfo.xyz, 1.0)).xyz;
+  return Light(normalize(center - uLightPosition.xyz), -1.0, uLightColor.rgb, 1.0, uLightPosition.xyz, 0.0, 0.0,
+               LightType_Directional);
+}
+#define u_Lights Light[LIGHT_COUNT + 1](duolodLight(), duolodLight())
+`);
 }
 
 await threePhysical();
