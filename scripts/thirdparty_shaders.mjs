@@ -10,6 +10,8 @@
 //     a textured metallic-roughness material with one punctual light.
 // The result keeps the shaders' own names; locations and bindings are left to glslang's
 // auto-mapping (CompileOptions::auto_map_locations), since neither source declares any.
+// *_duolod.{vert,frag} are the same shaders adapted onto duolod's renderer interface
+// (shaders/INTERFACE.md) so the round-trip test can render them.
 //
 // usage: node scripts/thirdparty_shaders.mjs NPM_CACHE_DIR   (writes NPM_CACHE_DIR/extracted/*)
 import { mkdirSync, readFileSync, writeFileSync, renameSync } from 'node:fs';
@@ -109,8 +111,64 @@ async function threePhysical() {
   ].join('\n');
   const fragmentChunks = expandIncludes('#include <tonemapping_pars_fragment>\n#include <colorspace_pars_fragment>\n',
     (name) => ShaderChunk[name], includePattern);
-  writeAtomic('three_physical.vert', vertexPrefix + prepare(physical.vertex));
-  writeAtomic('three_physical.frag', fragmentPrefix + fragmentChunks + fragmentFunctions + prepare(physical.fragment));
+  const vertex = vertexPrefix + prepare(physical.vertex);
+  const fragment = fragmentPrefix + fragmentChunks + fragmentFunctions + prepare(physical.fragment);
+  writeAtomic('three_physical.vert', vertex);
+  writeAtomic('three_physical.frag', fragment);
+  writeAtomic('three_physical_duolod.vert', adaptThreeVertex(boolUniformsToInt(vertex)));
+  writeAtomic('three_physical_duolod.frag', adaptThreeFragment(boolUniformsToInt(fragment)));
+}
+
+// three's built-in uniforms and material parameters as expressions of duolod's blocks; its light
+// arrays as duolod's one light (directional, towards the light from the object's centre, in view
+// space as three expects; the point light switched off); its textures at duolod's bindings; every
+// UV transform the identity (three's default).
+function adaptThreeVertex(text) {
+  text = withDuolodInterface(text);
+  const expressions = {
+    modelMatrix: 'uModel', modelViewMatrix: 'uView * uModel', projectionMatrix: 'uProjection', viewMatrix: 'uView',
+    normalMatrix: 'mat3(uView) * mat3(uNormalMatrix)', cameraPosition: 'uCameraPosition.xyz',
+  };
+  // The UV transforms of the enabled maps (the others sit in inactive #ifdef blocks).
+  for (const map of ['map', 'normalMap', 'roughnessMap', 'metalnessMap', 'emissiveMap', 'aoMap'])
+    expressions[`${map}Transform`] = 'mat3(1.0)';
+  text = uniformsToGlobals(text, expressions);
+  const attributes = [['in vec3 position', 0], ['in vec3 normal', 1], ['in vec2 uv', 3]];
+  for (const [declaration, location] of attributes) text = qualify(text, declaration, `layout(location = ${location})`);
+  return text;
+}
+
+function adaptThreeFragment(text) {
+  text = withDuolodInterface(text);
+  const expressions = {
+    viewMatrix: 'uView', cameraPosition: 'uCameraPosition.xyz', toneMappingExposure: '1.0',
+    diffuse: 'uBaseColorFactor.rgb', opacity: 'uBaseColorFactor.a', emissive: 'uEmissiveFactor.rgb',
+    metalness: 'uMaterialParams.x', roughness: 'uMaterialParams.y', normalScale: 'vec2(uMaterialParams.z)',
+    aoMapIntensity: 'uMaterialParams.w', ior: '1.5', specularIntensity: '1.0', specularColor: 'vec3(1.0)',
+    ambientLightColor: 'uAmbientColor.rgb',
+  };
+  text = uniformsToGlobals(text, expressions);
+  const samplers = [['map', 0], ['roughnessMap', 1], ['metalnessMap', 1], ['normalMap', 2], ['aoMap', 3],
+    ['emissiveMap', 4]];
+  for (const [name, binding] of samplers) text = qualify(text, `uniform sampler2D ${name}`, `layout(binding = ${binding})`);
+  text = replaceOnce(text, /uniform\s+DirectionalLight\s+directionalLights\s*\[\s*1\s*\]\s*;/, `
+DirectionalLight duolodDirectionalLight() {
+  vec3 center = (uModel * vec4(uObjectInfo.xyz, 1.0)).xyz;
+  return DirectionalLight(normalize(mat3(uView) * (uLightPosition.xyz - center)), uLightColor.rgb);
+}
+#define directionalLights DirectionalLight[1](duolodDirectionalLight())
+`);
+  return replaceOnce(text, /uniform\s+PointLight\s+pointLights\s*\[\s*1\s*\]\s*;/,
+    '\n#define pointLights PointLight[1](PointLight(vec3(0.0), vec3(0.0), 0.0, 1.0))\n');
+}
+
+function replaceOnce(text, pattern, replacement) {
+  if (!pattern.test(text)) throw new Error(`adapter: ${pattern} not found`);
+  return text.replace(pattern, replacement);
+}
+
+function withDuolodInterface(text) {
+  return text.replace(/^#version 450 core\n/, '#version 450 core\n' + duolodInterface);
 }
 
 // ---- glTF Sample Viewer ------------------------------------------------------------------------
@@ -146,11 +204,12 @@ function gltfViewer() {
   const vertex = expand('primitive.vert');
   writeAtomic('gltf_viewer_pbr.vert', '#version 450 core\n' + defines + vertex);
   writeAtomic('gltf_viewer_pbr.frag', '#version 450 core\n' + defines + debugDefines + fragment);
-  writeAtomic('gltf_viewer_pbr_duolod.vert', '#version 450 core\n' + duolodInterface + defines + adaptVertex(vertex));
-  writeAtomic('gltf_viewer_pbr_duolod.frag', '#version 450 core\n' + duolodInterface + defines + debugDefines + adaptFragment(fragment));
+  writeAtomic('gltf_viewer_pbr_duolod.vert', withDuolodInterface('#version 450 core\n' + defines + adaptVertex(vertex)));
+  writeAtomic('gltf_viewer_pbr_duolod.frag',
+              withDuolodInterface('#version 450 core\n' + defines + debugDefines + adaptFragment(fragment)));
 }
 
-// ---- the adapter onto duolod's renderer interface (shaders/INTERFACE.md) ----------------------
+// ---- adapters onto duolod's renderer interface (shaders/INTERFACE.md) --------------------------
 // The viewer's uniforms become expressions of duolod's Frame/Material blocks, its attributes and
 // textures get duolod's locations and bindings, and its light array becomes duolod's one light
 // (directional, from the light position towards the object's centre: the interface has no
@@ -166,23 +225,30 @@ layout(std140, binding = 1) uniform Material {
 };
 `;
 
-// `uniform T name;` → `#define name (expression)`, on its own line (the viewer's GLSL is minified).
-function uniformToExpression(text, name, expression) {
-  const pattern = new RegExp(`uniform\\s+\\w+\\s+${name}\\s*;`);
-  if (!pattern.test(text)) throw new Error(`gltf-viewer adapter: no uniform ${name}`);
-  return text.replace(pattern, `\n#define ${name} (${expression})\n`);
+// `uniform T name;` → a global `T name;` assigned `expression` first thing in main() (a macro
+// would also rewrite parameters that share the name, as three's `viewMatrix` arguments do).
+function uniformsToGlobals(text, expressions) {
+  const assignments = [];
+  for (const [name, expression] of Object.entries(expressions)) {
+    const pattern = new RegExp(`uniform\\s+(\\w+)\\s+${name}\\s*;`);
+    const match = text.match(pattern);
+    if (!match) throw new Error(`adapter: no uniform ${name}`);
+    text = text.replace(pattern, `${match[1]} ${name};`);
+    assignments.push(`${name} = ${expression};`);
+  }
+  return replaceOnce(text, /void\s+main\s*\(\s*(void)?\s*\)\s*{/, (header) => `${header}\n  ${assignments.join('\n  ')}\n`);
 }
 
 function qualify(text, declaration, qualifier) {
   const pattern = new RegExp(`(^|[;\\s])(${declaration.replace(/ /g, '\\s+')}\\s*;)`, 'm');
-  if (!pattern.test(text)) throw new Error(`gltf-viewer adapter: no declaration ${declaration}`);
+  if (!pattern.test(text)) throw new Error(`adapter: no declaration ${declaration}`);
   return text.replace(pattern, `$1${qualifier} $2`);
 }
 
 function adaptVertex(text) {
-  text = uniformToExpression(text, 'u_ViewProjectionMatrix', 'uProjection * uView');
-  text = uniformToExpression(text, 'u_ModelMatrix', 'uModel');
-  text = uniformToExpression(text, 'u_NormalMatrix', 'uNormalMatrix');
+  text = uniformsToGlobals(text, {
+    u_ViewProjectionMatrix: 'uProjection * uView', u_ModelMatrix: 'uModel', u_NormalMatrix: 'uNormalMatrix',
+  });
   const attributes = [['in vec3 a_position', 0], ['in vec3 a_normal', 1], ['in vec4 a_tangent', 2],
     ['in vec2 a_texcoord_0', 3]];
   for (const [declaration, location] of attributes) text = qualify(text, declaration, `layout(location = ${location})`);
@@ -195,14 +261,13 @@ function adaptFragment(text) {
     u_MetallicFactor: 'uMaterialParams.x', u_RoughnessFactor: 'uMaterialParams.y', u_NormalScale: 'uMaterialParams.z',
     u_OcclusionStrength: 'uMaterialParams.w', u_EmissiveStrength: '1.0', u_Exposure: '1.0',
   };
-  for (const [name, expression] of Object.entries(expressions)) text = uniformToExpression(text, name, expression);
+  text = uniformsToGlobals(text, expressions);
   const samplers = [['u_BaseColorSampler', 0], ['u_MetallicRoughnessSampler', 1], ['u_NormalSampler', 2],
     ['u_OcclusionSampler', 3], ['u_EmissiveSampler', 4]];
   for (const [name, binding] of samplers) text = qualify(text, `uniform sampler2D ${name}`, `layout(binding = ${binding})`);
   text = qualify(text, 'out vec4 g_finalColor', 'layout(location = 0)');
   const lights = /uniform\s+Light\s+u_Lights\s*\[\s*LIGHT_COUNT\s*\+\s*1\s*\]\s*;/;
-  if (!lights.test(text)) throw new Error('gltf-viewer adapter: no u_Lights array');
-  return text.replace(lights, `
+  return replaceOnce(text, lights, `
 Light duolodLight() {
   vec3 center = (uModel * vec4(uObjectInfo.xyz, 1.0)).xyz;
   return Light(normalize(center - uLightPosition.xyz), -1.0, uLightColor.rgb, 1.0, uLightPosition.xyz, 0.0, 0.0,
