@@ -1,0 +1,119 @@
+// "Moving to parameter" (He, Foley, Tatarchuk, Fatahalian, "A system for rapid, automatic shader
+// level-of-detail", TOG 2015; Liang et al. §4.1 rule 3; Pellacini 2005's average substitution): a fragment
+// value n is replaced by average(n), its mean over the covered pixels of the training domain,
+// which the CPU sets as a uniform. The average comes from RuleContext::average_value (an
+// instrumented render, value_average.cpp); the rule only rewrites the program.
+//
+// Sites: fragment-entry float scalar/vector values that compute something (their backward slice
+// holds at least one arithmetic/call/sample instruction: replacing a plain load saves nothing), are
+// outside loops (one value per pixel), and whose slice has no side effects.
+#include <cctype>
+
+#include "shader/rules2_pending.hpp"
+#include "shader/value_rewrite.hpp"
+
+namespace duolod::shader {
+
+namespace {
+
+using ir::Id;
+
+core::Error siteFailure(const RuleSite& site, const std::string& reason) {
+  return core::Error{"moving to parameter at %" + std::to_string(site.target) + ": " + reason};
+}
+
+// Why `value` cannot be moved to a parameter, or "" when it can.
+std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses, Id value) {
+  const ir::InstructionRef* ref = uses.defRef(value);
+  int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
+  if (!ref || ref->function != entry || ref->block < 0) return "not a value of the fragment entry point";
+  const ir::Instruction& definition = *ref->instruction;
+  if (!definition.type_id || !ir::isFloatScalarOrVector(uses, definition.type_id) ||
+      ir::typeInfo(uses, definition.type_id).width != 32)
+    return "not a 32-bit float scalar or vector";
+  if (definition.opcode == spv::OpLoad) return "a plain load";
+  const ir::Function& function = fragment.functions[entry];
+  if (blocksInLoops(function).count(function.blocks[ref->block].id())) return "inside a loop";
+  ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
+  if (sources.has_side_effects) return "its computation has side effects";
+  if (computingInstructionCount(uses, sources) == 0) return "computes nothing";
+  return "";
+}
+
+// Identifier characters only, so the uniform's name survives cross-compilation readable.
+std::string identifierFrom(const std::string& text) {
+  std::string result;
+  for (char c : text)
+    result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return result;
+}
+
+}  // namespace
+
+std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
+                                               const RuleContext& context) {
+  std::vector<RuleSite> sites;
+  if (!context.average_value) return sites;  // nothing could compute the averages
+  const ir::Module& fragment = program.fragment;
+  ir::DefUse uses(fragment);
+  int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
+  if (entry < 0) return sites;
+  std::set<Id> in_loops = blocksInLoops(fragment.functions[entry]);
+  for (Id value : candidateValues(fragment, uses, spv::ExecutionModelFragment)) {
+    const ir::InstructionRef* ref = uses.defRef(value);
+    if (in_loops.count(fragment.functions[entry].blocks[ref->block].id())) continue;
+    ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
+    if (sources.has_side_effects || computingInstructionCount(uses, sources) == 0) continue;
+    RuleSite site;
+    site.kind = RuleKind::kMoveToParameter;
+    site.stage = Stage::kFragment;
+    site.target = value;
+    site.description = "moving to parameter: " + describeValue(fragment, uses, value) +
+                       " → its average over the domain";
+    sites.push_back(std::move(site));
+  }
+  return sites;
+}
+
+core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, const RuleSite& site,
+                                                 const RuleContext& context) {
+  if (site.kind != RuleKind::kMoveToParameter || site.stage != Stage::kFragment)
+    return siteFailure(site, "not a fragment moving-to-parameter site");
+  if (!context.average_value) return siteFailure(site, "no average_value in the rule context");
+  Id type_id = ir::kNoId;
+  std::string name;
+  {
+    ir::DefUse uses(program.fragment);
+    if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
+      return siteFailure(site, why);
+    type_id = uses.def(site.target)->type_id;
+    name = describeValue(program.fragment, uses, site.target);
+  }
+  core::Result<std::vector<float>> average =
+      context.average_value(program, Stage::kFragment, site.target);
+  if (!average) return siteFailure(site, "averaging failed: " + average.error().message);
+  ir::DefUse uses(program.fragment);
+  size_t components = ir::componentCount(uses, type_id);
+  if (average->size() != components || components > 4)
+    return siteFailure(site, "the average has " + std::to_string(average->size()) +
+                                 " components, the value " + std::to_string(components));
+
+  std::vector<uint32_t> taken;
+  for (const ParameterValue& parameter : program.parameters) taken.push_back(parameter.location);
+  uint32_t location = freeUniformLocation({&program.vertex, &program.fragment},
+                                          context.first_parameter_location, taken);
+  ParameterValue parameter;
+  parameter.name = "uAverage_" + identifierFrom(name) + "_" + std::to_string(location);
+  parameter.location = location;
+  parameter.components = static_cast<int>(components);
+  for (size_t i = 0; i < components; ++i) parameter.value[i] = (*average)[i];
+
+  ShaderProgram result = program;
+  Id uniform = result.fragment.addLooseUniform(type_id, parameter.name, location);
+  if (auto replaced = replaceValueByLoad(result.fragment, site.target, uniform); !replaced)
+    return siteFailure(site, replaced.error().message);
+  result.parameters.push_back(std::move(parameter));
+  return result;
+}
+
+}  // namespace duolod::shader

@@ -1,0 +1,370 @@
+// Helpers for rules that replace a fragment value (see value_rewrite.hpp).
+#include "shader/value_rewrite.hpp"
+
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <set>
+
+namespace duolod::shader {
+
+using ir::Id;
+using ir::Instruction;
+using ir::Module;
+
+int entryFunctionIndex(const Module& module, spv::ExecutionModel model) {
+  const ir::Function* function = module.entryFunction(model);
+  if (!function) return -1;
+  return static_cast<int>(function - module.functions.data());
+}
+
+Id glslStd450Import(Module& module) {
+  for (const Instruction& import : module.ext_inst_imports)
+    if (import.literalString(0) == "GLSL.std.450") return import.result_id;
+  Id id = module.allocateId();
+  module.ext_inst_imports.push_back(ir::makeInstruction(module, spv::OpExtInstImport, ir::kNoId, id,
+                                                        ir::encodeString("GLSL.std.450")));
+  return id;
+}
+
+void addToEntryInterface(Module& module, spv::ExecutionModel model, Id variable) {
+  for (Instruction& entry : module.entry_points) {
+    if (entry.operands.empty() || entry.operands[0] != static_cast<uint32_t>(model)) continue;
+    entry.operands.push_back(variable);
+    entry.is_id.push_back(true);
+  }
+}
+
+std::optional<ir::InstructionPosition> insertionPointFor(const Module& module, Id value) {
+  std::optional<ir::InstructionPosition> position = module.findPosition(value);
+  if (!position) return std::nullopt;
+  const std::vector<Instruction>& list =
+      module.functions[position->function].blocks[position->block].instructions;
+  if (list[position->index].opcode == spv::OpPhi) {
+    // SPIR-V requires the phis first in their block.
+    while (position->index < static_cast<int>(list.size()) &&
+           list[position->index].opcode == spv::OpPhi)
+      ++position->index;
+  }
+  return position;
+}
+
+core::Result<Id> replaceValueByLoad(Module& module, Id value, Id variable) {
+  std::optional<ir::InstructionPosition> defined_at = module.findPosition(value);
+  std::optional<ir::InstructionPosition> position = insertionPointFor(module, value);
+  if (!defined_at || !position)
+    return core::Error{"value %" + std::to_string(value) + " is not in a function body"};
+  Id type = module.functions[defined_at->function]
+                .blocks[defined_at->block]
+                .instructions[defined_at->index]
+                .type_id;
+  Id load = module.allocateId();
+  module.insertBefore(*position, {ir::makeInstruction(module, spv::OpLoad, type, load, {variable})});
+  module.replaceAllUses(value, load);
+  removeDeadCode(module);
+  return load;
+}
+
+namespace {
+
+bool isAtomic(spv::Op op) {
+  return (op >= spv::OpAtomicLoad && op <= spv::OpAtomicXor) || op == spv::OpAtomicFlagTestAndSet ||
+         op == spv::OpAtomicFlagClear;
+}
+
+// Opcodes whose removal, once their result is unused, cannot change what the shader does.
+bool removableWhenUnused(const Module& module, const Instruction& instruction) {
+  switch (instruction.opcode) {
+    case spv::OpFunctionCall:
+    case spv::OpVariable:
+    case spv::OpFunctionParameter:
+    case spv::OpLabel:
+    case spv::OpImageTexelPointer: return false;
+    case spv::OpExtInst: {
+      // Only GLSL.std.450 is known to be free of side effects.
+      for (const Instruction& import : module.ext_inst_imports)
+        if (import.result_id == instruction.operands[0])
+          return import.literalString(0) == "GLSL.std.450";
+      return false;
+    }
+    default: return !isAtomic(instruction.opcode);
+  }
+}
+
+// The variable (or parameter) a pointer is based on, through access chains.
+const Instruction* pointerBase(const ir::DefUse& uses, Id pointer) {
+  const Instruction* def = uses.def(pointer);
+  while (def && (def->opcode == spv::OpAccessChain || def->opcode == spv::OpInBoundsAccessChain ||
+                 def->opcode == spv::OpPtrAccessChain || def->opcode == spv::OpCopyObject))
+    def = uses.def(def->operands[0]);
+  return def;
+}
+
+bool isLocalPointer(const Instruction* base) {
+  if (!base) return false;
+  if (base->opcode == spv::OpFunctionParameter) return true;
+  return base->opcode == spv::OpVariable && base->operands[0] == spv::StorageClassFunction;
+}
+
+// True when calling `function` can only write memory reachable from its own pointer arguments
+// and locals, and has no other effect (discard, atomics, image writes, unknown extended sets).
+bool functionIsPure(const Module& module, const ir::DefUse& uses, Id function_id,
+                    std::map<Id, bool>& memo) {
+  if (auto found = memo.find(function_id); found != memo.end()) return found->second;
+  memo[function_id] = false;  // recursion is illegal in SPIR-V shaders; be conservative
+  const ir::Function* function = module.findFunction(function_id);
+  if (!function) return false;
+  for (const ir::Block& block : function->blocks)
+    for (const Instruction& instruction : block.instructions) {
+      switch (instruction.opcode) {
+        case spv::OpKill:
+        case spv::OpTerminateInvocation:
+        case spv::OpDemoteToHelperInvocation:
+        case spv::OpImageWrite:
+        case spv::OpEmitVertex:
+        case spv::OpEndPrimitive:
+        case spv::OpControlBarrier:
+        case spv::OpMemoryBarrier: return false;
+        case spv::OpStore:
+        case spv::OpCopyMemory:
+          if (!isLocalPointer(pointerBase(uses, instruction.operands[0]))) return false;
+          break;
+        case spv::OpFunctionCall:
+          if (!functionIsPure(module, uses, instruction.operands[0], memo)) return false;
+          break;
+        case spv::OpExtInst:
+          if (!removableWhenUnused(module, instruction)) return false;
+          break;
+        default:
+          if (isAtomic(instruction.opcode)) return false;
+      }
+    }
+  memo[function_id] = true;
+  return true;
+}
+
+bool isDebugOrAnnotation(spv::Op op) {
+  return op == spv::OpName || op == spv::OpMemberName || op == spv::OpDecorate ||
+         op == spv::OpMemberDecorate || op == spv::OpDecorateId || op == spv::OpLine;
+}
+
+// Users that make a value live (names and decorations do not).
+std::vector<const Instruction*> liveUsers(const ir::DefUse& uses, Id id) {
+  std::vector<const Instruction*> result;
+  for (const ir::InstructionRef& user : uses.users(id))
+    if (!isDebugOrAnnotation(user.instruction->opcode)) result.push_back(user.instruction);
+  return result;
+}
+
+}  // namespace
+
+size_t removeDeadCode(Module& module) {
+  size_t removed_total = 0;
+  std::set<Id> entry_functions;
+  for (const Instruction& entry : module.entry_points) entry_functions.insert(entry.operands[1]);
+  while (true) {
+    ir::DefUse uses(module);
+    std::map<Id, bool> pure_functions;
+    std::set<Id> dead;           // result ids to remove
+    std::set<Id> store_targets;  // Function variables whose stores go too
+    for (const ir::Function& function : module.functions) {
+      if (!entry_functions.count(function.id()) && liveUsers(uses, function.id()).empty()) {
+        // The whole function goes, and with it the names of everything defined inside.
+        dead.insert(function.id());
+        for (const Instruction& parameter : function.parameters) dead.insert(parameter.result_id);
+        for (const ir::Block& block : function.blocks) {
+          dead.insert(block.id());
+          for (const Instruction& instruction : block.instructions)
+            if (instruction.hasResult()) dead.insert(instruction.result_id);
+        }
+        continue;
+      }
+      for (const ir::Block& block : function.blocks)
+        for (const Instruction& instruction : block.instructions) {
+          if (!instruction.hasResult()) continue;
+          std::vector<const Instruction*> users = liveUsers(uses, instruction.result_id);
+          if (instruction.opcode == spv::OpVariable) {
+            bool only_stored = std::all_of(users.begin(), users.end(), [&](const Instruction* user) {
+              return user->opcode == spv::OpStore && user->operands[0] == instruction.result_id;
+            });
+            if (only_stored) {
+              dead.insert(instruction.result_id);
+              store_targets.insert(instruction.result_id);
+            }
+            continue;
+          }
+          if (!users.empty()) continue;
+          if (instruction.opcode == spv::OpFunctionCall) {
+            if (!functionIsPure(module, uses, instruction.operands[0], pure_functions)) continue;
+            // The callee may write through its pointer arguments: only drop the call when nobody
+            // reads those variables (parameter temporaries, which are then dropped too).
+            bool arguments_unread = true;
+            for (size_t i = 1; i < instruction.operands.size(); ++i) {
+              const Instruction* argument = uses.def(instruction.operands[i]);
+              if (!argument || !argument->type_id ||
+                  !ir::pointerStorageClass(uses, argument->type_id))
+                continue;
+              if (argument->opcode != spv::OpVariable) {
+                arguments_unread = false;
+                break;
+              }
+              for (const Instruction* user : liveUsers(uses, argument->result_id))
+                if (user->opcode != spv::OpStore && user->opcode != spv::OpFunctionCall)
+                  arguments_unread = false;
+            }
+            if (arguments_unread) dead.insert(instruction.result_id);
+            continue;
+          }
+          if (removableWhenUnused(module, instruction)) dead.insert(instruction.result_id);
+        }
+    }
+    if (dead.empty()) break;
+    size_t before = 0, after = 0, functions_before = module.functions.size();
+    for (const ir::Function& function : module.functions)
+      for (const ir::Block& block : function.blocks) before += block.instructions.size();
+    module.removeInstructionsIf([&](const Instruction& instruction) {
+      return instruction.opcode == spv::OpStore && store_targets.count(instruction.operands[0]);
+    });
+    module.removeInstructions(dead);
+    for (const ir::Function& function : module.functions)
+      for (const ir::Block& block : function.blocks) after += block.instructions.size();
+    if (before == after && functions_before == module.functions.size()) break;  // no progress
+    removed_total += before - after;
+  }
+  return removed_total;
+}
+
+namespace {
+
+// How many locations a value of `type` occupies (SPIR-V / GLSL location rules, 32-bit types).
+uint32_t locationsSpanned(const ir::DefUse& uses, Id type) {
+  const Instruction* def = uses.def(type);
+  if (!def) return 1;
+  switch (def->opcode) {
+    case spv::OpTypeMatrix: return def->operands[1];
+    case spv::OpTypeArray: {
+      auto length = ir::constantIntValue(uses, def->operands[1]);
+      return static_cast<uint32_t>(std::max<int64_t>(1, length.value_or(1))) *
+             locationsSpanned(uses, def->operands[0]);
+    }
+    case spv::OpTypeStruct: {
+      uint32_t total = 0;
+      for (uint32_t member : def->operands) total += locationsSpanned(uses, member);
+      return total;
+    }
+    default: return 1;
+  }
+}
+
+}  // namespace
+
+uint32_t freeInterfaceLocation(const std::vector<const Module*>& modules, uint32_t first) {
+  std::set<uint32_t> taken;
+  for (const Module* module : modules) {
+    ir::DefUse uses(*module);
+    for (const ir::InterfaceVariable& variable : ir::interfaceVariables(*module, uses)) {
+      if (!variable.location) continue;
+      uint32_t span = locationsSpanned(uses, variable.value_type);
+      for (uint32_t i = 0; i < span; ++i) taken.insert(*variable.location + i);
+    }
+  }
+  uint32_t location = first;
+  while (taken.count(location)) ++location;
+  return location;
+}
+
+uint32_t freeUniformLocation(const std::vector<const Module*>& modules, uint32_t first,
+                             const std::vector<uint32_t>& taken_list) {
+  std::set<uint32_t> taken(taken_list.begin(), taken_list.end());
+  for (const Module* module : modules) {
+    ir::DefUse uses(*module);
+    for (const ir::LooseUniform& uniform : ir::looseUniforms(*module, uses))
+      if (uniform.location) {
+        uint32_t span = locationsSpanned(uses, uniform.value_type);
+        for (uint32_t i = 0; i < span; ++i) taken.insert(*uniform.location + i);
+      }
+  }
+  uint32_t location = first;
+  while (taken.count(location)) ++location;
+  return location;
+}
+
+std::set<Id> blocksInLoops(const ir::Function& function) {
+  std::set<Id> inside;
+  ir::Cfg cfg = ir::buildCfg(function);
+  for (size_t header = 0; header < function.blocks.size(); ++header) {
+    const Instruction* merge = function.blocks[header].mergeInstruction();
+    if (!merge || merge->opcode != spv::OpLoopMerge) continue;
+    int merge_block = cfg.merge_block[header];
+    std::vector<int> work = {static_cast<int>(header)};
+    std::set<int> seen = {static_cast<int>(header)};
+    while (!work.empty()) {
+      int block = work.back();
+      work.pop_back();
+      inside.insert(cfg.blocks[block]);
+      for (int next : cfg.successors[block])
+        if (next != merge_block && seen.insert(next).second) work.push_back(next);
+    }
+  }
+  return inside;
+}
+
+std::vector<Id> candidateValues(const Module& module, const ir::DefUse& uses,
+                                spv::ExecutionModel model) {
+  std::vector<Id> result;
+  int entry = entryFunctionIndex(module, model);
+  if (entry < 0) return result;
+  for (const ir::Block& block : module.functions[entry].blocks)
+    for (const Instruction& instruction : block.instructions) {
+      if (!instruction.hasResult() || !instruction.type_id) continue;
+      switch (instruction.opcode) {
+        case spv::OpLoad:
+        case spv::OpAccessChain:
+        case spv::OpInBoundsAccessChain:
+        case spv::OpVariable:
+        case spv::OpPhi:
+        case spv::OpCopyObject:
+        case spv::OpUndef: continue;
+        default: break;
+      }
+      if (!ir::isFloatScalarOrVector(uses, instruction.type_id)) continue;
+      if (ir::typeInfo(uses, instruction.type_id).width != 32) continue;
+      result.push_back(instruction.result_id);
+    }
+  return result;
+}
+
+int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& sources) {
+  int count = 0;
+  for (Id id : sources.instructions) {
+    const Instruction* def = uses.def(id);
+    if (!def) continue;
+    switch (def->opcode) {
+      case spv::OpLoad:
+      case spv::OpAccessChain:
+      case spv::OpInBoundsAccessChain:
+      case spv::OpVariable:
+      case spv::OpCompositeExtract:
+      case spv::OpCompositeConstruct:
+      case spv::OpVectorShuffle:
+      case spv::OpCopyObject: break;
+      default: ++count;
+    }
+  }
+  return count;
+}
+
+std::string describeValue(const Module& module, const ir::DefUse& uses, Id value) {
+  std::string own = module.name(value);
+  if (!own.empty()) return own;
+  for (const ir::InstructionRef& user : uses.users(value)) {
+    const Instruction& instruction = *user.instruction;
+    if (instruction.opcode == spv::OpStore && instruction.operands[1] == value) {
+      std::string stored_into = module.name(instruction.operands[0]);
+      if (!stored_into.empty()) return stored_into;
+    }
+  }
+  return "%" + std::to_string(value);
+}
+
+}  // namespace duolod::shader

@@ -1,0 +1,66 @@
+// Helpers shared by the rules that replace one fragment value by something computed elsewhere
+// ("moving to parameter", He et al. 2015; per-pixel → per-vertex, Wang et al. 2014) and by the
+// instrumented render that averages a value (value_average.cpp). Private to src/shader.
+#pragma once
+
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "duolod/core.hpp"
+#include "shader/ir.hpp"
+
+namespace duolod::shader {
+
+// Index into Module::functions of the entry point for `model`, or -1.
+int entryFunctionIndex(const ir::Module& module, spv::ExecutionModel model);
+
+// The id of the module's GLSL.std.450 extended instruction import (added when missing).
+ir::Id glslStd450Import(ir::Module& module);
+
+// Appends `variable` to the interface list of the entry point for `model` (Input/Output variables
+// must be listed there in SPIR-V 1.0-1.3; every global from 1.4).
+void addToEntryInterface(ir::Module& module, spv::ExecutionModel model, ir::Id variable);
+
+// Where a replacement for `value` can be inserted so that it dominates every use of `value`: just
+// before it, or after the last OpPhi of its block when `value` is a phi.
+std::optional<ir::InstructionPosition> insertionPointFor(const ir::Module& module, ir::Id value);
+
+// Replaces every use of `value` by a load of the global `variable` (whose pointee type must be the
+// value's type), inserted where `value` is defined, then removes what became dead
+// (removeDeadCode). Returns the id of the load.
+core::Result<ir::Id> replaceValueByLoad(ir::Module& module, ir::Id value, ir::Id variable);
+
+// Repeatedly removes what nothing uses any more: pure instructions with unused results, Function
+// variables that are only stored to, calls of side-effect-free functions whose result and pointer
+// arguments are unused, and functions nobody calls. Returns the number of instructions removed.
+size_t removeDeadCode(ir::Module& module);
+
+// The lowest location >= `first` that no Input/Output variable of `modules` occupies (a location
+// taken by an array or matrix counts all the locations it spans).
+uint32_t freeInterfaceLocation(const std::vector<const ir::Module*>& modules, uint32_t first);
+// The lowest location >= `first` that no loose uniform of `modules` uses and that is not in
+// `taken`.
+uint32_t freeUniformLocation(const std::vector<const ir::Module*>& modules, uint32_t first,
+                             const std::vector<uint32_t>& taken);
+
+// Label ids of the blocks of `function` that lie inside a loop construct (from a loop header up to,
+// not including, its merge block): a value there has one instance per iteration, so "its value at
+// a pixel" is not one number.
+std::set<ir::Id> blocksInLoops(const ir::Function& function);
+
+// Fragment-entry values a value rule can target: results of the entry function of `model` whose
+// type is a float scalar or vector, excluding loads, pointers, phis and constants; in module order.
+std::vector<ir::Id> candidateValues(const ir::Module& module, const ir::DefUse& uses,
+                                    spv::ExecutionModel model);
+
+// Number of slice instructions that compute something (not loads, access chains, variables or
+// composite shuffles): a value with none is a plain copy of an input or a uniform.
+int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& sources);
+
+// A readable name for `value` in descriptions: its OpName, else the name of the Function variable
+// it is stored into, else "%<id>".
+std::string describeValue(const ir::Module& module, const ir::DefUse& uses, ir::Id value);
+
+}  // namespace duolod::shader
