@@ -14,10 +14,6 @@ namespace duolod::shader {
 using ir::Id;
 using ir::Instruction;
 
-namespace {
-
-// Replaces every load of a loose uniform the program sets on the CPU by the constant value, so the
-// instrumented copy renders the same without any uniform being set.
 core::Status bakeParameters(ir::Module& module, const std::vector<ParameterValue>& parameters) {
   for (const ParameterValue& parameter : parameters) {
     ir::DefUse uses(module);
@@ -41,8 +37,6 @@ core::Status bakeParameters(ir::Module& module, const std::vector<ParameterValue
   }
   return core::okStatus();
 }
-
-}  // namespace
 
 core::Result<ir::Module> instrumentFragmentValue(const ShaderProgram& program, Id value,
                                                  uint32_t component) {

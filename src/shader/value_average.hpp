@@ -29,6 +29,11 @@ namespace duolod::shader {
 core::Result<ir::Module> instrumentFragmentValue(const ShaderProgram& program, ir::Id value,
                                                  uint32_t component);
 
+// Replaces every load of a loose uniform that `parameters` set (by location) by the constant value,
+// so the module renders the same without the CPU setting anything (the instrumented copies, and
+// self-contained variants).
+core::Status bakeParameters(ir::Module& module, const std::vector<ParameterValue>& parameters);
+
 // Decodes one pixel written by the instrumented module (bytes R, G, B).
 float decodeAveragedPixel(uint8_t red, uint8_t green, uint8_t blue);
 
