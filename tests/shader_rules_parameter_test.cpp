@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 
 #include "shader/rules2_pending.hpp"
 #include "shader/value_average.hpp"
@@ -141,6 +142,22 @@ TEST_F(MoveToParameter, ParametersComposeAndAreBakedForLaterAverages) {
   EXPECT_NEAR((*average)[3], 1.0f, 0.001f);
 }
 
+// A real shader (calls, loops, uniform blocks in the slice): averages of bounded terms of
+// noise_phong land in their ranges — diffuse = max(n·l, 0) in (0, 1], the specular strength
+// mix(0.35, 0.2, vein) in [0.2, 0.35].
+TEST_F(MoveToParameter, AveragesTermsOfTheNoiseShader) {
+  ShaderProgram program =
+      makeProgram(readShaderFile("noise_phong.vert"), readShaderFile("noise_phong.frag"));
+  std::vector<float> diffuse = averageOf(program, "diffuse");
+  ASSERT_EQ(diffuse.size(), 1u);
+  EXPECT_GT(diffuse[0], 0.05f);
+  EXPECT_LE(diffuse[0], 1.0f);
+  std::vector<float> strength = averageOf(program, "specularStrength");
+  ASSERT_EQ(strength.size(), 1u);
+  EXPECT_GE(strength[0], 0.2f - 1e-4f);
+  EXPECT_LE(strength[0], 0.35f + 1e-4f);
+}
+
 TEST(MoveToParameterSites, OfferedOnlyWithAveragingAndOutsideLoops) {
   const char* fragment = R"(#version 450 core
 layout(location = 1) in vec2 vUV;
@@ -191,7 +208,11 @@ TEST_P(MoveToParameterReference, SampledSitesValidateAndLink) {
   std::vector<RuleSite> sites = findMoveToParameterSites(program, context);
   std::cout << "[ moving to parameter ] " << name << ": " << sites.size() << " sites\n";
   ASSERT_FALSE(sites.empty());
-  const size_t sample = std::min<size_t>(20, sites.size());
+  // DUOLOD_ALL_SITES=1 applies every site and lists them (for measurements; slower).
+  const bool all_sites = std::getenv("DUOLOD_ALL_SITES") != nullptr;
+  const size_t sample = all_sites ? sites.size() : std::min<size_t>(20, sites.size());
+  if (all_sites)
+    for (const RuleSite& site : sites) std::cout << "    " << site.description << "\n";
   const size_t linked = 3;
   for (size_t k = 0; k < sample; ++k) {
     const RuleSite& site = sites[k * sites.size() / sample];

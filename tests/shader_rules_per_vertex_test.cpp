@@ -166,7 +166,11 @@ TEST_P(PerVertexReference, SampledSitesValidateAndLink) {
   std::vector<RuleSite> sites = findPerVertexSites(program, {});
   std::cout << "[ per-vertex ] " << name << ": " << sites.size() << " sites\n";
   ASSERT_FALSE(sites.empty()) << name;
-  const size_t sample = std::min<size_t>(20, sites.size());
+  // DUOLOD_ALL_SITES=1 applies every site and lists them (for measurements; slower).
+  const bool all_sites = std::getenv("DUOLOD_ALL_SITES") != nullptr;
+  const size_t sample = all_sites ? sites.size() : std::min<size_t>(20, sites.size());
+  if (all_sites)
+    for (const RuleSite& site : sites) std::cout << "    " << site.description << "\n";
   const size_t linked = 3;
   for (size_t k = 0; k < sample; ++k) {
     const RuleSite& site = sites[k * sites.size() / sample];
