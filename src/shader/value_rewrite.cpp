@@ -357,14 +357,19 @@ int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& so
 std::string describeValue(const Module& module, const ir::DefUse& uses, Id value) {
   std::string own = module.name(value);
   if (!own.empty()) return own;
+  // glslang's call-argument temporaries are all called "param": a GLSL variable says more.
+  std::string temporary;
   for (const ir::InstructionRef& user : uses.users(value)) {
     const Instruction& instruction = *user.instruction;
-    if (instruction.opcode == spv::OpStore && instruction.operands[1] == value) {
-      std::string stored_into = module.name(instruction.operands[0]);
-      if (!stored_into.empty()) return stored_into;
+    if (instruction.opcode != spv::OpStore || instruction.operands[1] != value) continue;
+    std::string stored_into = module.name(instruction.operands[0]);
+    if (stored_into.rfind("param", 0) == 0) {
+      temporary = stored_into;
+    } else if (!stored_into.empty()) {
+      return stored_into;
     }
   }
-  return "%" + std::to_string(value);
+  return temporary.empty() ? "%" + std::to_string(value) : temporary;
 }
 
 }  // namespace duolod::shader
