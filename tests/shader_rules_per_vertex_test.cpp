@@ -155,6 +155,42 @@ TEST(PerVertexSites, StaleSiteFailsCleanly) {
   }
 }
 
+// After moving to parameter, a value reading the new uniform can still move per vertex: the
+// vertex stage declares the same loose uniform at the same location (one uniform once linked).
+TEST_F(PerVertex, ComposesWithMovingToParameter) {
+  const char* fragment = R"(#version 450 core
+layout(location = 0) in vec3 vNormal;
+layout(location = 1) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() {
+  float v = 0.25 + 0.5 * vUV.x;
+  vec3 c = normalize(vNormal) * v;
+  outColor = vec4(c, 1.0);
+}
+)";
+  ShaderProgram program = makeProgram(passThroughVertex(), fragment);
+  RuleContext context;
+  context.average_value = [](const ShaderProgram&, Stage, ir::Id) {
+    return core::Result<std::vector<float>>(std::vector<float>{0.5f});
+  };
+  std::vector<RuleSite> parameter_sites = findMoveToParameterSites(program, context);
+  const RuleSite* v = siteNamed(parameter_sites, "v");
+  ASSERT_NE(v, nullptr);
+  auto with_parameter = applyMoveToParameter(program, *v, context);
+  ASSERT_TRUE(with_parameter.ok()) << with_parameter.error().message;
+  std::vector<RuleSite> vertex_sites = findPerVertexSites(*with_parameter, context);
+  const RuleSite* c = siteNamed(vertex_sites, "c");
+  ASSERT_NE(c, nullptr);
+  auto moved = applyPerVertex(*with_parameter, *c, context);
+  ASSERT_TRUE(moved.ok()) << moved.error().message;
+  ir::DefUse vertex_uses(moved->vertex);
+  std::vector<ir::LooseUniform> uniforms = ir::looseUniforms(moved->vertex, vertex_uses);
+  ASSERT_EQ(uniforms.size(), 1u);
+  EXPECT_EQ(uniforms[0].location, context.first_parameter_location);
+  render::ImageBatch8 image = renderSquare(emitValidated(*moved, "parameter then per-vertex"));
+  EXPECT_FALSE(image.pixels.empty());
+}
+
 // The reference shaders: how many sites, and every sampled application validates; a few link.
 class PerVertexReference : public RendererFixture,
                            public ::testing::WithParamInterface<const char*> {};

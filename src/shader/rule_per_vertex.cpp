@@ -351,7 +351,6 @@ class VertexTranslator {
           case spv::OpLoad: loaded = true; break;
           case spv::OpAccessChain:
           case spv::OpInBoundsAccessChain:
-            if (use.operands[0] != pointer) break;  // the variable is an index: read by a load
             pointers.push_back(use.result_id);
             break;
           case spv::OpFunctionCall:
