@@ -6,7 +6,6 @@
 // the paper's 20 views × 5 lights. Moving to parameter also reports the averaging time (one
 // instrumented compile + render of the domain per component).
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cstdio>
 
@@ -40,7 +39,7 @@ int main(int argc, char** argv) {
   CLI::App app{"duolod value-rule benchmark: per-vertex and moving to parameter on a real asset"};
   std::string asset_path = std::string(DUOLOD_ASSET_DIR) + "/obj/spot/spot.obj";
   std::string shader_name = "noise_phong";
-  std::vector<std::string> values = {"q",        "turbulence", "albedo", "normal",   "viewDir",
+  std::vector<std::string> values = {"q",        "turbulence", "albedo",   "normal",   "viewDir",
                                      "lightDir", "diffuse",    "specular", "radiance", "outColor"};
   int resolution = 64;
   float distance_radii = 3;
@@ -60,11 +59,13 @@ int main(int argc, char** argv) {
   auto asset_id = renderer.uploadAsset(*asset);
   if (!asset_id) return std::fprintf(stderr, "%s\n", asset_id.error().message.c_str()), 1;
   core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
-  std::vector<render::Sample> samples = render::domainSamples(sphere, distance_radii * sphere.radius);
+  std::vector<render::Sample> samples =
+      render::domainSamples(sphere, distance_radii * sphere.radius);
 
   auto source = render::loadShaderPair(shader_name);
   if (!source) return std::fprintf(stderr, "%s\n", source.error().message.c_str()), 1;
-  auto vertex_words = shader::compileToSpirv(source->vertex, shader::Stage::kVertex, shader_name + ".vert");
+  auto vertex_words =
+      shader::compileToSpirv(source->vertex, shader::Stage::kVertex, shader_name + ".vert");
   auto fragment_words =
       shader::compileToSpirv(source->fragment, shader::Stage::kFragment, shader_name + ".frag");
   if (!vertex_words || !fragment_words) return std::fprintf(stderr, "compile failed\n"), 1;

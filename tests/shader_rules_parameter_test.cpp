@@ -130,7 +130,8 @@ TEST_F(MoveToParameter, ParametersComposeAndAreBakedForLaterAverages) {
   EXPECT_EQ(program.parameters[1].location, 41u);
   EXPECT_NEAR(program.parameters[1].value[0], -1.0f, 0.02f);
   emitValidated(program, "two parameters");
-  // The output colour, averaged on the twice-moved program, sees the baked parameters: (v, v, v, 1).
+  // The output colour, averaged on the twice-moved program, sees the baked parameters: (v, v, v,
+  // 1).
   ir::DefUse uses(program.fragment);
   ir::Id color = ir::kNoId;
   for (ir::Id value : candidateValues(program.fragment, uses, spv::ExecutionModelFragment))

@@ -32,7 +32,8 @@ layout(location = 0) in vec3 inPosition;
 layout(location = 1) in vec3 inNormal;
 layout(location = 0) out vec3 vColor;
 void main() {
-  vColor = )" + color_expression + R"(;
+  vColor = )" +
+         color_expression + R"(;
   gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0)));
 }
 )";
@@ -60,7 +61,8 @@ class PerVertex : public RendererFixture {
     RuleContext context;
     std::vector<RuleSite> sites = findPerVertexSites(original, context);
     const RuleSite* site = siteNamed(sites, value_name);
-    ASSERT_NE(site, nullptr) << "no per-vertex site for " << value_name << " among " << sites.size();
+    ASSERT_NE(site, nullptr) << "no per-vertex site for " << value_name << " among "
+                             << sites.size();
     auto moved = applyPerVertex(original, *site, context);
     ASSERT_TRUE(moved.ok()) << moved.error().message;
     EXPECT_LT(bodyInstructionCount(moved->fragment), bodyInstructionCount(original.fragment));
@@ -100,8 +102,9 @@ void main() {
 }
 )";
   ShaderProgram original = makeProgram(passThroughVertex(), fragment);
-  expectGouraud(original, "tinted",
-                gouraudVertex("(normalize(inNormal) * 0.5 + 0.5) * uBaseColorFactor.rgb", material));
+  expectGouraud(
+      original, "tinted",
+      gouraudVertex("(normalize(inNormal) * 0.5 + 0.5) * uBaseColorFactor.rgb", material));
 }
 
 // Values the vertex stage cannot compute are not offered: a texture sample, gl_FragCoord, a local

@@ -48,7 +48,8 @@ inline core::Asset tiltedSquare() {
   core::Asset asset;
   asset.source_path = "tilted square";
   asset.mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
-  asset.mesh.normals = {{-0.9f, -0.9f, 0.4f}, {0.9f, -0.9f, 0.4f}, {0.9f, 0.9f, 0.4f}, {-0.9f, 0.9f, 0.4f}};
+  asset.mesh.normals = {
+      {-0.9f, -0.9f, 0.4f}, {0.9f, -0.9f, 0.4f}, {0.9f, 0.9f, 0.4f}, {-0.9f, 0.9f, 0.4f}};
   asset.mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   asset.mesh.indices = {0, 1, 2, 0, 2, 3};
   asset.mesh.submeshes = {{0, 6, 0}};
@@ -83,7 +84,8 @@ inline std::string readShaderFile(const std::string& file) {
 }
 
 // Both stages parsed into a ShaderProgram (rules.hpp), straight from the IR.
-inline ShaderProgram makeProgram(const std::string& vertex_source, const std::string& fragment_source) {
+inline ShaderProgram makeProgram(const std::string& vertex_source,
+                                 const std::string& fragment_source) {
   ShaderProgram program;
   auto vertex = ir::parseModule(compileStage(vertex_source, Stage::kVertex, "test.vert"));
   auto fragment = ir::parseModule(compileStage(fragment_source, Stage::kFragment, "test.frag"));

@@ -1,7 +1,7 @@
 // "Moving to parameter" (He, Foley, Tatarchuk, Fatahalian, "A system for rapid, automatic shader
-// level-of-detail", TOG 2015; Liang et al. §4.1 rule 3; Pellacini 2005's average substitution): a fragment
-// value n is replaced by average(n), its mean over the covered pixels of the training domain,
-// which the CPU sets as a uniform. The average comes from RuleContext::average_value (an
+// level-of-detail", TOG 2015; Liang et al. §4.1 rule 3; Pellacini 2005's average substitution): a
+// fragment value n is replaced by average(n), its mean over the covered pixels of the training
+// domain, which the CPU sets as a uniform. The average comes from RuleContext::average_value (an
 // instrumented render, value_average.cpp); the rule only rewrites the program.
 //
 // Sites: fragment-entry float scalar/vector values that compute something (their backward slice
@@ -26,7 +26,8 @@ core::Error siteFailure(const RuleSite& site, const std::string& reason) {
 std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses, Id value) {
   const ir::InstructionRef* ref = uses.defRef(value);
   int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
-  if (!ref || ref->function != entry || ref->block < 0) return "not a value of the fragment entry point";
+  if (!ref || ref->function != entry || ref->block < 0)
+    return "not a value of the fragment entry point";
   const ir::Instruction& definition = *ref->instruction;
   if (!definition.type_id || !ir::isFloatScalarOrVector(uses, definition.type_id) ||
       ir::typeInfo(uses, definition.type_id).width != 32)
@@ -43,8 +44,7 @@ std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses, Id
 // Identifier characters only, so the uniform's name survives cross-compilation readable.
 std::string identifierFrom(const std::string& text) {
   std::string result;
-  for (char c : text)
-    result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  for (char c : text) result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
   return result;
 }
 

@@ -33,7 +33,9 @@ using ir::Id;
 using ir::Instruction;
 using ir::Module;
 
-bool isTypeOpcode(spv::Op op) { return op >= spv::OpTypeVoid && op <= spv::OpTypeForwardPointer; }
+bool isTypeOpcode(spv::Op op) {
+  return op >= spv::OpTypeVoid && op <= spv::OpTypeForwardPointer;
+}
 
 // The vertex module's interface before the rule changes it.
 struct VertexInterface {
@@ -46,8 +48,8 @@ struct VertexInterface {
     std::vector<Id> member_types;
     std::vector<std::optional<uint32_t>> member_offsets;
   };
-  std::map<uint32_t, Output> outputs;        // by location (no builtins)
-  std::map<uint32_t, BlockVariable> blocks;  // Uniform blocks by binding
+  std::map<uint32_t, Output> outputs;                          // by location (no builtins)
+  std::map<uint32_t, BlockVariable> blocks;                    // Uniform blocks by binding
   std::map<uint32_t, VertexInterface::Output> loose_uniforms;  // by location
   std::map<std::string, uint32_t> loose_uniform_names;
 
@@ -67,7 +69,8 @@ struct VertexInterface {
       blocks[*block.binding] = std::move(entry);
     }
     for (const ir::LooseUniform& uniform : ir::looseUniforms(vertex, uses)) {
-      if (uniform.location) loose_uniforms[*uniform.location] = {uniform.variable, uniform.value_type};
+      if (uniform.location)
+        loose_uniforms[*uniform.location] = {uniform.variable, uniform.value_type};
       loose_uniform_names[uniform.name] = uniform.location.value_or(~0u);
     }
   }
@@ -77,10 +80,14 @@ struct VertexInterface {
 class VertexTranslator {
  public:
   VertexTranslator(const Module& fragment, Module& vertex)
-      : fragment_(fragment), uses_(fragment), vertex_(vertex), interface_(vertex),
+      : fragment_(fragment),
+        uses_(fragment),
+        vertex_(vertex),
+        interface_(vertex),
         entry_(entryFunctionIndex(fragment, spv::ExecutionModelFragment)) {
     for (const Instruction& instruction : fragment.names)
-      if (instruction.opcode == spv::OpName) names_[instruction.operands[0]] = instruction.literalString(1);
+      if (instruction.opcode == spv::OpName)
+        names_[instruction.operands[0]] = instruction.literalString(1);
   }
 
   // The vertex id computing the same as fragment id `id`, or kNoId (see failure()).
@@ -116,7 +123,8 @@ class VertexTranslator {
     const Instruction& instruction = *ref->instruction;
     spv::Op op = instruction.opcode;
     if (op == spv::OpExtInstImport) {
-      if (instruction.literalString(0) != "GLSL.std.450") return fail(id, "is an unknown extended set");
+      if (instruction.literalString(0) != "GLSL.std.450")
+        return fail(id, "is an unknown extended set");
       return glslStd450Import(vertex_);
     }
     if (op == spv::OpFunction) return copyFunction(id);
@@ -132,10 +140,14 @@ class VertexTranslator {
   Id translateType(const Instruction& type) {
     const std::vector<uint32_t>& in = type.operands;
     switch (type.opcode) {
-      case spv::OpTypeVoid: return vertex_.typeVoid();
-      case spv::OpTypeBool: return vertex_.typeBool();
-      case spv::OpTypeInt: return vertex_.typeInt(in[0], in[1] != 0);
-      case spv::OpTypeFloat: return vertex_.typeFloat(in[0]);
+      case spv::OpTypeVoid:
+        return vertex_.typeVoid();
+      case spv::OpTypeBool:
+        return vertex_.typeBool();
+      case spv::OpTypeInt:
+        return vertex_.typeInt(in[0], in[1] != 0);
+      case spv::OpTypeFloat:
+        return vertex_.typeFloat(in[0]);
       case spv::OpTypeVector: {
         Id component = translate(in[0]);
         return component ? vertex_.typeVector(component, in[1]) : ir::kNoId;
@@ -177,7 +189,8 @@ class VertexTranslator {
         }
         return vertex_.addTypeOrConstant(spv::OpTypeFunction, ir::kNoId, operands);
       }
-      default: return fail(type.result_id, "is a type the vertex stage cannot share (image, sampler...)");
+      default:
+        return fail(type.result_id, "is a type the vertex stage cannot share (image, sampler...)");
     }
   }
 
@@ -221,8 +234,10 @@ class VertexTranslator {
       case spv::OpConstantFalse:
       case spv::OpConstantNull:
       case spv::OpConstantComposite:
-      case spv::OpUndef: break;
-      default: return fail(constant.result_id, "is a specialization constant or unknown value");
+      case spv::OpUndef:
+        break;
+      default:
+        return fail(constant.result_id, "is a specialization constant or unknown value");
     }
     Id type = translate(constant.type_id);
     if (!type) return ir::kNoId;
@@ -244,7 +259,8 @@ class VertexTranslator {
         return fail(id, "is a builtin or component input the vertex stage does not write");
       auto output = interface_.outputs.find(*location);
       if (output == interface_.outputs.end())
-        return fail(id, "reads location " + std::to_string(*location) + ", which the vertex stage does not write");
+        return fail(id, "reads location " + std::to_string(*location) +
+                            ", which the vertex stage does not write");
       if (translate(pointee) != output->second.value_type)
         return fail(id, "has another type than the vertex output at its location");
       return output->second.variable;
@@ -294,8 +310,9 @@ class VertexTranslator {
     map_[block.result_id] = block_type;
     Id pointer = vertex_.typePointer(spv::StorageClassUniform, block_type);
     Id copy = vertex_.allocateId();
-    vertex_.types_values.push_back(ir::makeInstruction(
-        vertex_, spv::OpVariable, pointer, copy, {static_cast<uint32_t>(spv::StorageClassUniform)}));
+    vertex_.types_values.push_back(
+        ir::makeInstruction(vertex_, spv::OpVariable, pointer, copy,
+                            {static_cast<uint32_t>(spv::StorageClassUniform)}));
     copyAnnotations(variable.result_id, copy);
     return copy;
   }
@@ -303,15 +320,25 @@ class VertexTranslator {
   Id translateEntryInstruction(const Instruction& instruction) {
     Id id = instruction.result_id;
     switch (instruction.opcode) {
-      case spv::OpVariable: return translateLocalVariable(instruction);
-      case spv::OpPhi: return fail(id, "is a phi (control flow)");
+      case spv::OpVariable:
+        return translateLocalVariable(instruction);
+      case spv::OpPhi:
+        return fail(id, "is a phi (control flow)");
       case spv::OpLabel:
-      case spv::OpFunctionParameter: return fail(id, "is not a value");
-      case spv::OpDPdx: case spv::OpDPdy: case spv::OpFwidth: case spv::OpDPdxFine:
-      case spv::OpDPdyFine: case spv::OpFwidthFine: case spv::OpDPdxCoarse:
-      case spv::OpDPdyCoarse: case spv::OpFwidthCoarse:
+      case spv::OpFunctionParameter:
+        return fail(id, "is not a value");
+      case spv::OpDPdx:
+      case spv::OpDPdy:
+      case spv::OpFwidth:
+      case spv::OpDPdxFine:
+      case spv::OpDPdyFine:
+      case spv::OpFwidthFine:
+      case spv::OpDPdxCoarse:
+      case spv::OpDPdyCoarse:
+      case spv::OpFwidthCoarse:
         return fail(id, "is a screen-space derivative");
-      default: break;
+      default:
+        break;
     }
     Id type = instruction.type_id ? translate(instruction.type_id) : ir::kNoId;
     std::vector<uint32_t> operands = instruction.operands;
@@ -342,13 +369,16 @@ class VertexTranslator {
         const Instruction& use = *user.instruction;
         switch (use.opcode) {
           case spv::OpName:
-          case spv::OpDecorate: break;
+          case spv::OpDecorate:
+            break;
           case spv::OpStore:
             if (use.operands[0] != pointer || pointer != id) return fail(id, "is written in part");
             ++stores;
             stored = use.operands[1];
             break;
-          case spv::OpLoad: loaded = true; break;
+          case spv::OpLoad:
+            loaded = true;
+            break;
           case spv::OpAccessChain:
           case spv::OpInBoundsAccessChain:
             pointers.push_back(use.result_id);
@@ -357,7 +387,8 @@ class VertexTranslator {
             if (pointer != id) return fail(id, "is passed in part to a function");
             passed_to_call = true;
             break;
-          default: return fail(id, "is used in a way the rule does not follow");
+          default:
+            return fail(id, "is used in a way the rule does not follow");
         }
       }
     }
@@ -415,7 +446,8 @@ class VertexTranslator {
     }
     for (const ir::Block& block : function->blocks) {
       ir::Block copied_block;
-      copied_block.label = ir::makeInstruction(vertex_, spv::OpLabel, ir::kNoId, map_.at(block.id()), {});
+      copied_block.label =
+          ir::makeInstruction(vertex_, spv::OpLabel, ir::kNoId, map_.at(block.id()), {});
       for (const Instruction& instruction : block.instructions) {
         if (instruction.opcode == spv::OpLine || instruction.opcode == spv::OpNoLine) continue;
         auto copied = copyInstruction(instruction);
@@ -462,7 +494,8 @@ int returnBlockIndex(const Module& vertex) {
 std::string unsuitability(const Module& fragment, const ir::DefUse& uses, Id value) {
   const ir::InstructionRef* ref = uses.defRef(value);
   int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
-  if (!ref || ref->function != entry || ref->block < 0) return "not a value of the fragment entry point";
+  if (!ref || ref->function != entry || ref->block < 0)
+    return "not a value of the fragment entry point";
   const Instruction& definition = *ref->instruction;
   if (!definition.type_id || !ir::isFloatScalarOrVector(uses, definition.type_id) ||
       ir::typeInfo(uses, definition.type_id).width != 32)
@@ -537,13 +570,14 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
   vertex.types_values.push_back(ir::makeInstruction(
       vertex, spv::OpVariable, vertex.typePointer(spv::StorageClassOutput, vertex_type), output,
       {static_cast<uint32_t>(spv::StorageClassOutput)}));
-  vertex.annotations.push_back(ir::makeInstruction(
-      vertex, spv::OpDecorate, ir::kNoId, ir::kNoId,
-      {output, static_cast<uint32_t>(spv::DecorationLocation), location}));
+  vertex.annotations.push_back(
+      ir::makeInstruction(vertex, spv::OpDecorate, ir::kNoId, ir::kNoId,
+                          {output, static_cast<uint32_t>(spv::DecorationLocation), location}));
   vertex.setName(output, varying_name);
   addToEntryInterface(vertex, spv::ExecutionModelVertex, output);
   std::vector<Instruction> body = std::move(translator.body);
-  body.push_back(ir::makeInstruction(vertex, spv::OpStore, ir::kNoId, ir::kNoId, {output, computed}));
+  body.push_back(
+      ir::makeInstruction(vertex, spv::OpStore, ir::kNoId, ir::kNoId, {output, computed}));
   int vertex_entry = entryFunctionIndex(vertex, spv::ExecutionModelVertex);
   ir::Block& last = vertex.functions[vertex_entry].blocks[return_block];
   vertex.insertBefore({vertex_entry, return_block, static_cast<int>(last.instructions.size()) - 1},
@@ -556,9 +590,9 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
   fragment.types_values.push_back(ir::makeInstruction(
       fragment, spv::OpVariable, fragment.typePointer(spv::StorageClassInput, fragment_type), input,
       {static_cast<uint32_t>(spv::StorageClassInput)}));
-  fragment.annotations.push_back(ir::makeInstruction(
-      fragment, spv::OpDecorate, ir::kNoId, ir::kNoId,
-      {input, static_cast<uint32_t>(spv::DecorationLocation), location}));
+  fragment.annotations.push_back(
+      ir::makeInstruction(fragment, spv::OpDecorate, ir::kNoId, ir::kNoId,
+                          {input, static_cast<uint32_t>(spv::DecorationLocation), location}));
   fragment.setName(input, varying_name);
   addToEntryInterface(fragment, spv::ExecutionModelFragment, input);
   if (auto replaced = replaceValueByLoad(fragment, site.target, input); !replaced)

@@ -9,8 +9,8 @@ namespace duolod::shader {
 
 std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
                                                const RuleContext& context);
-core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program,
-                                                 const RuleSite& site, const RuleContext& context);
+core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, const RuleSite& site,
+                                                 const RuleContext& context);
 
 std::vector<RuleSite> findPerVertexSites(const ShaderProgram& program, const RuleContext& context);
 core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const RuleSite& site,

@@ -100,20 +100,23 @@ core::Result<ir::Module> instrumentFragmentValue(const ShaderProgram& program, I
   };
   Id x = components == 1 ? value : emit(spv::OpCompositeExtract, float_type, {value, component});
   Id magnitude = extended(GLSLstd450FAbs, {x});
-  Id squashed = emit(spv::OpFDiv, float_type, {x, emit(spv::OpFAdd, float_type, {magnitude, constant(1)})});
+  Id squashed =
+      emit(spv::OpFDiv, float_type, {x, emit(spv::OpFAdd, float_type, {magnitude, constant(1)})});
   Id y = emit(spv::OpFAdd, float_type,
               {emit(spv::OpFMul, float_type, {squashed, constant(0.5f)}), constant(0.5f)});
   // Largest float below 1, so the top byte never overflows.
   y = extended(GLSLstd450FClamp, {y, constant(0), constant(std::nextafter(1.0f, 0.0f))});
   Id scaled = emit(spv::OpFMul, float_type, {y, constant(255)});
   Id top = extended(GLSLstd450Floor, {scaled});
-  Id rest = emit(spv::OpFMul, float_type, {emit(spv::OpFSub, float_type, {scaled, top}), constant(255)});
+  Id rest =
+      emit(spv::OpFMul, float_type, {emit(spv::OpFSub, float_type, {scaled, top}), constant(255)});
   Id middle = extended(GLSLstd450Floor, {rest});
   Id low = emit(spv::OpFSub, float_type, {rest, middle});
   Id color = emit(spv::OpCompositeConstruct, vec4_type,
                   {emit(spv::OpFDiv, float_type, {top, constant(255)}),
                    emit(spv::OpFDiv, float_type, {middle, constant(255)}), low, constant(1)});
-  code.push_back(ir::makeInstruction(module, spv::OpStore, ir::kNoId, ir::kNoId, {color_output, color}));
+  code.push_back(
+      ir::makeInstruction(module, spv::OpStore, ir::kNoId, ir::kNoId, {color_output, color}));
 
   module.removeInstructionsIf([&](const Instruction& instruction) {
     return instruction.opcode == spv::OpStore && output_pointers.count(instruction.operands[0]);
@@ -133,8 +136,9 @@ core::Result<ir::Module> instrumentFragmentValue(const ShaderProgram& program, I
   while (first < static_cast<int>(entry_block.instructions.size()) &&
          entry_block.instructions[first].opcode == spv::OpVariable)
     ++first;
-  module.insertBefore({entry, 0, first}, {ir::makeInstruction(module, spv::OpStore, ir::kNoId,
-                                                               ir::kNoId, {color_output, transparent})});
+  module.insertBefore({entry, 0, first},
+                      {ir::makeInstruction(module, spv::OpStore, ir::kNoId, ir::kNoId,
+                                           {color_output, transparent})});
   removeDeadCode(module);
   return module;
 }
@@ -179,7 +183,8 @@ core::Result<float> ValueAverager::averageComponent(const ShaderProgram& program
   core::Result<ir::Module> instrumented = instrumentFragmentValue(program, value, component);
   if (!instrumented) return instrumented.error();
   render::SpirvBinary binary{ir::emitModule(program.vertex), ir::emitModule(*instrumented)};
-  uint64_t key = ir::wordsHash(binary.fragment) ^ (ir::wordsHash(binary.vertex) * 0x9e3779b97f4a7c15ull);
+  uint64_t key =
+      ir::wordsHash(binary.fragment) ^ (ir::wordsHash(binary.vertex) * 0x9e3779b97f4a7c15ull);
   if (auto found = cache_.find(key); found != cache_.end()) {
     ++counters_.cache_hits;
     return found->second;

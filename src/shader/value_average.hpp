@@ -55,9 +55,9 @@ class ValueAverager {
   std::function<core::Result<std::vector<float>>(const ShaderProgram&, Stage, ir::Id)> function();
 
   struct Counters {
-    int renders = 0;       // instrumented programs compiled and rendered
-    int cache_hits = 0;    // components answered from the cache
-    int64_t pixels = 0;    // covered pixels averaged, all renders
+    int renders = 0;     // instrumented programs compiled and rendered
+    int cache_hits = 0;  // components answered from the cache
+    int64_t pixels = 0;  // covered pixels averaged, all renders
   };
   const Counters& counters() const { return counters_; }
 

@@ -59,7 +59,8 @@ core::Result<Id> replaceValueByLoad(Module& module, Id value, Id variable) {
                 .instructions[defined_at->index]
                 .type_id;
   Id load = module.allocateId();
-  module.insertBefore(*position, {ir::makeInstruction(module, spv::OpLoad, type, load, {variable})});
+  module.insertBefore(*position,
+                      {ir::makeInstruction(module, spv::OpLoad, type, load, {variable})});
   module.replaceAllUses(value, load);
   removeDeadCode(module);
   return load;
@@ -79,7 +80,8 @@ bool removableWhenUnused(const Module& module, const Instruction& instruction) {
     case spv::OpVariable:
     case spv::OpFunctionParameter:
     case spv::OpLabel:
-    case spv::OpImageTexelPointer: return false;
+    case spv::OpImageTexelPointer:
+      return false;
     case spv::OpExtInst: {
       // Only GLSL.std.450 is known to be free of side effects.
       for (const Instruction& import : module.ext_inst_imports)
@@ -87,7 +89,8 @@ bool removableWhenUnused(const Module& module, const Instruction& instruction) {
           return import.literalString(0) == "GLSL.std.450";
       return false;
     }
-    default: return !isAtomic(instruction.opcode);
+    default:
+      return !isAtomic(instruction.opcode);
   }
 }
 
@@ -124,7 +127,8 @@ bool functionIsPure(const Module& module, const ir::DefUse& uses, Id function_id
         case spv::OpEmitVertex:
         case spv::OpEndPrimitive:
         case spv::OpControlBarrier:
-        case spv::OpMemoryBarrier: return false;
+        case spv::OpMemoryBarrier:
+          return false;
         case spv::OpStore:
         case spv::OpCopyMemory:
           if (!isLocalPointer(pointerBase(uses, instruction.operands[0]))) return false;
@@ -184,9 +188,10 @@ size_t removeDeadCode(Module& module) {
           if (!instruction.hasResult()) continue;
           std::vector<const Instruction*> users = liveUsers(uses, instruction.result_id);
           if (instruction.opcode == spv::OpVariable) {
-            bool only_stored = std::all_of(users.begin(), users.end(), [&](const Instruction* user) {
-              return user->opcode == spv::OpStore && user->operands[0] == instruction.result_id;
-            });
+            bool only_stored =
+                std::all_of(users.begin(), users.end(), [&](const Instruction* user) {
+                  return user->opcode == spv::OpStore && user->operands[0] == instruction.result_id;
+                });
             if (only_stored) {
               dead.insert(instruction.result_id);
               store_targets.insert(instruction.result_id);
@@ -241,7 +246,8 @@ uint32_t locationsSpanned(const ir::DefUse& uses, Id type) {
   const Instruction* def = uses.def(type);
   if (!def) return 1;
   switch (def->opcode) {
-    case spv::OpTypeMatrix: return def->operands[1];
+    case spv::OpTypeMatrix:
+      return def->operands[1];
     case spv::OpTypeArray: {
       auto length = ir::constantIntValue(uses, def->operands[1]);
       return static_cast<uint32_t>(std::max<int64_t>(1, length.value_or(1))) *
@@ -252,7 +258,8 @@ uint32_t locationsSpanned(const ir::DefUse& uses, Id type) {
       for (uint32_t member : def->operands) total += locationsSpanned(uses, member);
       return total;
     }
-    default: return 1;
+    default:
+      return 1;
   }
 }
 
@@ -324,8 +331,10 @@ std::vector<Id> candidateValues(const Module& module, const ir::DefUse& uses,
         case spv::OpVariable:
         case spv::OpPhi:
         case spv::OpCopyObject:
-        case spv::OpUndef: continue;
-        default: break;
+        case spv::OpUndef:
+          continue;
+        default:
+          break;
       }
       if (!ir::isFloatScalarOrVector(uses, instruction.type_id)) continue;
       if (ir::typeInfo(uses, instruction.type_id).width != 32) continue;
@@ -347,8 +356,10 @@ int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& so
       case spv::OpCompositeExtract:
       case spv::OpCompositeConstruct:
       case spv::OpVectorShuffle:
-      case spv::OpCopyObject: break;
-      default: ++count;
+      case spv::OpCopyObject:
+        break;
+      default:
+        ++count;
     }
   }
   return count;
