@@ -13,7 +13,7 @@
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
 #include "duolod/shader.hpp"
-#include "shader/rules2_pending.hpp"
+#include "shader/rules_internal.hpp"
 #include "shader/value_average.hpp"
 
 using namespace duolod;

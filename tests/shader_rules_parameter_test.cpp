@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cstdlib>
 
-#include "shader/rules2_pending.hpp"
+#include "shader/rules_internal.hpp"
 #include "shader/value_average.hpp"
 #include "shader/value_rewrite.hpp"
 #include "shader_value_rules_support.hpp"

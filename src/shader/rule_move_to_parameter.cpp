@@ -9,7 +9,7 @@
 // outside loops (one value per pixel), and whose slice has no side effects.
 #include <cctype>
 
-#include "shader/rules2_pending.hpp"
+#include "shader/rules_internal.hpp"
 #include "shader/value_rewrite.hpp"
 
 namespace duolod::shader {
@@ -17,10 +17,6 @@ namespace duolod::shader {
 namespace {
 
 using ir::Id;
-
-core::Error siteFailure(const RuleSite& site, const std::string& reason) {
-  return core::Error{"moving to parameter at %" + std::to_string(site.target) + ": " + reason};
-}
 
 // Why `value` cannot be moved to a parameter, or "" when it can.
 std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses, Id value) {
@@ -78,25 +74,25 @@ std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
 core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, const RuleSite& site,
                                                  const RuleContext& context) {
   if (site.kind != RuleKind::kMoveToParameter || site.stage != Stage::kFragment)
-    return siteFailure(site, "not a fragment moving-to-parameter site");
-  if (!context.average_value) return siteFailure(site, "no average_value in the rule context");
+    return siteError(site, "not a fragment moving-to-parameter site");
+  if (!context.average_value) return siteError(site, "no average_value in the rule context");
   Id type_id = ir::kNoId;
   std::string name;
   {
     ir::DefUse uses(program.fragment);
     if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
-      return siteFailure(site, why);
+      return siteError(site, why);
     type_id = uses.def(site.target)->type_id;
     name = describeValue(program.fragment, uses, site.target);
   }
   core::Result<std::vector<float>> average =
       context.average_value(program, Stage::kFragment, site.target);
-  if (!average) return siteFailure(site, "averaging failed: " + average.error().message);
+  if (!average) return siteError(site, "averaging failed: " + average.error().message);
   ir::DefUse uses(program.fragment);
   size_t components = ir::componentCount(uses, type_id);
   if (average->size() != components || components > 4)
-    return siteFailure(site, "the average has " + std::to_string(average->size()) +
-                                 " components, the value " + std::to_string(components));
+    return siteError(site, "the average has " + std::to_string(average->size()) +
+                               " components, the value " + std::to_string(components));
 
   std::vector<uint32_t> taken;
   for (const ParameterValue& parameter : program.parameters) taken.push_back(parameter.location);
@@ -111,7 +107,7 @@ core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, c
   ShaderProgram result = program;
   Id uniform = result.fragment.addLooseUniform(type_id, parameter.name, location);
   if (auto replaced = replaceValueByLoad(result.fragment, site.target, uniform); !replaced)
-    return siteFailure(site, replaced.error().message);
+    return siteError(site, replaced.error().message);
   result.parameters.push_back(std::move(parameter));
   return result;
 }

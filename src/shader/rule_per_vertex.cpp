@@ -22,7 +22,7 @@
 #include <set>
 #include <unordered_map>
 
-#include "shader/rules2_pending.hpp"
+#include "shader/rules_internal.hpp"
 #include "shader/value_rewrite.hpp"
 
 namespace duolod::shader {
@@ -472,10 +472,6 @@ class VertexTranslator {
   std::string failure_;
 };
 
-core::Error siteFailure(const RuleSite& site, const std::string& reason) {
-  return core::Error{"per-vertex at %" + std::to_string(site.target) + ": " + reason};
-}
-
 // The index of the vertex entry point's only returning block, or -1.
 int returnBlockIndex(const Module& vertex) {
   int entry = entryFunctionIndex(vertex, spv::ExecutionModelVertex);
@@ -541,16 +537,16 @@ std::vector<RuleSite> findPerVertexSites(const ShaderProgram& program, const Rul
 core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const RuleSite& site,
                                            const RuleContext& context) {
   if (site.kind != RuleKind::kPerVertex || site.stage != Stage::kFragment)
-    return siteFailure(site, "not a fragment per-vertex site");
+    return siteError(site, "not a fragment per-vertex site");
   int return_block = returnBlockIndex(program.vertex);
   if (return_block < 0)
-    return siteFailure(site, "the vertex entry point does not end in a single return");
+    return siteError(site, "the vertex entry point does not end in a single return");
   Id fragment_type = ir::kNoId;
   std::string name;
   {
     ir::DefUse uses(program.fragment);
     if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
-      return siteFailure(site, why);
+      return siteError(site, why);
     fragment_type = uses.def(site.target)->type_id;
     name = identifierFrom(describeValue(program.fragment, uses, site.target));
   }
@@ -565,7 +561,7 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
   VertexTranslator translator(program.fragment, vertex);
   Id computed = translator.translate(site.target);
   Id vertex_type = computed ? translator.translate(fragment_type) : ir::kNoId;
-  if (!computed || !vertex_type) return siteFailure(site, translator.failure());
+  if (!computed || !vertex_type) return siteError(site, translator.failure());
   Id output = vertex.allocateId();
   vertex.types_values.push_back(ir::makeInstruction(
       vertex, spv::OpVariable, vertex.typePointer(spv::StorageClassOutput, vertex_type), output,
@@ -596,7 +592,7 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
   fragment.setName(input, varying_name);
   addToEntryInterface(fragment, spv::ExecutionModelFragment, input);
   if (auto replaced = replaceValueByLoad(fragment, site.target, input); !replaced)
-    return siteFailure(site, replaced.error().message);
+    return siteError(site, replaced.error().message);
   return result;
 }
 

@@ -252,8 +252,8 @@ std::vector<RuleSite> enumerateSites(const ShaderProgram& program, const RuleCon
   using Finder = std::vector<RuleSite> (*)(const ShaderProgram&, const RuleContext&);
   // Indexed by RuleKind; nullptr: not implemented in this build.
   const std::array<Finder, kRuleKindCount> finders = {
-      &findOperationRemovalSites, nullptr, nullptr,
-      &findTextureAverageSites,   &findTextureMipSites, &findLoopTruncationSites};
+      &findOperationRemovalSites, &findMoveToParameterSites, &findPerVertexSites,
+      &findTextureAverageSites,   &findTextureMipSites,      &findLoopTruncationSites};
   std::vector<RuleSite> sites;
   for (int kind = 0; kind < kRuleKindCount; ++kind) {
     if (!context.enabled[static_cast<size_t>(kind)] || !finders[static_cast<size_t>(kind)])
@@ -287,8 +287,8 @@ core::Result<ShaderProgram> applyRule(const ShaderProgram& program, const RuleSi
   core::Result<ShaderProgram> result = siteError(site, "this rule is not implemented yet");
   switch (site.kind) {
     case RuleKind::kOperationRemoval: result = applyOperationRemoval(program, site, context); break;
-    case RuleKind::kMoveToParameter: break;
-    case RuleKind::kPerVertex: break;
+    case RuleKind::kMoveToParameter: result = applyMoveToParameter(program, site, context); break;
+    case RuleKind::kPerVertex: result = applyPerVertex(program, site, context); break;
     case RuleKind::kTextureAverage: result = applyTextureAverage(program, site, context); break;
     case RuleKind::kTextureMip: result = applyTextureMip(program, site, context); break;
     case RuleKind::kLoopTruncation: result = applyLoopTruncation(program, site, context); break;
