@@ -64,7 +64,7 @@ std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
     site.kind = RuleKind::kMoveToParameter;
     site.stage = Stage::kFragment;
     site.target = value;
-    site.description = "moving to parameter: " + describeValue(fragment, uses, value) +
+    site.description = "moving to parameter: " + describeComputedValue(fragment, uses, value) +
                        " → its average over the domain";
     sites.push_back(std::move(site));
   }
@@ -83,7 +83,7 @@ core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, c
     if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
       return siteError(site, why);
     type_id = uses.def(site.target)->type_id;
-    name = describeValue(program.fragment, uses, site.target);
+    name = describeComputedValue(program.fragment, uses, site.target);
   }
   core::Result<std::vector<float>> average =
       context.average_value(program, Stage::kFragment, site.target);

@@ -527,7 +527,7 @@ std::vector<RuleSite> findPerVertexSites(const ShaderProgram& program, const Rul
     site.kind = RuleKind::kPerVertex;
     site.stage = Stage::kFragment;
     site.target = value;
-    site.description = "per-vertex: " + describeValue(program.fragment, uses, value) +
+    site.description = "per-vertex: " + describeComputedValue(program.fragment, uses, value) +
                        " computed in the vertex stage and interpolated";
     sites.push_back(std::move(site));
   }
@@ -548,7 +548,7 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
     if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
       return siteError(site, why);
     fragment_type = uses.def(site.target)->type_id;
-    name = identifierFrom(describeValue(program.fragment, uses, site.target));
+    name = identifierFrom(describeComputedValue(program.fragment, uses, site.target));
   }
 
   ShaderProgram result = program;

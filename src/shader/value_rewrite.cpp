@@ -6,6 +6,8 @@
 #include <map>
 #include <set>
 
+#include "shader/rules_internal.hpp"
+
 namespace duolod::shader {
 
 using ir::Id;
@@ -365,7 +367,7 @@ int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& so
   return count;
 }
 
-std::string describeValue(const Module& module, const ir::DefUse& uses, Id value) {
+std::string describeComputedValue(const Module& module, const ir::DefUse& uses, Id value) {
   std::string own = module.name(value);
   if (!own.empty()) return own;
   // glslang's call-argument temporaries are all called "param": a GLSL variable says more.
@@ -380,7 +382,7 @@ std::string describeValue(const Module& module, const ir::DefUse& uses, Id value
       return stored_into;
     }
   }
-  return temporary.empty() ? "%" + std::to_string(value) : temporary;
+  return temporary.empty() ? describeValue(module, uses, value) : temporary;
 }
 
 }  // namespace duolod::shader

@@ -59,8 +59,8 @@ std::vector<ir::Id> candidateValues(const ir::Module& module, const ir::DefUse& 
 // composite shuffles): a value with none is a plain copy of an input or a uniform.
 int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& sources);
 
-// A readable name for `value` in descriptions: its OpName, else the name of the Function variable
-// it is stored into, else "%<id>".
-std::string describeValue(const ir::Module& module, const ir::DefUse& uses, ir::Id value);
+// A readable name for a computed `value` in descriptions: its OpName, else the GLSL variable it is
+// stored into (glslang names variables, not the results stored into them), else describeValue.
+std::string describeComputedValue(const ir::Module& module, const ir::DefUse& uses, ir::Id value);
 
 }  // namespace duolod::shader
