@@ -1,0 +1,201 @@
+// The cost models of shader/cost_model.hpp and the block-count instrumentation of
+// shader/instrument.hpp, on small hand-written shaders whose counts can be checked by hand.
+// Deterministic only: counts of ops and of block executions, never time.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include "duolod/shader.hpp"
+#include "shader/cost_model.hpp"
+#include "shader/instrument.hpp"
+#include "test_support.hpp"
+
+namespace duolod::shader {
+namespace {
+
+ir::Module compileModule(const std::string& source, Stage stage, const std::string& name) {
+  auto words = compileToSpirv(source, stage, name);
+  EXPECT_TRUE(words.ok()) << (words.ok() ? "" : words.error().message);
+  if (!words.ok()) return {};
+  auto module = ir::parseModule(*words);
+  EXPECT_TRUE(module.ok()) << (module.ok() ? "" : module.error().message);
+  return module.ok() ? *module : ir::Module{};
+}
+
+std::string readShader(const std::string& file) {
+  std::ifstream in(test::sourcePath("shaders/" + file));
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+double at(const OpClassCounts& counts, OpClass op_class) {
+  return counts[static_cast<int>(op_class)];
+}
+
+// outColor = c * c + c on a vec4: one vec4 multiply and one vec4 add = 8 float ops; glslang
+// (no optimisation) loads vColor once per use (3 loads) and stores outColor once.
+const char* kArithmeticShader = R"(#version 450
+layout(location = 0) in vec4 vColor;
+layout(location = 0) out vec4 outColor;
+void main() { outColor = vColor * vColor + vColor; }
+)";
+
+// One texture sample, one sine and one vec4 × scalar.
+const char* kTextureShader = R"(#version 450
+layout(binding = 0) uniform sampler2D uTexture;
+layout(location = 0) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() { outColor = texture(uTexture, vUV) * sin(vUV.x); }
+)";
+
+TEST(ShaderCostModel, CountsArithmeticByComponent) {
+  ir::Module module = compileModule(kArithmeticShader, Stage::kFragment, "arith.frag");
+  OpClassCounts counts = staticOpCounts(module);
+  EXPECT_EQ(at(counts, OpClass::kFloatArithmetic), 8);
+  EXPECT_EQ(at(counts, OpClass::kTranscendental), 0);
+  EXPECT_EQ(at(counts, OpClass::kTextureSample), 0);
+  EXPECT_EQ(at(counts, OpClass::kMemory), 4);       // 3 OpLoad + 1 OpStore
+  EXPECT_EQ(at(counts, OpClass::kControlFlow), 1);  // OpReturn
+  // He et al.: 8 scalar ops, no texture.
+  EXPECT_EQ(heStaticCost(module), 8);
+}
+
+TEST(ShaderCostModel, HeCountsTexturesAtOneHundred) {
+  ir::Module module = compileModule(kTextureShader, Stage::kFragment, "texture.frag");
+  OpClassCounts counts = staticOpCounts(module);
+  EXPECT_EQ(at(counts, OpClass::kTextureSample), 1);
+  EXPECT_EQ(at(counts, OpClass::kTranscendental), 1);   // sin of a scalar
+  EXPECT_EQ(at(counts, OpClass::kFloatArithmetic), 4);  // vec4 × float
+  // 4 + 1 scalar ops + 100 × 1 texture op.
+  EXPECT_EQ(heStaticCost(module), 105);
+  // The program heuristic adds the stages.
+  ir::Module arithmetic = compileModule(kArithmeticShader, Stage::kFragment, "arith.frag");
+  EXPECT_EQ(heStaticCost(arithmetic, module), 113);
+}
+
+TEST(ShaderCostModel, MatrixAndDotProductsCountMultiplyAdds) {
+  ir::Module module = compileModule(R"(#version 450
+layout(location = 0) in vec4 vPosition;
+layout(location = 0) out vec4 outColor;
+layout(std140, binding = 0) uniform Frame { mat4 uMatrix; };
+void main() { outColor = uMatrix * vPosition + vec4(dot(vPosition.xyz, vPosition.xyz)); }
+)",
+                                    Stage::kFragment, "matrix.frag");
+  // mat4 × vec4 = 16 multiply-adds, dot of vec3 = 3, vec4 add = 4.
+  EXPECT_EQ(at(staticOpCounts(module), OpClass::kFloatArithmetic), 16 + 3 + 4);
+}
+
+// A loop with a constant trip count of 4 and a branch: the static count sees each block once, the
+// dynamic count with executions per invocation scales each block by how often it runs.
+const char* kLoopShader = R"(#version 450
+layout(location = 0) in vec4 vColor;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec4 sum = vec4(0.0);
+  for (int i = 0; i < 4; ++i) sum += vColor * float(i);
+  if (gl_FragCoord.x < 8.0) sum = sin(sum);
+  outColor = sum;
+}
+)";
+
+TEST(ShaderCostModel, DynamicCountsScaleBlocksByExecutions) {
+  ir::Module module = compileModule(kLoopShader, Stage::kFragment, "loop.frag");
+  std::vector<BlockOps> blocks = blockOpCounts(module);
+  ASSERT_GT(blocks.size(), 3u);
+  // Every block once reproduces the static count.
+  std::vector<double> once(blocks.size(), 1.0);
+  EXPECT_EQ(dynamicOpCounts(module, once), staticOpCounts(module));
+  // The sine's block (the only transcendental) at half the invocations: 4 × 0.5 sines.
+  std::vector<double> half = once;
+  int sine_blocks = 0;
+  for (size_t b = 0; b < blocks.size(); ++b)
+    if (at(blocks[b].ops, OpClass::kTranscendental) > 0) half[b] = 0.5, ++sine_blocks;
+  EXPECT_EQ(sine_blocks, 1);
+  EXPECT_EQ(at(dynamicOpCounts(module, half), OpClass::kTranscendental), 2);
+}
+
+TEST(ShaderCostModel, InstrumentedModulesValidate) {
+  ir::Module loop = compileModule(kLoopShader, Stage::kFragment, "loop.frag");
+  auto instrumented = instrumentBlockCounts(loop, kFragmentCounterBinding);
+  ASSERT_TRUE(instrumented.ok()) << instrumented.error().message;
+  EXPECT_EQ(instrumented->counter_count, static_cast<int>(blockOpCounts(loop).size()));
+  auto valid = validateSpirv(ir::emitModule(instrumented->module), "instrumented loop.frag");
+  EXPECT_TRUE(valid.ok()) << (valid.ok() ? "" : valid.error().message);
+  // One atomic add per block.
+  OpClassCounts added = staticOpCounts(instrumented->module);
+  OpClassCounts original = staticOpCounts(loop);
+  EXPECT_EQ(at(added, OpClass::kMemory) - at(original, OpClass::kMemory),
+            2 * instrumented->counter_count);  // OpAccessChain + OpAtomicIAdd
+
+  for (const char* name : {"pbr", "noise_phong", "blend"}) {
+    for (auto [extension, stage] : {std::pair{".vert", Stage::kVertex},
+                                    std::pair{".frag", Stage::kFragment}}) {
+      std::string file = std::string(name) + extension;
+      ir::Module module = compileModule(readShader(file), stage, file);
+      auto copy = instrumentBlockCounts(module, kVertexCounterBinding);
+      ASSERT_TRUE(copy.ok()) << copy.error().message;
+      auto check = validateSpirv(ir::emitModule(copy->module), "instrumented " + file);
+      EXPECT_TRUE(check.ok()) << (check.ok() ? "" : check.error().message);
+    }
+  }
+}
+
+TEST(ShaderCostModel, NonNegativeLeastSquaresByHand) {
+  // b = 2·a0 + 3·a1 exactly: the unconstrained solution is non-negative, so NNLS finds it.
+  std::vector<std::vector<double>> rows{{1, 0}, {0, 1}, {1, 1}};
+  std::vector<double> targets{2, 3, 5};
+  auto exact = solveNonNegativeLeastSquares(rows, targets);
+  ASSERT_TRUE(exact.ok()) << exact.error().message;
+  EXPECT_NEAR((*exact)[0], 2, 1e-9);
+  EXPECT_NEAR((*exact)[1], 3, 1e-9);
+  // Rows (1,0), (1,1) with targets (1.5, 1): least squares is exact at (1.5, −0.5). NNLS clamps
+  // the second weight to 0 and refits the first alone: x0 = mean(1.5, 1) = 1.25.
+  std::vector<std::vector<double>> clamp_rows{{1, 0}, {1, 1}};
+  std::vector<double> clamp_targets{1.5, 1.0};
+  auto clamped = solveNonNegativeLeastSquares(clamp_rows, clamp_targets);
+  ASSERT_TRUE(clamped.ok()) << clamped.error().message;
+  EXPECT_NEAR((*clamped)[0], 1.25, 1e-9);
+  EXPECT_EQ((*clamped)[1], 0);
+  // Bad input is an error, not a crash.
+  EXPECT_FALSE(solveNonNegativeLeastSquares({}, {}).ok());
+  EXPECT_FALSE(solveNonNegativeLeastSquares({{1, 2}, {3}}, std::vector<double>{1, 2}).ok());
+}
+
+TEST(ShaderCostModel, PredictionIsTheWeightedSum) {
+  CostFeatures features;
+  features.vertex_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 10;
+  features.fragment_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 20;
+  features.fragment_ops[static_cast<int>(OpClass::kTextureSample)] = 2;
+  features.vertex_invocations = 100;
+  features.fragment_invocations = 1000;
+  CostWeights weights;
+  weights.per_op[static_cast<int>(OpClass::kFloatArithmetic)] = 1;
+  weights.per_op[static_cast<int>(OpClass::kTextureSample)] = 50;
+  weights.per_vertex_invocation = 3;
+  weights.per_fragment_invocation = 5;
+  weights.per_draw = 7;
+  // V (w_v + 10) + F (w_f + 20 + 2·50) + w_draw
+  EXPECT_EQ(predictCost(features, weights), 100 * 13 + 1000 * 125 + 7);
+  // Calibration recovers weights that generated the measurements exactly.
+  std::vector<CostFeatures> set;
+  std::vector<double> seconds;
+  for (int i = 0; i < 12; ++i) {
+    CostFeatures f = features;
+    f.fragment_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 5.0 + 3 * i;
+    f.fragment_ops[static_cast<int>(OpClass::kTextureSample)] = i % 4;
+    f.fragment_invocations = 500.0 + 100 * (i % 5);
+    f.vertex_invocations = 50.0 + 10 * (i % 3);
+    set.push_back(f);
+    seconds.push_back(predictCost(f, weights));
+  }
+  auto calibrated = calibrateCostWeights(set, seconds, "test");
+  ASSERT_TRUE(calibrated.ok()) << calibrated.error().message;
+  for (size_t i = 0; i < set.size(); ++i)
+    EXPECT_NEAR(predictCost(set[i], *calibrated), seconds[i], 1e-6 * seconds[i]);
+}
+
+}  // namespace
+}  // namespace duolod::shader
