@@ -217,6 +217,15 @@ double heStaticCost(const ir::Module& vertex, const ir::Module& fragment) {
 
 // ---------------------------------------------------------------------------------------------
 
+CostFeatures staticCostFeatures(const ir::Module& vertex, const ir::Module& fragment,
+                                double vertex_invocations_per_draw,
+                                double fragment_invocations_per_draw) {
+  return {.vertex_ops = staticOpCounts(vertex),
+          .fragment_ops = staticOpCounts(fragment),
+          .vertex_invocations = vertex_invocations_per_draw,
+          .fragment_invocations = fragment_invocations_per_draw};
+}
+
 std::array<double, kCostModelParameterCount> costDesignRow(const CostFeatures& features) {
   std::array<double, kCostModelParameterCount> row{};
   for (int k = 0; k < kOpClassCount; ++k)

@@ -15,7 +15,7 @@
 //        cost = V · c_v + F · c_f + draws · w_draw,
 //        c_s  = w_invocation_s + Σ_k w_k · n_{s,k}   (n_{s,k}: class-k ops per invocation of stage s)
 //    The weights are calibrated against measured llvmpipe wall time by non-negative least squares
-//    (bench/shader_cost.cpp) and stored in kCalibratedWeights below, so prediction needs no timing.
+//    (bench/shader_cost.cpp) and stored in a versioned table, so prediction needs no timing.
 //
 // DESIGN.md "Measuring cost": static instruction counts rank shaders poorly (Spearman ≈ 0.7); counts
 // weighted by dynamic block execution rank them well (≈ 0.96).
@@ -101,6 +101,12 @@ struct CostWeights {
   std::string version;               // which calibration (see kCalibratedWeights)
 };
 
+// The features with every block counted once per invocation (no profile): "static counts × V, F",
+// the ablation that shows what the dynamic counts add.
+CostFeatures staticCostFeatures(const ir::Module& vertex, const ir::Module& fragment,
+                                double vertex_invocations_per_draw,
+                                double fragment_invocations_per_draw);
+
 // Predicted seconds of one draw: V·c_v + F·c_f + w_draw.
 double predictCost(const CostFeatures& features, const CostWeights& weights);
 
@@ -123,9 +129,5 @@ core::Result<std::vector<double>> solveNonNegativeLeastSquares(
 core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> features,
                                                std::span<const double> measured_seconds,
                                                std::string version);
-
-// The weights calibrated on this project's reference machine (bench/shader_cost.cpp, Mesa
-// llvmpipe), with the command that produced them in cost_model.cpp.
-const CostWeights& calibratedCostWeights();
 
 }  // namespace duolod::shader

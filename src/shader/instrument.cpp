@@ -92,4 +92,13 @@ core::Result<InstrumentedModule> instrumentBlockCounts(const ir::Module& origina
   return result;
 }
 
+CostFeatures profiledCostFeatures(const ir::Module& vertex, const ir::Module& fragment,
+                                  const BlockProfile& profile, double vertex_invocations_per_draw,
+                                  double fragment_invocations_per_draw) {
+  return {.vertex_ops = dynamicOpCounts(vertex, profile.vertex_executions),
+          .fragment_ops = dynamicOpCounts(fragment, profile.fragment_executions),
+          .vertex_invocations = vertex_invocations_per_draw,
+          .fragment_invocations = fragment_invocations_per_draw};
+}
+
 }  // namespace duolod::shader

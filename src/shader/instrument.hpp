@@ -19,6 +19,7 @@
 
 #include "duolod/core.hpp"
 #include "duolod/render.hpp"
+#include "shader/cost_model.hpp"
 #include "shader/ir.hpp"
 
 namespace duolod::shader {
@@ -60,5 +61,11 @@ core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
                                               const ir::Module& vertex, const ir::Module& fragment,
                                               std::span<const render::Sample> samples,
                                               int resolution);
+
+// Our model's features (cost_model.hpp) of a program in a configuration: per-invocation op counts
+// from `profile` (of this very program), and the configuration's invocations per draw.
+CostFeatures profiledCostFeatures(const ir::Module& vertex, const ir::Module& fragment,
+                                  const BlockProfile& profile, double vertex_invocations_per_draw,
+                                  double fragment_invocations_per_draw);
 
 }  // namespace duolod::shader
