@@ -6,14 +6,11 @@
 #include <type_traits>
 #include <vector>
 
+#include "duolod/core.hpp"
+
 namespace duolod::bench {
 
-inline double median(std::vector<double> values) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
+using core::median;
 
 // Median wall time of `repeats` calls of `run`. A `run` returning bool false stops and gives -1.
 template <class F>

@@ -219,6 +219,17 @@ void setLogSink(LogSink sink);
 void setLogLevel(LogLevel minimum);
 void log(LogLevel level, std::string_view message);
 
+// ---------------------------------------------------------------------------------------------
+// Statistics for measurements and for checking predictions against them.
+
+// Median (the mean of the middle two for an even count); 0 for no values.
+double median(std::vector<double> values);
+// Ranks 1..n of `values`, ties sharing the mean of the ranks they span ("fractional" ranks).
+std::vector<double> fractionalRanks(std::span<const double> values);
+// Spearman's rank correlation: Pearson's correlation of the fractional ranks, so ties are handled.
+// In [−1, 1]; 0 when either side is constant or the sizes differ or are below 2.
+double spearmanCorrelation(std::span<const double> a, std::span<const double> b);
+
 // 64-bit FNV-1a; used to key caches by content.
 uint64_t hashBytes(const void* data, size_t size, uint64_t seed = 0xcbf29ce484222325ull);
 

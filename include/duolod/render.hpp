@@ -3,6 +3,7 @@
 // into an atlas read back once. Supersampled references (f̄, eq. 1) are box-filtered on the GPU.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -118,12 +119,64 @@ struct RenderOptions {
   int resolution = 128;   // tile side in pixels (the footprint)
   int supersample = 1;    // k: render at k×resolution and box-filter k×k (the reference f̄)
   int msaa_samples = 0;   // 0 = off
+  // Count the work of the object's draws into RenderStats::work (ARB_pipeline_statistics_query).
+  // Fails with an error on a device without the extension.
+  bool count_work = false;
+};
+
+// Work the device did for the object's draws, from ARB_pipeline_statistics_query (core in GL 4.6).
+// Unlike time it is deterministic for a device and input, so tests and the cost model (§5.2: the
+// paper's extension of He et al. with vertex and pixel counts) use it. For renderReference() the
+// counts are those of the k×-sized render; the box filter's own pass is not counted.
+// On Mesa llvmpipe (measured, tests/render_counters_test.cpp): each distinct indexed vertex of a draw
+// is shaded once (a quad of 6 indices counts 4), and fragments are shaded in whole 4×4-pixel blocks:
+// a triangle adds 16 for every block it touches, so edges and shared diagonals count extra.
+struct WorkCounts {
+  uint64_t vertex_invocations = 0;          // GL_VERTEX_SHADER_INVOCATIONS
+  uint64_t fragment_invocations = 0;        // GL_FRAGMENT_SHADER_INVOCATIONS
+  uint64_t primitives_submitted = 0;        // GL_PRIMITIVES_SUBMITTED
+  uint64_t clipping_input_primitives = 0;   // GL_CLIPPING_INPUT_PRIMITIVES (after culling stages)
+  uint64_t clipping_output_primitives = 0;  // GL_CLIPPING_OUTPUT_PRIMITIVES
 };
 
 struct RenderStats {
   double seconds = 0;  // wall clock including glFinish and readback
   int draws = 0;
   int chunks = 0;  // atlas passes needed
+  WorkCounts work;  // filled when RenderOptions::count_work is set
+};
+
+// A plain uniform of a program, set by the CPU: how "moving to parameter" (He et al. 2015) hands a
+// value averaged over the domain to a simplified shader. Programs from SPIR-V have no names to look
+// up (ARB_gl_spirv), so the uniform is addressed by its explicit `layout(location = N)`.
+struct UniformValue {
+  int location = -1;
+  int components = 1;  // float, vec2, vec3 or vec4
+  std::array<float, 4> value{};
+};
+
+// Draw-cost timing on the wall clock (DESIGN.md, "Measuring cost": llvmpipe's GL_TIME_ELAPSED is
+// wrong, so it is never used). Protocol: the samples are drawn at the footprint into one atlas
+// (one tile per sample, no readback), a "pass" being a clear plus one draw of the object per
+// sample. Each program is warmed up (llvmpipe compiles shader variants at the first draw), then
+// the number of passes per repeat is calibrated so that a repeat lasts at least
+// `min_repeat_seconds`; the repeats alternate between the programs and a clear-only baseline
+// (A B C base A B C base ...) so slow drift hits all of them alike; each repeat ends in glFinish.
+struct TimingOptions {
+  int resolution = 128;              // tile side: the footprint s_d the samples were framed for
+  int repeats = 7;                   // timed repeats per program; the median is reported
+  double min_repeat_seconds = 0.03;  // calibrates passes per repeat (timer noise ≪ a repeat)
+  int max_passes_per_repeat = 1000;
+};
+struct DrawTime {
+  // Median over repeats of one pass's time minus the clear-only baseline's median (>= 0): the
+  // object's draw cost over all samples. Divide by the sample count for one view.
+  double seconds = 0;
+  double pass_seconds = 0;   // median raw time of one pass (clear + draws, up to glFinish)
+  double clear_seconds = 0;  // median time of a clear-only pass
+  double spread = 0;         // (max − min) / median of the per-pass times over the repeats
+  int passes_per_repeat = 0;
+  int repeats = 0;
 };
 
 class Renderer {
@@ -148,6 +201,13 @@ class Renderer {
   core::Result<ProgramId> compileProgram(const SpirvBinary& binary);
   void releaseProgram(ProgramId program);
 
+  // Sets plain uniforms of a program (program state: it persists across renders until set again).
+  core::Status setProgramUniforms(ProgramId program, std::span<const UniformValue> values);
+  // An extra std140 uniform block (e.g. the parameters a simplified shader reads), bound at
+  // `binding` for every later draw; the frame and material blocks keep their bindings. Empty bytes
+  // unbind it.
+  core::Status setParameterBlock(int binding, std::span<const uint8_t> bytes);
+
   void setBindings(const Bindings& bindings);
   void setAmbient(core::Vec3 ambient_color);
   void setLightColor(core::Vec3 light_color);
@@ -161,6 +221,16 @@ class Renderer {
                                             std::span<const Sample> samples,
                                             const RenderOptions& options,
                                             RenderStats* stats = nullptr);
+
+  // Wall-clock draw cost of each program over the samples (TimingOptions describes the protocol).
+  // Times are only comparable within one call: compare programs as ratios of one measurement.
+  core::Result<std::vector<DrawTime>> measureDrawTimes(AssetId asset,
+                                                       std::span<const ProgramId> programs,
+                                                       std::span<const Sample> samples,
+                                                       const TimingOptions& options = {});
+  core::Result<DrawTime> measureDrawTime(AssetId asset, ProgramId program,
+                                         std::span<const Sample> samples,
+                                         const TimingOptions& options = {});
 
   // ---- Local re-rendering, for image-driven simplification (§4.2, Lindstrom & Turk 2000) ----
   // A collapse changes only a few pixels of each view. Each tile is a small screen region of one

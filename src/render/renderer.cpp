@@ -167,6 +167,39 @@ void beginDrawing(const Framebuffer& target) {
   if (target.samples > 0) glEnable(GL_MULTISAMPLE);
 }
 
+namespace {
+constexpr GLenum kWorkQueryTargets[WorkQueries::kCount] = {
+    GL_VERTEX_SHADER_INVOCATIONS_ARB, GL_FRAGMENT_SHADER_INVOCATIONS_ARB,
+    GL_PRIMITIVES_SUBMITTED_ARB, GL_CLIPPING_INPUT_PRIMITIVES_ARB,
+    GL_CLIPPING_OUTPUT_PRIMITIVES_ARB};
+}  // namespace
+
+void WorkQueries::create() {
+  available = epoxy_gl_version() >= 46 ||
+              epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query");
+  if (available) glGenQueries(kCount, ids);
+}
+void WorkQueries::destroy() {
+  if (available) glDeleteQueries(kCount, ids);
+  available = false;
+}
+void WorkQueries::begin() {
+  for (int q = 0; q < kCount; ++q) glBeginQuery(kWorkQueryTargets[q], ids[q]);
+}
+void WorkQueries::end() {
+  for (int q = 0; q < kCount; ++q) glEndQuery(kWorkQueryTargets[q]);
+}
+void WorkQueries::addResults(WorkCounts& counts) {
+  uint64_t* fields[kCount] = {&counts.vertex_invocations, &counts.fragment_invocations,
+                              &counts.primitives_submitted, &counts.clipping_input_primitives,
+                              &counts.clipping_output_primitives};
+  for (int q = 0; q < kCount; ++q) {
+    GLuint64 value = 0;
+    glGetQueryObjectui64v(ids[q], GL_QUERY_RESULT, &value);
+    *fields[q] += value;
+  }
+}
+
 }  // namespace internal
 
 using namespace internal;
@@ -192,6 +225,7 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
   s.flat_normal_texture = s.makeSolidTexture(128, 128, 255);
   glCreateBuffers(1, &s.frame_ubo);
   glCreateVertexArrays(1, &s.empty_vao);
+  s.work_queries.create();
   auto downsample =
       renderer->compileProgram(GlslSource{kDownsampleVertex, kDownsampleFragment, "downsample.vert",
                                           "downsample.frag"});
@@ -202,6 +236,53 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
 }
 
 std::string Renderer::deviceDescription() const { return state_->context.description(); }
+
+core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const UniformValue> values) {
+  State& s = *state_;
+  if (program < 0 || program >= static_cast<int>(s.programs.size()) || !s.programs[program])
+    return Error{"setProgramUniforms: unknown program id " + std::to_string(program)};
+  while (glGetError() != GL_NO_ERROR) {
+  }
+  GLuint id = s.programs[program];
+  for (const UniformValue& v : values) {
+    if (v.location < 0 || v.components < 1 || v.components > 4)
+      return Error{"setProgramUniforms: uniform at location " + std::to_string(v.location) +
+                   " with " + std::to_string(v.components) +
+                   " components (needs a location >= 0 and 1..4 components)"};
+    const float* x = v.value.data();
+    switch (v.components) {
+      case 1: glProgramUniform1fv(id, v.location, 1, x); break;
+      case 2: glProgramUniform2fv(id, v.location, 1, x); break;
+      case 3: glProgramUniform3fv(id, v.location, 1, x); break;
+      default: glProgramUniform4fv(id, v.location, 1, x); break;
+    }
+    if (GLenum error = glGetError(); error != GL_NO_ERROR)
+      return Error{"setProgramUniforms: the program has no " + std::to_string(v.components) +
+                   "-float uniform at location " + std::to_string(v.location) + " (GL error " +
+                   std::to_string(error) + ")"};
+  }
+  return core::okStatus();
+}
+
+core::Status Renderer::setParameterBlock(int binding, std::span<const uint8_t> bytes) {
+  State& s = *state_;
+  if (bytes.empty()) {
+    s.parameter_binding = -1;
+    return core::okStatus();
+  }
+  GLint max_bindings = 0;
+  glGetIntegerv(GL_MAX_UNIFORM_BUFFER_BINDINGS, &max_bindings);
+  if (binding < 0 || binding >= max_bindings || binding == s.bindings.frame_block ||
+      binding == s.bindings.material_block)
+    return Error{"setParameterBlock: binding " + std::to_string(binding) +
+                 " is out of range or taken by the frame/material block"};
+  // A new buffer each time: a draw still queued may read the old one (the driver keeps it alive).
+  if (s.parameter_ubo) glDeleteBuffers(1, &s.parameter_ubo);
+  glCreateBuffers(1, &s.parameter_ubo);
+  glNamedBufferStorage(s.parameter_ubo, static_cast<GLsizeiptr>(bytes.size()), bytes.data(), 0);
+  s.parameter_binding = binding;
+  return core::okStatus();
+}
 
 void Renderer::setBindings(const Bindings& bindings) { state_->bindings = bindings; }
 void Renderer::setAmbient(core::Vec3 ambient_color) { state_->ambient = ambient_color; }
@@ -402,7 +483,7 @@ AtlasLayout planAtlas(int count, int tile, int max_size, int samples) {
 
 }  // namespace internal
 
-namespace {
+namespace internal {
 
 core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
                           Renderer::ProgramId program, std::span<const Sample> samples,
@@ -414,10 +495,29 @@ core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
   if (samples.empty()) return Error{"render: no samples to render"};
   if (options.resolution < 1 || options.supersample < 1 || options.supersample > 16)
     return Error{"render: resolution must be >= 1 and supersampling 1..16"};
+  if (options.count_work && !s.work_queries.available)
+    return Error{"render: counting work needs ARB_pipeline_statistics_query, which " +
+                 s.context.description() + " lacks"};
   if (options.resolution * options.supersample > s.max_size)
     return Error{"render: a " + std::to_string(options.resolution * options.supersample) +
                  "-pixel tile exceeds the device's " + std::to_string(s.max_size) + " limit"};
   return core::okStatus();
+}
+
+}  // namespace internal
+
+namespace {
+
+// drawChunk(), inside the work queries when counting.
+int drawCounted(Renderer::State& s, ChunkDrawer& drawer, bool count_work, int first, int count,
+                int tile, const AtlasLayout& layout, GLsizeiptr stride, WorkCounts& work) {
+  if (count_work) s.work_queries.begin();
+  int draws = drawer.drawChunk(first, count, tile, layout, stride);
+  if (count_work) {
+    s.work_queries.end();
+    s.work_queries.addResults(work);
+  }
+  return draws;
 }
 
 }  // namespace
@@ -452,7 +552,8 @@ core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_i
         !ok)
       return ok.error();
     beginDrawing(s.atlas);
-    local.draws += drawer.drawChunk(first, n, tile, layout, stride);
+    local.draws += drawCounted(s, drawer, options.count_work, first, n, tile, layout, stride,
+                               local.work);
     GLuint read_fbo = s.atlas.fbo;
     if (options.msaa_samples > 0) {
       if (auto ok = ensureFramebuffer(s.resolved, width, height, 0, GL_RGBA8, false, false); !ok)
@@ -508,7 +609,8 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
         !ok)
       return ok.error();
     beginDrawing(s.atlas);
-    local.draws += drawer.drawChunk(first, n, big_tile, layout, stride);
+    local.draws += drawCounted(s, drawer, options.count_work, first, n, big_tile, layout, stride,
+                               local.work);
     glDisable(GL_SCISSOR_TEST);
     // The box filter reads a single-sample texture: resolve (or copy) the atlas into one.
     if (auto ok = ensureFramebuffer(s.resolved, big_width, big_height, 0, GL_RGBA8, false, true);

@@ -108,6 +108,19 @@ void scatterTiles(const std::vector<T>& atlas, int atlas_width, const AtlasLayou
   }
 }
 
+// The five ARB_pipeline_statistics_query counters of WorkCounts, begun and ended around the
+// object's draws only (not the box filter or clears), summed over atlas chunks.
+struct WorkQueries {
+  static constexpr int kCount = 5;
+  GLuint ids[kCount] = {};
+  bool available = false;  // the device has the extension (or GL 4.6)
+  void create();
+  void destroy();
+  void begin();
+  void end();
+  void addResults(WorkCounts& counts);  // waits for the results
+};
+
 inline void copyMatrix(float* out, const core::Mat4& m) { std::memcpy(out, m.m.data(), 64); }
 inline int roundUp(int value, int multiple) { return (value + multiple - 1) / multiple * multiple; }
 
@@ -128,6 +141,9 @@ struct Renderer::State {
   internal::Framebuffer atlas, resolved, reference_float;
   GLuint downsample_program = 0;
   GLuint empty_vao = 0;
+  internal::WorkQueries work_queries;
+  GLuint parameter_ubo = 0;  // setParameterBlock(); bound with every draw's inputs
+  int parameter_binding = -1;
 
   ~State() {
     if (context_alive) {
@@ -143,6 +159,8 @@ struct Renderer::State {
       glDeleteTextures(2, textures);
       if (frame_ubo) glDeleteBuffers(1, &frame_ubo);
       if (empty_vao) glDeleteVertexArrays(1, &empty_vao);
+      work_queries.destroy();
+      if (parameter_ubo) glDeleteBuffers(1, &parameter_ubo);
     }
   }
 
@@ -166,6 +184,11 @@ struct Renderer::State {
 };
 
 namespace internal {
+
+// The checks every whole-view render shares (ids, sample count, sizes, work counting available).
+core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
+                          Renderer::ProgramId program, std::span<const Sample> samples,
+                          const RenderOptions& options);
 
 // Shared by render() and renderReference(): draws samples [first, first+n) of a chunk into the
 // atlas at `tile` pixels per sample.
@@ -212,6 +235,8 @@ struct ChunkDrawer {
     const Bindings& b = s.bindings;
     glUseProgram(program);
     glBindVertexArray(asset.vao);
+    if (s.parameter_binding >= 0)
+      glBindBufferBase(GL_UNIFORM_BUFFER, s.parameter_binding, s.parameter_ubo);
     const int locations[6] = {b.position, b.normal, b.tangent, b.uv0, b.uv1, b.color};
     const int components[6] = {3, 3, 4, 2, 2, 4};
     const float defaults[6][4] = {{0, 0, 0, 1}, {0, 0, 1, 0}, {1, 0, 0, 1},
