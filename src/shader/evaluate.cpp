@@ -1,0 +1,223 @@
+// Variant error evaluation with program and error caches (see evaluate.hpp). Errors follow Liang et
+// al. eq. (6) through metric::imageError against the k×k-supersampled reference of eq. (1).
+#include "shader/evaluate.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <type_traits>
+
+namespace duolod::shader {
+namespace {
+using core::Error;
+
+// Folds the bytes of plain values into an FNV-1a hash (core::hashBytes); sizes go in first so
+// that adjacent sequences cannot alias.
+template <class T>
+uint64_t mixValue(uint64_t hash, const T& value) {
+  static_assert(std::is_arithmetic_v<T> || std::is_enum_v<T>);
+  return core::hashBytes(&value, sizeof value, hash);
+}
+template <class T>
+uint64_t mixSequence(uint64_t hash, const std::vector<T>& values) {
+  hash = mixValue(hash, values.size());
+  return values.empty() ? hash : core::hashBytes(values.data(), values.size() * sizeof(T), hash);
+}
+
+uint64_t meshKey(const core::Mesh& mesh) {
+  uint64_t hash = mixSequence(0xcbf29ce484222325ull, mesh.positions);
+  hash = mixSequence(hash, mesh.normals);
+  hash = mixSequence(hash, mesh.uv0);
+  hash = mixSequence(hash, mesh.indices);
+  for (const core::Submesh& sub : mesh.submeshes) {
+    hash = mixValue(hash, sub.first_index);
+    hash = mixValue(hash, sub.index_count);
+    hash = mixValue(hash, sub.material);
+  }
+  return hash;
+}
+
+// Every view whose index is a multiple of views/kept_views (evenly spaced), and within it
+// kept_lights evenly spaced lights (index 0, the centre light, first).
+std::vector<render::Sample> reducedDomain(const std::vector<render::Sample>& samples,
+                                          int kept_views, int kept_lights) {
+  int views = 0, lights = 0;
+  for (const render::Sample& s : samples) {
+    views = std::max(views, s.view_index + 1);
+    lights = std::max(lights, s.light_index + 1);
+  }
+  kept_views = std::clamp(kept_views, 1, views);
+  kept_lights = std::clamp(kept_lights, 1, lights);
+  std::vector<render::Sample> reduced;
+  for (int v = 0; v < kept_views; ++v)
+    for (int l = 0; l < kept_lights; ++l) {
+      int view = v * views / kept_views, light = l * lights / kept_lights;
+      reduced.push_back(samples[size_t(view) * lights + light]);  // view-major order
+    }
+  return reduced;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+uint64_t programKey(const Variant& variant) {
+  return mixSequence(mixSequence(0xcbf29ce484222325ull, variant.spirv.vertex),
+                     variant.spirv.fragment);
+}
+
+uint64_t variantKey(const Variant& variant) {
+  uint64_t hash = mixValue(programKey(variant), variant.uniforms.size());
+  for (const render::UniformValue& uniform : variant.uniforms) {
+    hash = mixValue(hash, uniform.location);
+    hash = mixValue(hash, uniform.components);
+    for (int c = 0; c < uniform.components && c < 4; ++c) hash = mixValue(hash, uniform.value[c]);
+  }
+  return mixSequence(hash, variant.parameter_block);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+EvaluationCache::EvaluationCache(render::Renderer& renderer) : renderer_(renderer) {}
+
+EvaluationCache::~EvaluationCache() {
+  for (auto& [key, program] : programs_)
+    if (program) renderer_.releaseProgram(*program);
+}
+
+core::Result<render::Renderer::ProgramId> EvaluationCache::program(const Variant& variant) {
+  uint64_t key = programKey(variant);
+  if (auto found = programs_.find(key); found != programs_.end()) {
+    ++counters_.program_hits;
+    return found->second;
+  }
+  auto start = std::chrono::steady_clock::now();
+  core::Result<render::Renderer::ProgramId> compiled = renderer_.compileProgram(variant.spirv);
+  counters_.compile_seconds += secondsSince(start);
+  if (compiled)
+    ++counters_.programs_compiled;
+  else
+    ++counters_.compile_failures;
+  programs_.emplace(key, compiled);
+  return compiled;
+}
+
+std::optional<metric::ImageError> EvaluationCache::findError(uint64_t variant_key,
+                                                             uint64_t configuration_key) {
+  auto found = errors_.find({variant_key, configuration_key});
+  if (found == errors_.end()) return std::nullopt;
+  ++counters_.error_hits;
+  return found->second;
+}
+
+void EvaluationCache::storeError(uint64_t variant_key, uint64_t configuration_key,
+                                 const metric::ImageError& error) {
+  errors_[{variant_key, configuration_key}] = error;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+core::Result<std::unique_ptr<VariantEvaluator>> VariantEvaluator::create(
+    std::shared_ptr<EvaluationCache> cache, render::Renderer::AssetId asset,
+    const core::Mesh& mesh, const Variant& original, const EvaluationConfig& config) {
+  if (!cache) return Error{"VariantEvaluator: no evaluation cache"};
+  if (!(config.distance > 0) || config.supersample < 1 || config.predicted_views < 1 ||
+      config.predicted_lights < 1 || !(config.predicted_resolution_scale > 0))
+    return Error{"VariantEvaluator: distance, supersampling and the predicted domain must be "
+                 "positive"};
+  if (mesh.positions.empty()) return Error{"VariantEvaluator: the mesh has no vertices"};
+  std::unique_ptr<VariantEvaluator> evaluator(new VariantEvaluator());
+  VariantEvaluator& e = *evaluator;
+  e.cache_ = std::move(cache);
+  e.asset_ = asset;
+  e.config_ = config;
+  core::Sphere bounds = core::computeBoundingSphere(mesh);
+  e.footprint_ = render::footprintPixels(bounds, config.distance, config.display);
+  e.predicted_resolution_ =
+      std::min(e.footprint_,
+               std::max(std::max(1, config.predicted_min_resolution),
+                        static_cast<int>(std::lround(e.footprint_ *
+                                                     config.predicted_resolution_scale))));
+  e.samples_ = render::domainSamples(bounds, config.distance, config.domain);
+  e.predicted_samples_ = reducedDomain(e.samples_, config.predicted_views, config.predicted_lights);
+
+  // Everything that changes the images: mesh, materials, footprint, domain, reference k.
+  uint64_t key = mixValue(meshKey(mesh), config.asset_key);
+  key = mixValue(key, config.distance);
+  key = mixValue(key, e.footprint_);
+  key = mixValue(key, config.domain.views);
+  key = mixValue(key, config.domain.light_cross_arm);
+  key = mixValue(key, config.domain.light_cross_center);
+  key = mixValue(key, config.domain.light_rotation_deg);
+  key = mixValue(key, config.supersample);
+  key = mixValue(key, config.parameter_binding);
+  e.configuration_key_ = key;
+  key = mixValue(key, e.predicted_resolution_);
+  key = mixValue(key, config.predicted_views);
+  key = mixValue(key, config.predicted_min_resolution);
+  e.predicted_configuration_key_ = mixValue(key, config.predicted_lights);
+
+  auto program = e.cache_->program(original);
+  if (!program) return Error{"VariantEvaluator: the original shader: " + program.error().message};
+  render::Renderer& renderer = e.cache_->renderer();
+  if (auto ok = renderer.setProgramUniforms(*program, original.uniforms); !ok) return ok.error();
+  if (auto ok = renderer.setParameterBlock(config.parameter_binding, original.parameter_block); !ok)
+    return ok.error();
+  auto start = std::chrono::steady_clock::now();
+  render::RenderOptions options{.resolution = e.footprint_, .supersample = config.supersample};
+  auto reference = renderer.renderReference(asset, *program, e.samples_, options);
+  if (!reference) return reference.error();
+  e.reference_ = std::move(reference.value());
+  options.resolution = e.predicted_resolution_;
+  auto predicted = renderer.renderReference(asset, *program, e.predicted_samples_, options);
+  if (!predicted) return predicted.error();
+  e.predicted_reference_ = std::move(predicted.value());
+  e.counters_.reference_seconds = secondsSince(start);
+  return evaluator;
+}
+
+core::Result<metric::ImageError> VariantEvaluator::renderedError(const Variant& variant) {
+  return evaluate(variant, false);
+}
+
+core::Result<metric::ImageError> VariantEvaluator::predictedError(const Variant& variant) {
+  return evaluate(variant, true);
+}
+
+core::Result<metric::ImageError> VariantEvaluator::evaluate(const Variant& variant,
+                                                            bool predicted) {
+  uint64_t variant_key = variantKey(variant);
+  uint64_t configuration_key = predicted ? predicted_configuration_key_ : configuration_key_;
+  if (auto cached = cache_->findError(variant_key, configuration_key)) return *cached;
+
+  auto program = cache_->program(variant);
+  if (!program) return program.error();
+  render::Renderer& renderer = cache_->renderer();
+  if (auto ok = renderer.setProgramUniforms(*program, variant.uniforms); !ok) return ok.error();
+  if (auto ok = renderer.setParameterBlock(config_.parameter_binding, variant.parameter_block); !ok)
+    return ok.error();
+  const std::vector<render::Sample>& samples = predicted ? predicted_samples_ : samples_;
+  int resolution = predicted ? predicted_resolution_ : footprint_;
+  auto start = std::chrono::steady_clock::now();
+  auto images = renderer.render(asset_, *program, samples, {.resolution = resolution});
+  if (!images) return images.error();
+  metric::ImageError error =
+      metric::imageError(*images, predicted ? predicted_reference_ : reference_);
+  counters_.render_seconds += secondsSince(start);
+  counters_.sample_renders += static_cast<int>(samples.size());
+  if (predicted) {
+    ++counters_.predicted;
+    // eq. (6) sums over pixels: rescale to the footprint's pixel count.
+    double scale = double(footprint_) * footprint_ / (double(resolution) * resolution);
+    error.epsilon *= scale;
+    error.coverage_px *= scale;
+  } else {
+    ++counters_.rendered;
+  }
+  cache_->storeError(variant_key, configuration_key, error);
+  return error;
+}
+
+}  // namespace duolod::shader
