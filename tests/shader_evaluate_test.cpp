@@ -151,7 +151,7 @@ TEST_F(EvaluatorTest, ConstantColoursByHandAndTheCachesAtWork) {
   EXPECT_EQ(e.sampleCount(), 100);           // 20 views × 5 lights
   EXPECT_EQ(e.predictedSampleCount(), 5);    // 5 views × 1 light
   EXPECT_GT(e.footprint(), 20);
-  EXPECT_EQ(e.predictedResolution(), e.footprint());  // below the 64-pixel floor
+  EXPECT_EQ(e.predictedResolution(), e.footprint());  // the default: predict at the footprint
 
   // The original against its own supersampled reference: only the silhouette's aliasing.
   auto own = e.renderedError(original);
@@ -218,6 +218,26 @@ TEST_F(EvaluatorTest, ConstantColoursByHandAndTheCachesAtWork) {
   EXPECT_EQ(cache->counters().programs_compiled, 3);
   EXPECT_GT(far->per_pixel, 0.088);
   EXPECT_LT(far->per_pixel, 0.09 + 0.36 * 0.3);  // half the footprint: more edge pixels
+}
+
+TEST_F(EvaluatorTest, PredictedDomainIsAnEvenSubsetAtTheChosenResolution) {
+  auto cache = std::make_shared<shader::EvaluationCache>(*renderer_);
+  shader::Variant original = shaderVariant("constant");
+  shader::EvaluationConfig config = smallConfig();
+  config.predicted_views = 4;
+  config.predicted_lights = 2;
+  config.predicted_resolution_scale = 0.5f;
+  config.predicted_min_resolution = 8;
+  auto evaluator = shader::VariantEvaluator::create(cache, asset_id_, asset_.mesh, original, config);
+  ASSERT_TRUE(evaluator) << evaluator.error().message;
+  EXPECT_EQ((*evaluator)->predictedSampleCount(), 8);
+  EXPECT_EQ((*evaluator)->predictedResolution(), ((*evaluator)->footprint() + 1) / 2);
+  config.predicted_min_resolution = 1000;  // the floor never exceeds the footprint
+  auto floored = shader::VariantEvaluator::create(cache, asset_id_, asset_.mesh, original, config);
+  ASSERT_TRUE(floored) << floored.error().message;
+  EXPECT_EQ((*floored)->predictedResolution(), (*floored)->footprint());
+  // Both programs came from the cache after the first compile.
+  EXPECT_EQ(cache->counters().programs_compiled, 1);
 }
 
 TEST_F(EvaluatorTest, BrokenVariantsFailOnceWithAMessage) {

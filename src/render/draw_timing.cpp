@@ -60,8 +60,13 @@ core::Result<std::vector<DrawTime>> Renderer::measureDrawTimes(AssetId asset_id,
            passes;
   };
 
-  // Warm-up: llvmpipe builds each shader variant for the draw state at its first draw.
-  for (GLuint program : entries) timePasses(program, 2);
+  // Warm-up: llvmpipe builds each shader variant for the draw state at its first draw; one
+  // sample triggers it.
+  for (GLuint program : entries) {
+    beginDrawing(s.atlas);
+    if (program) ChunkDrawer{s, asset, program}.drawChunk(0, 1, tile, layout, stride);
+    glFinish();
+  }
   std::vector<int> passes(entries.size());
   for (size_t e = 0; e < entries.size(); ++e) {
     double one = std::max(timePasses(entries[e], 1), 1e-7);

@@ -75,13 +75,16 @@ struct EvaluationConfig {
   // The predicted error renders `predicted_views` views (evenly spaced in the domain's order) ×
   // `predicted_lights` lights per view (evenly spaced, the centre light first) at
   // `predicted_resolution_scale` × the footprint, but never below `predicted_min_resolution` (nor
-  // above the footprint), against a reference of the same reduced domain. The floor matters: the
-  // error measures aliasing, and below ~64 px a lower resolution changes it (measured on the noise
-  // shader at a 49 px footprint: at 25 px the original aliased more than its 1-octave version, so
-  // the prediction ranked them the wrong way round).
+  // above the footprint), against a reference of the same reduced domain.
+  // The resolution defaults to the footprint because the error measures aliasing, which changes
+  // with resolution: on the Dragon with noise_phong at 128 px (bench/shader_eval, bench/RESULTS.md)
+  // predicting at 64 px misranked the close noise variants (Spearman 0.93 over 15 variants, the
+  // original predicted worse than 3 octaves), at 128 px it ranked them (0.996); a 49 px footprint
+  // predicted at 25 px put the 1-octave version ahead of the original. Fewer samples (5 of 100)
+  // alone make the prediction ~15× cheaper than the rendered error.
   int predicted_views = 5;
   int predicted_lights = 1;
-  float predicted_resolution_scale = 0.5f;
+  float predicted_resolution_scale = 1.0f;
   int predicted_min_resolution = 64;
   int parameter_binding = 2;  // uniform block binding of Variant::parameter_block
   // Identifies the materials and textures when one cache serves several assets (the mesh itself
