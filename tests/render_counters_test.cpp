@@ -57,12 +57,8 @@ void main() { outColor = vec4(uTint.rgb + uOffset.rgb, 1.0); }
 class RenderCountersTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    auto created = render::Renderer::create();
-    if (!created) {
-      failure_ = created.error().message;
-      return;
-    }
-    renderer_ = std::move(created.value()).release();
+    renderer_ = test::createRenderer(failure_);
+    if (!renderer_) return;
     auto program = renderer_->compileProgram(
         render::GlslSource{kVertex, kFragment, "counters.vert", "counters.frag"});
     ASSERT_TRUE(program) << program.error().message;

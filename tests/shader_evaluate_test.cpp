@@ -77,12 +77,8 @@ core::Result<render::SpirvBinary> spirvPair(const std::string& vertex, const std
 class EvaluatorTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    auto created = render::Renderer::create();
-    if (!created) {
-      failure_ = created.error().message;
-      return;
-    }
-    renderer_ = std::move(created.value()).release();
+    renderer_ = test::createRenderer(failure_);
+    if (!renderer_) return;
     asset_.source_path = "icosphere";
     asset_.mesh = test::icosphere(2);
     core::computeNormals(asset_.mesh);
@@ -113,7 +109,11 @@ class EvaluatorTest : public ::testing::Test {
     EXPECT_TRUE(spirv) << spirv.error().message;
     return shader::Variant{*spirv, {}, {}};
   }
-  // About 40 pixels across the sphere on a 240-pixel display.
+  static core::Result<std::unique_ptr<shader::VariantEvaluator>> constantEvaluator(
+      std::shared_ptr<shader::EvaluationCache> cache, const shader::Variant& original) {
+    return shader::VariantEvaluator::create(cache, asset_id_, asset_.mesh, original, smallConfig());
+  }
+  // About 50 pixels across the sphere on a 240-pixel display.
   static shader::EvaluationConfig smallConfig(float distance = 12.0f) {
     shader::EvaluationConfig config;
     config.distance = distance;
@@ -144,8 +144,7 @@ TEST_F(EvaluatorTest, KeysSeparateWordsFromValues) {
 TEST_F(EvaluatorTest, ConstantColoursByHandAndTheCachesAtWork) {
   auto cache = std::make_shared<shader::EvaluationCache>(*renderer_);
   shader::Variant original = shaderVariant("constant");
-  auto evaluator =
-      shader::VariantEvaluator::create(cache, asset_id_, asset_.mesh, original, smallConfig());
+  auto evaluator = constantEvaluator(cache, original);
   ASSERT_TRUE(evaluator) << evaluator.error().message;
   shader::VariantEvaluator& e = **evaluator;
   EXPECT_EQ(e.sampleCount(), 100);           // 20 views × 5 lights
@@ -243,8 +242,7 @@ TEST_F(EvaluatorTest, PredictedDomainIsAnEvenSubsetAtTheChosenResolution) {
 TEST_F(EvaluatorTest, BrokenVariantsFailOnceWithAMessage) {
   auto cache = std::make_shared<shader::EvaluationCache>(*renderer_);
   shader::Variant original = shaderVariant("constant");
-  auto evaluator =
-      shader::VariantEvaluator::create(cache, asset_id_, asset_.mesh, original, smallConfig());
+  auto evaluator = constantEvaluator(cache, original);
   ASSERT_TRUE(evaluator) << evaluator.error().message;
   shader::Variant broken = original;
   broken.spirv.fragment = {0xdeadbeefu, 1, 2, 3, 4, 5};

@@ -63,4 +63,13 @@ CommandRun runCommand(const std::string& binary, const std::vector<std::string>&
   return run;
 }
 
+render::Renderer* createRenderer(std::string& failure) {
+  auto created = render::Renderer::create();
+  if (!created) {
+    failure = created.error().message;
+    return nullptr;
+  }
+  return std::move(created.value()).release();
+}
+
 }  // namespace duolod::test

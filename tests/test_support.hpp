@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "duolod/render.hpp"
+
 namespace duolod::test {
 
 // Path of an asset under ../shared/assets, or "" when it is missing.
@@ -25,6 +27,10 @@ struct CommandRun {
 };
 CommandRun runCommand(const std::string& binary, const std::vector<std::string>& args);
 std::string readText(const std::filesystem::path& path);
+// A renderer for a test suite's SetUpTestSuite (the caller owns it), or nullptr with the reason in
+// `failure` when there is no OpenGL 4.5 context.
+render::Renderer* createRenderer(std::string& failure);
+
 inline bool contains(const std::string& text, const std::string& fragment) {
   return text.find(fragment) != std::string::npos;
 }
