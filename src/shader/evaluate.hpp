@@ -32,7 +32,8 @@ uint64_t programKey(const Variant& variant);
 uint64_t variantKey(const Variant& variant);
 
 // Compiled programs by programKey (failures too, so a bad variant costs one attempt) and image
-// errors by (variantKey, configuration key). Owns the programs it compiles.
+// errors by (variantKey, configuration key). Owns the programs it compiles, so it must not outlive
+// the renderer.
 class EvaluationCache {
  public:
   explicit EvaluationCache(render::Renderer& renderer);
