@@ -197,6 +197,16 @@ TEST_F(EvaluatorTest, ConstantColoursByHandAndTheCachesAtWork) {
   EXPECT_EQ(e.counters().predicted, 1);
   EXPECT_EQ(e.counters().sample_renders, 4 * 100 + 5);
 
+  // The device's work was counted with the render: the same mesh and footprint give the same
+  // counts for both colours (no discard), and at least the covered pixels are shaded.
+  ASSERT_TRUE(renderer_->canCountWork());
+  auto own_work = e.work(original), bluer_work = e.work(bluer);
+  ASSERT_TRUE(own_work && bluer_work);
+  EXPECT_EQ(own_work->fragment_invocations, bluer_work->fragment_invocations);
+  EXPECT_GE(double(own_work->fragment_invocations), 100 * own->coverage_px);
+  EXPECT_EQ(own_work->primitives_submitted, 100 * asset_.mesh.triangleCount());
+  EXPECT_FALSE(e.work(shaderVariant("noise_phong")));  // never rendered here
+
   // Re-evaluation is answered from the error cache: no compile, no render, the same value.
   int hits = cache->counters().error_hits;
   auto again = e.renderedError(bluer);

@@ -187,6 +187,8 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   std::string deviceDescription() const;  // GL_RENDERER, GL_VERSION
+  // Whether RenderOptions::count_work is available (ARB_pipeline_statistics_query or GL 4.6).
+  bool canCountWork() const;
 
   // Handles to GPU objects owned by the Renderer.
   using AssetId = int;

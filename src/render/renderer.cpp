@@ -236,6 +236,7 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
 }
 
 std::string Renderer::deviceDescription() const { return state_->context.description(); }
+bool Renderer::canCountWork() const { return state_->work_queries.available; }
 
 core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const UniformValue> values) {
   State& s = *state_;

@@ -186,6 +186,12 @@ core::Result<metric::ImageError> VariantEvaluator::predictedError(const Variant&
   return evaluate(variant, true);
 }
 
+std::optional<render::WorkCounts> VariantEvaluator::work(const Variant& variant) const {
+  auto found = work_.find(variantKey(variant));
+  if (found == work_.end()) return std::nullopt;
+  return found->second;
+}
+
 core::Result<metric::ImageError> VariantEvaluator::evaluate(const Variant& variant,
                                                             bool predicted) {
   uint64_t variant_key = variantKey(variant);
@@ -201,8 +207,12 @@ core::Result<metric::ImageError> VariantEvaluator::evaluate(const Variant& varia
   const std::vector<render::Sample>& samples = predicted ? predicted_samples_ : samples_;
   int resolution = predicted ? predicted_resolution_ : footprint_;
   auto start = std::chrono::steady_clock::now();
-  auto images = renderer.render(asset_, *program, samples, {.resolution = resolution});
+  render::RenderStats stats;
+  bool count_work = !predicted && renderer.canCountWork();
+  auto images = renderer.render(asset_, *program, samples,
+                                {.resolution = resolution, .count_work = count_work}, &stats);
   if (!images) return images.error();
+  if (count_work) work_[variant_key] = stats.work;
   metric::ImageError error =
       metric::imageError(*images, predicted ? predicted_reference_ : reference_);
   counters_.render_seconds += secondsSince(start);

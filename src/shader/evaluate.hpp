@@ -108,6 +108,11 @@ class VariantEvaluator {
   // as measured.
   core::Result<metric::ImageError> predictedError(const Variant& variant);
 
+  // The device's work for the variant's whole-domain render (vertex and fragment invocations, the
+  // counts §5.2's cost model multiplies): known once renderedError() has rendered it, when the
+  // device can count (Renderer::canCountWork()).
+  std::optional<render::WorkCounts> work(const Variant& variant) const;
+
   int footprint() const { return footprint_; }
   int predictedResolution() const { return predicted_resolution_; }
   int sampleCount() const { return static_cast<int>(samples_.size()); }
@@ -134,6 +139,7 @@ class VariantEvaluator {
   std::vector<render::Sample> samples_, predicted_samples_;
   render::ImageBatchF reference_, predicted_reference_;
   uint64_t configuration_key_ = 0, predicted_configuration_key_ = 0;
+  std::unordered_map<uint64_t, render::WorkCounts> work_;  // by variantKey
   Counters counters_;
 };
 
