@@ -1,0 +1,133 @@
+// Searches over shader simplification rules (Liang et al. §5.2; issue 4 item 6), private to
+// src/shader:
+//
+//  * Genetic programming with NSGA-II selection (Sitthi-Amorn, Modly, Weimer, Lawrence 2011,
+//    "Genetic Programming for Shader Simplification"; Deb et al. 2002). A genome is the ordered list
+//    of RuleSites applied to the original program. Mutation appends sites drawn from
+//    enumerateSites() of the genome's program, removes one, or replaces one by a site of the
+//    program before it; crossover joins a prefix of one parent to a suffix of the other. A genome
+//    whose sites no longer apply (a rule removed what a later site names) is invalid and dropped.
+//    The two objectives are the predicted cost and the predicted error; the result is the Pareto
+//    frontier of (cost, error) for the (mesh, distance) configuration the scorer stands for.
+//
+//  * He et al. 2015's greedy simplification: from the original, repeatedly apply the single rule
+//    with the smallest predicted error increase per unit of predicted cost saved, recording the
+//    sequence (each step is a level).
+//
+// Both materialise genomes through a prefix cache (a genome extending a known one costs one
+// applyRule) and score each distinct program once (by a hash of its SPIR-V and parameters); the
+// scorer's own caches (compiled programs, errors by module hash: shader/evaluate.hpp) are shared by
+// both searches and by the final re-evaluation. Everything is seeded and deterministic for a
+// deterministic scorer.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "duolod/core.hpp"
+#include "shader/rules.hpp"
+
+namespace duolod::shader {
+
+// What the searches optimise, for one (mesh, distance) configuration. Errors from a callback make
+// the variant invalid (dropped), they do not stop the search.
+struct VariantScorer {
+  std::function<core::Result<double>(const ShaderProgram&)> predicted_cost;
+  std::function<core::Result<double>(const ShaderProgram&)> predicted_error;
+  // For the final front only: eq. (6) over the whole domain (optional).
+  std::function<core::Result<double>(const ShaderProgram&)> rendered_error;
+};
+
+// A hash of the program's emitted words and CPU-set parameters: identifies a variant.
+uint64_t programHash(const ShaderProgram& program);
+
+struct SearchVariant {
+  std::vector<RuleSite> sites;  // applied to the original, in order
+  std::shared_ptr<const ShaderProgram> program;
+  double predicted_cost = 0;
+  double predicted_error = 0;
+  std::optional<double> rendered_error;  // filled by the final re-evaluation
+};
+
+struct SearchCounters {
+  int variants_generated = 0;  // distinct programs materialised (applyRule successes)
+  int rule_failures = 0;       // applyRule calls that failed (the genome was dropped)
+  int variants_predicted = 0;  // distinct programs scored with the predicted cost and error
+  int score_failures = 0;      // distinct programs the scorer rejected (e.g. failed to compile)
+  int score_cache_hits = 0;    // genomes whose program was already scored
+  int variants_rendered = 0;   // rendered errors computed (final re-evaluation)
+  int genomes_evaluated = 0;   // NSGA-II evaluations (GP only)
+  double seconds = 0;
+};
+
+struct SearchResult {
+  // GP: the valid first front, by increasing predicted cost (the original included when it is
+  // on it). Greedy: the original, then one variant per step.
+  std::vector<SearchVariant> variants;
+  SearchCounters counters;
+};
+
+struct GeneticSearchOptions {
+  int population_size = 24;
+  int generations = 20;
+  double crossover_probability = 0.5;
+  uint64_t seed = 1;
+  // Mutation: append sites (1 + a geometric number, mean about 1 + append_extra_mean) with
+  // probability append_probability, else remove one or replace one, equally likely.
+  double append_probability = 0.6;
+  double append_extra_mean = 1.0;
+  int max_genome_length = 200;
+  // Errors above this (predicted) make a variant invalid: the search spends no time beyond the
+  // useful range (the paper's e_max bounds the levels anyway). Infinity keeps everything.
+  double max_error = 1e30;
+  // Called after each generation with the generation (1-based) and the counters so far.
+  std::function<void(int, const SearchCounters&)> on_generation;
+};
+
+struct GreedySearchOptions {
+  int max_steps = 64;
+  // Candidates scored per step: all sites when <= 0, else this many drawn evenly over the sites
+  // in enumerateSites() order (deterministic), keeping each step's cost bounded on big shaders.
+  int max_candidates_per_step = 0;
+  double max_error = 1e30;  // stop when every candidate's predicted error is above this
+  std::function<void(int, const SearchCounters&)> on_step;
+};
+
+// The caches both searches share (materialised genomes and scores). One per (original, context,
+// scorer configuration).
+class SearchCache {
+ public:
+  SearchCache(ShaderProgram original, RuleContext context, VariantScorer scorer);
+  ~SearchCache();
+
+  const ShaderProgram& original() const;
+  std::shared_ptr<const ShaderProgram> sharedOriginal() const;
+  const RuleContext& context() const;
+  // The program of `sites` applied to the original, or an error when a site does not apply.
+  core::Result<std::shared_ptr<const ShaderProgram>> materialise(const std::vector<RuleSite>& sites);
+  struct Score {
+    double cost = 0, error = 0;
+  };
+  core::Result<Score> score(const ShaderProgram& program);
+  core::Result<double> renderedError(const ShaderProgram& program);
+  SearchCounters& counters();
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearchOptions& options);
+core::Result<SearchResult> searchGreedy(SearchCache& cache, const GreedySearchOptions& options);
+
+// Fills rendered_error of every variant with the scorer's rendered error (cached by program).
+core::Status renderFront(SearchCache& cache, std::vector<SearchVariant>& variants);
+
+// The sites of a variant in words: "operation removal: ...; texture average: ..." or "original".
+std::string describeSites(const std::vector<RuleSite>& sites);
+
+}  // namespace duolod::shader
