@@ -145,7 +145,7 @@ class ReferenceRoundTrip : public ::testing::TestWithParam<const char*> {
     // ε = 0 up to float noise: at most a few 8-bit levels on a handful of pixels. Eq. (6) sums the
     // squared RGB differences; one pixel off by one level in one channel is (1/255)² ≈ 1.5e-5.
     EXPECT_LE(glsl_error.per_pixel, 1e-5) << "epsilon " << glsl_error.epsilon;
-    double spirv_epsilon = -1;
+    std::string spirv_epsilon = "not rendered";
     if (spirv_too) {
       auto from_ir_words = renderer_->compileProgram(render::SpirvBinary{vertex.emitted_words, fragment.emitted_words});
       ASSERT_TRUE(from_ir_words) << from_ir_words.error().message;
@@ -153,10 +153,10 @@ class ReferenceRoundTrip : public ::testing::TestWithParam<const char*> {
       ASSERT_TRUE(from_spirv) << from_spirv.error().message;
       metric::ImageError spirv_error = metric::imageError(*from_spirv, *reference);
       EXPECT_LE(spirv_error.per_pixel, 1e-5) << "epsilon " << spirv_error.epsilon;
-      spirv_epsilon = spirv_error.epsilon;
+      spirv_epsilon = std::to_string(spirv_error.epsilon);
     }
-    std::printf("[ roundtrip ] %-22s eps(GLSL 450 from IR) = %.3g  eps(SPIR-V from IR) = %.3g  (%.0f px/sample, %d samples)\n",
-                name.c_str(), glsl_error.epsilon, spirv_epsilon, glsl_error.coverage_px, glsl_error.samples);
+    std::printf("[ roundtrip ] %-22s eps(GLSL 450 from IR) = %.3g  eps(SPIR-V from IR) = %s  (%.0f px/sample, %d samples)\n",
+                name.c_str(), glsl_error.epsilon, spirv_epsilon.c_str(), glsl_error.coverage_px, glsl_error.samples);
   }
 
   static inline render::Renderer* renderer_ = nullptr;
