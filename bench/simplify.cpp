@@ -130,6 +130,7 @@ int main(int argc, char** argv) {
   int repeats = 3;
   size_t samples = 100000;
   bool endpoint = false;
+  bool progressive = true;
   float attribute_weight = 1.0f;
   std::string gltfpack = "/usr/bin/gltfpack";
   app.add_option("meshes", meshes, "mesh files (.off .obj .ply .gltf .glb); default: CGAL + shared");
@@ -140,6 +141,8 @@ int main(int argc, char** argv) {
   app.add_option("--samples", samples, "surface samples per mesh and direction (0: no distances)")
       ->capture_default_str();
   app.add_flag("--endpoint", endpoint, "duolod with Placement::kEndpoint (like meshopt 0.18)");
+  app.add_flag("!--no-progressive", progressive,
+               "skip the progressive-record table (for profiling the simplifiers alone)");
   app.add_option("--attribute-weight", attribute_weight, "duolod SimplifyOptions::attribute_weight")
       ->capture_default_str();
   app.add_option("--gltfpack", gltfpack, "gltfpack binary (\"\" to skip it)")
@@ -212,7 +215,7 @@ int main(int argc, char** argv) {
                  input.triangleCount(), input.vertexCount(), attributeList(input).c_str());
 
     // §5.1: one recorded run down to 1%, then K = 500 candidates extracted in one sweep.
-    {
+    if (progressive) {
       mesh::SimplifyOptions options{.target_triangles = input.triangleCount() / 100,
                                     .record = true};
       auto recorded = mesh::simplifyQuadric(input, options);

@@ -308,6 +308,18 @@ class Engine {
   }
   void fillQueue();
   bool tryCollapse(const QueuedCollapse& entry, float cost);
+  bool applyIfLegal(CandidateCollapse& cand, uint8_t placement, const Neighbor& edge);
+  bool flips(const CandidateCollapse& cand, uint8_t placement) const;
+  const Neighbor* findEdge(uint32_t to) const {
+    for (const Neighbor& nb : neighbors_)
+      if (nb.vertex == to) return &nb;
+    return nullptr;
+  }
+  uint8_t placementOf(const CandidateCollapse& c) const;
+  void runGreedy();
+  void runPasses();
+  void collectPassCandidates();
+  bool tryPassCollapse(const CandidateCollapse& priced);
   bool linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge);
   bool flipsOrDegenerates(uint32_t moving, uint32_t other, Vec3d position,
                           std::span<const uint32_t> incident) const;
@@ -340,6 +352,8 @@ class Engine {
   std::vector<CandidateCollapse> batch_;
   std::vector<float> placed_;
   CollapseQueue queue_;
+  std::vector<uint64_t> pass_order_;     // kPasses: (cost bits << 32 | batch index)
+  std::vector<uint32_t> pass_lock_;      // kPasses: per position, the pass that touched it
 
   SimplifyStats stats_;
   size_t pass_rejections_ = 0;
@@ -674,6 +688,16 @@ void Engine::emitEdgeCandidates(uint32_t p, uint32_t done_round) {
   }
 }
 
+// Where the candidate puts the survivor: an endpoint exactly, or a free point.
+uint8_t Engine::placementOf(const CandidateCollapse& c) const {
+  const Vec3d& p = c.position;
+  const Vec3d& at_to = state_.positions[c.to];
+  const Vec3d& at_from = state_.positions[c.from];
+  if (c.endpoint_only || (p.x == at_to.x && p.y == at_to.y && p.z == at_to.z)) return kAtTo;
+  if (p.x == at_from.x && p.y == at_from.y && p.z == at_from.z) return kAtFrom;
+  return isFinite(p) ? kAtPoint : kAtTo;
+}
+
 void Engine::queueCandidate(const CandidateCollapse& c, bool heapify_later) {
   QueuedCollapse e;
   e.error = std::isfinite(c.error) ? float(c.error) : std::numeric_limits<float>::max();
@@ -682,14 +706,7 @@ void Engine::queueCandidate(const CandidateCollapse& c, bool heapify_later) {
   e.stamp_from = stamps_[c.from];
   e.stamp_to = stamps_[c.to];
   const Vec3d& p = c.position;
-  const Vec3d& at_to = state_.positions[c.to];
-  const Vec3d& at_from = state_.positions[c.from];
-  if (c.endpoint_only || (p.x == at_to.x && p.y == at_to.y && p.z == at_to.z))
-    e.placement = kAtTo;
-  else if (p.x == at_from.x && p.y == at_from.y && p.z == at_from.z)
-    e.placement = kAtFrom;
-  else
-    e.placement = isFinite(p) ? kAtPoint : kAtTo;
+  e.placement = placementOf(c);
   e.x = float(p.x), e.y = float(p.y), e.z = float(p.z);
   e.exact = c.exact ? 1 : 0;
   float cost = std::isfinite(c.cost) ? float(c.cost) : std::numeric_limits<float>::max();
@@ -708,9 +725,8 @@ void Engine::flushBatch(bool heapify_later) {
 
 bool Engine::candidateFor(const QueuedCollapse& entry, CandidateCollapse& out) {
   gatherNeighbors(entry.from);
-  for (const Neighbor& nb : neighbors_)
-    if (nb.vertex == entry.to) return makeCandidate(entry.from, entry.to, nb, true, edgeFeatures(nb), out);
-  return false;
+  const Neighbor* edge = findEdge(entry.to);
+  return edge && makeCandidate(entry.from, entry.to, *edge, true, edgeFeatures(*edge), out);
 }
 
 // Lazy pricing: the cheapest entry is an estimate, so price it and the next estimates from the
@@ -944,9 +960,7 @@ void Engine::invalidateAround(uint32_t survivor) {
 bool Engine::tryCollapse(const QueuedCollapse& entry, float cost) {
   const EngineState& s = state_;
   gatherNeighbors(entry.from);
-  const Neighbor* edge = nullptr;
-  for (const Neighbor& nb : neighbors_)
-    if (nb.vertex == entry.to) edge = &nb;
+  const Neighbor* edge = findEdge(entry.to);
   if (!edge) return false;  // no longer adjacent (cannot happen with valid stamps; defensive)
 
   CandidateCollapse cand;
@@ -971,21 +985,208 @@ bool Engine::tryCollapse(const QueuedCollapse& entry, float cost) {
   else
     cand.position = {entry.x, entry.y, entry.z};
 
-  if (!linkConditionHolds(entry.from, entry.to, *edge)) {
+  if (!applyIfLegal(cand, placement, *edge)) return false;
+  invalidateAround(entry.to);
+  return true;
+}
+
+// The link condition and the flip test (gatherNeighbors(cand.from) must be current), then the
+// collapse.
+bool Engine::applyIfLegal(CandidateCollapse& cand, uint8_t placement, const Neighbor& edge) {
+  if (!linkConditionHolds(cand.from, cand.to, edge)) {
     ++stats_.rejected_topology;
     ++pass_rejections_;
     return false;
   }
-  if (flipsOrDegenerates(entry.from, entry.to, cand.position, incident_) ||
-      (placement != kAtTo &&
-       flipsOrDegenerates(entry.to, entry.from, cand.position, to_incident_))) {
+  if (flips(cand, placement)) {
     ++stats_.rejected_flip;
     ++pass_rejections_;
     return false;
   }
   applyCollapse(cand, placement);
-  invalidateAround(entry.to);
   return true;
+}
+
+// The flip test of both endpoints' triangles (after linkConditionHolds filled to_incident_).
+bool Engine::flips(const CandidateCollapse& cand, uint8_t placement) const {
+  return flipsOrDegenerates(cand.from, cand.to, cand.position, incident_) ||
+         (placement != kAtTo && flipsOrDegenerates(cand.to, cand.from, cand.position, to_incident_));
+}
+
+void Engine::runGreedy() {
+  auto reached = [&] { return state_.live_triangles <= options_.target_triangles; };
+  for (int pass = 0; pass < std::max(1, options_.max_passes) && !reached(); ++pass) {
+    pass_rejections_ = 0;
+    fillQueue();
+    while (!queue_.empty() && !reached()) {
+      float cost = 0;
+      QueuedCollapse entry = queue_.pop(cost);
+      if (isStale(entry) || isForbidden(entry, cost)) continue;
+      if (!entry.exact && model_.refineBatchSize() > 0) {
+        refineTop(entry);
+        continue;
+      }
+      if (double(entry.error) > options_.target_error) continue;
+      tryCollapse(entry, cost);
+    }
+    if (pass_rejections_ == 0) break;
+  }
+}
+
+// The candidates of one pass into batch_: every live edge once. An edge with a free endpoint is
+// interior and manifold (a free position has no feature edge, and collapses keep it so), so it is
+// taken from the triangle where it runs from the lower to the higher id, with everything
+// makeCandidate would find read off that triangle: only the free end may go, into the other
+// end's wedge in that triangle. Edges between two non-free positions (feature lines, corners)
+// go through gatherNeighbors + makeCandidate, from their lower end.
+void Engine::collectPassCandidates() {
+  const EngineState& s = state_;
+  batch_.clear();
+  const size_t triangles = s.triangle_alive.size();
+  const VertexKind* kinds = s.kinds.data();
+  CandidateCollapse c;
+  c.wedge_count = 1;
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!s.triangle_alive[t]) continue;
+    const uint32_t* w = &s.corners[t * 3];
+    const uint32_t p[3] = {s.wedge_position[w[0]], s.wedge_position[w[1]],
+                           s.wedge_position[w[2]]};
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t k2 = kNextCorner[k];
+      const uint32_t a = p[k], b = p[k2];
+      if (a > b) continue;
+      const bool a_free = kinds[a] == VertexKind::kFree, b_free = kinds[b] == VertexKind::kFree;
+      if (!a_free && !b_free) continue;
+      if (a_free) {
+        c.from = a, c.to = b, c.from_wedges[0] = w[k], c.to_wedges[0] = w[k2];
+        c.endpoint_only = options_.endpoint_only || !b_free;
+        c.position = s.positions[b];
+        batch_.push_back(c);
+      }
+      // The other direction: needed when b is free and the placement is tied to the survivor.
+      if (b_free && (!a_free || options_.endpoint_only)) {
+        c.from = b, c.to = a, c.from_wedges[0] = w[k2], c.to_wedges[0] = w[k];
+        c.endpoint_only = options_.endpoint_only || !a_free;
+        c.position = s.positions[a];
+        batch_.push_back(c);
+      }
+    }
+  }
+  const uint32_t position_count = uint32_t(s.positions.size());
+  CandidateCollapse forward, backward;
+  for (uint32_t p = 0; p < position_count; ++p) {
+    if (!s.position_alive[p] || kinds[p] == VertexKind::kFree) continue;
+    gatherNeighbors(p);
+    for (const Neighbor& nb : neighbors_) {
+      if (nb.vertex < p || kinds[nb.vertex] == VertexKind::kFree) continue;
+      const uint8_t features = edgeFeatures(nb);
+      if (makeCandidate(p, nb.vertex, nb, true, features, forward)) batch_.push_back(forward);
+      if (makeCandidate(nb.vertex, p, nb, false, features, backward)) batch_.push_back(backward);
+    }
+  }
+}
+
+// One pass-ordered collapse: the priced candidate, checked again against the current topology
+// (its endpoints are untouched in this pass, but their neighbours may have moved).
+bool Engine::tryPassCollapse(const CandidateCollapse& priced) {
+  gatherNeighbors(priced.from);
+  const Neighbor* edge = findEdge(priced.to);
+  if (!edge) return false;
+  CandidateCollapse cand;
+  if (!makeCandidate(priced.from, priced.to, *edge, true, edgeFeatures(*edge), cand)) {
+    ++stats_.rejected_border;
+    return false;
+  }
+  cand.cost = priced.cost;
+  cand.error = priced.error;
+  cand.position = cand.endpoint_only ? state_.positions[cand.to] : priced.position;
+  if (!linkConditionHolds(cand.from, cand.to, *edge)) {
+    ++stats_.rejected_topology;
+    return false;
+  }
+  if (!cand.endpoint_only) {
+    const Vec3d priced_position = cand.position;
+    const double priced_cost = cand.cost, priced_error = cand.error;
+    model_.refinePlacement(state_, cand);
+    if (isFinite(cand.position) && (cand.position.x != priced_position.x ||
+                                    cand.position.y != priced_position.y ||
+                                    cand.position.z != priced_position.z)) {
+      const uint8_t placement = placementOf(cand);
+      if (!flips(cand, placement)) {
+        applyCollapse(cand, placement);
+        return true;
+      }
+    }
+    // Not moved, or the better place flips a triangle: where it was priced.
+    cand.position = priced_position, cand.cost = priced_cost, cand.error = priced_error;
+  }
+  const uint8_t placement = placementOf(cand);
+  if (flips(cand, placement)) {
+    ++stats_.rejected_flip;
+    return false;
+  }
+  applyCollapse(cand, placement);
+  return true;
+}
+
+void Engine::runPasses() {
+  EngineState& s = state_;
+  pass_lock_.assign(s.positions.size(), 0);
+  auto reached = [&] { return s.live_triangles <= options_.target_triangles; };
+  auto cost_bits = [](double cost) {
+    float f = std::isfinite(cost) ? float(cost) : std::numeric_limits<float>::max();
+    if (!(f >= 0)) f = f < 0 ? 0.0f : std::numeric_limits<float>::max();
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    return bits;
+  };
+  for (uint32_t pass = 1; !reached(); ++pass) {
+    collectPassCandidates();
+    if (batch_.empty()) break;
+    model_.evaluate(s, batch_);
+    pass_order_.clear();
+    for (uint32_t i = 0; i < batch_.size(); ++i) {
+      const CandidateCollapse& c = batch_[i];
+      if (!(c.error <= options_.target_error) || !std::isfinite(c.cost)) continue;
+      pass_order_.push_back(uint64_t(cost_bits(c.cost)) << 32 | i);
+    }
+    if (pass_order_.empty()) break;
+    // Goal: the collapses still needed (each removes about two triangles). Edges up to
+    // pass_cost_slack times the goal-rank cost are taken in order; the rest wait for the next pass,
+    // unless none of the taken ones could be applied.
+    const size_t goal =
+        options_.target_triangles > 0 ? (s.live_triangles - options_.target_triangles + 1) / 2 : 0;
+    auto first_rest = pass_order_.end();
+    if (goal > 0 && goal < pass_order_.size()) {
+      std::nth_element(pass_order_.begin(), pass_order_.begin() + goal, pass_order_.end());
+      float goal_cost;
+      const uint32_t goal_bits = uint32_t(pass_order_[goal] >> 32);
+      std::memcpy(&goal_cost, &goal_bits, 4);
+      const uint64_t limit =
+          uint64_t(cost_bits(double(goal_cost) * options_.pass_cost_slack)) << 32 | 0xffffffffu;
+      first_rest = std::partition(pass_order_.begin(), pass_order_.end(),
+                                  [&](uint64_t key) { return key <= limit; });
+    }
+    std::sort(pass_order_.begin(), first_rest);
+    size_t applied = 0;
+    auto apply_range = [&](auto begin, auto end) {
+      for (auto it = begin; it != end && !reached(); ++it) {
+        const CandidateCollapse& c = batch_[uint32_t(*it)];
+        if (pass_lock_[c.from] == pass || pass_lock_[c.to] == pass) continue;
+        if (!s.position_alive[c.from] || !s.position_alive[c.to]) continue;
+        if (!tryPassCollapse(c)) continue;
+        pass_lock_[c.from] = pass_lock_[c.to] = pass;
+        ++applied;
+      }
+    };
+    apply_range(pass_order_.begin(), first_rest);
+    if (applied == 0 && first_rest != pass_order_.end()) {
+      std::sort(first_rest, pass_order_.end());
+      apply_range(first_rest, pass_order_.end());
+    }
+    if (applied == 0) break;
+  }
+  batch_.clear();
 }
 
 core::Mesh Engine::buildOutput() const {
@@ -1034,23 +1235,11 @@ SimplifyResult Engine::run() {
     record_.values.submeshes.clear();
   }
 
-  auto reached = [&] { return state_.live_triangles <= options_.target_triangles; };
-  for (int pass = 0; pass < std::max(1, options_.max_passes) && !reached(); ++pass) {
-    pass_rejections_ = 0;
-    fillQueue();
-    while (!queue_.empty() && !reached()) {
-      float cost = 0;
-      QueuedCollapse entry = queue_.pop(cost);
-      if (isStale(entry) || isForbidden(entry, cost)) continue;
-      if (!entry.exact && model_.refineBatchSize() > 0) {
-        refineTop(entry);
-        continue;
-      }
-      if (double(entry.error) > options_.target_error) continue;
-      tryCollapse(entry, cost);
-    }
-    if (pass_rejections_ == 0) break;
-  }
+  if (options_.ordering == CollapseOrdering::kPasses && model_.refineBatchSize() == 0 &&
+      options_.invalidation_ring <= 1)
+    runPasses();
+  else
+    runGreedy();
 
   model_.end(state_);
   SimplifyResult result;

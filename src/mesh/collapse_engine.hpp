@@ -172,6 +172,14 @@ class CostModel {
   virtual void refine(const EngineState& state, std::span<CandidateCollapse> batch) {
     (void)state, (void)batch;
   }
+  // Pass ordering only (EngineOptions::ordering): called for a candidate about to be applied,
+  // before the flip test. A model that priced its candidates cheaply (e.g. the best of a few
+  // fixed points) may move the survivor somewhere better here and lower cost and error to match;
+  // it must not raise them. If the new position would flip a triangle the engine goes back to the
+  // priced one.
+  virtual void refinePlacement(const EngineState& state, CandidateCollapse& chosen) {
+    (void)state, (void)chosen;
+  }
   // Once, when the engine stops (state final).
   virtual void end(const EngineState& state) { (void)state; }
   // After the collapse is applied (state already updated), for incremental model data.
@@ -179,6 +187,18 @@ class CostModel {
     (void)state, (void)applied;
   }
 };
+
+// How the engine orders collapses.
+//   kGreedy: a strict greedy queue (Garland & Heckbert 1997): always the cheapest edge next, and
+//     every collapse re-prices the edges it invalidated. Needed for lazily priced models
+//     (refineBatchSize() > 0) and for costs of a wider ring (invalidation_ring 2).
+//   kPasses: passes over all edges (as in meshoptimizer's simplifier): price every live edge
+//     once, sort by cost, apply the cheapest edges in order while skipping any edge that shares
+//     an endpoint with a collapse already applied in this pass (its price is stale), up to the
+//     pass's cost limit (pass_cost_slack times the cost of the edge at the pass's goal rank, the
+//     number of collapses still needed); then the next pass re-prices what is left. No queue
+//     maintenance and no re-pricing per collapse, so several times fewer instructions.
+enum class CollapseOrdering : uint8_t { kGreedy, kPasses };
 
 struct EngineOptions {
   size_t target_triangles = 0;                                     // 0 = none
@@ -196,6 +216,9 @@ struct EngineOptions {
   // when the queue runs dry short of the target, the engine refills it from all edges, at most
   // this many times.
   int max_passes = 4;
+  CollapseOrdering ordering = CollapseOrdering::kGreedy;
+  // kPasses: a pass applies edges up to this multiple of the cost at its goal rank.
+  double pass_cost_slack = 1.5;
 };
 
 // Welds wedges (equal position and attributes), drops unreferenced vertices, triangles with an

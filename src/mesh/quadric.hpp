@@ -38,6 +38,10 @@ Vec3d minimizeQuadricNear(const Quadric& q, Vec3d center, double max_distance);
 
 struct QuadricModelOptions {
   bool endpoint_only = false;
+  // Price free collapses at the best of the endpoints and the midpoint (three evaluations, no
+  // solve) and solve the optimal placement only in refinePlacement, for the collapses the engine
+  // applies (CollapseOrdering::kPasses). The price is then an upper bound of the optimal cost.
+  bool price_at_fixed_points = false;
   float attribute_weight = 1.0f;
 };
 
@@ -49,6 +53,7 @@ class QuadricModel final : public CostModel {
   void evaluate(const EngineState& state, std::span<CandidateCollapse> batch) override;
   void placeAttributes(const EngineState& state, const CandidateCollapse& chosen,
                        std::span<float> values) override;
+  void refinePlacement(const EngineState& state, CandidateCollapse& chosen) override;
   void onCollapse(const EngineState& state, const AppliedCollapse& applied) override;
 
  private:
@@ -56,6 +61,10 @@ class QuadricModel final : public CostModel {
   // scratch_, returns a pointer to it (for placeAttributes).
   const double* mergedAttributeQuadric(const CandidateCollapse& candidate, uint32_t target);
   Quadric reducedMergedQuadric(const CandidateCollapse& candidate, uint32_t target) const;
+  // The geometric quadric of the merged position, and the total (plus the attribute quadrics of
+  // the survivor's wedges, minimized over the attributes) that prices and places it.
+  void mergedQuadrics(const EngineState& state, const CandidateCollapse& candidate,
+                      Quadric& geometric, Quadric& total) const;
 
   QuadricModelOptions options_;
   // Per position: plane quadrics plus feature-line penalty planes.

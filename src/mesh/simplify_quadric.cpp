@@ -13,6 +13,7 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
   auto start = std::chrono::steady_clock::now();
   core::Mesh prepared = prepareMesh(mesh);
   QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
+                      .price_at_fixed_points = true,
                       .attribute_weight = options.attribute_weight});
   EngineOptions engine_options{
       .target_triangles = options.target_triangles,
@@ -21,6 +22,7 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
       .lock_border = options.lock_border,
       .allow_material_border_collapse = options.allow_material_border_collapse,
       .record = options.record,
+      .ordering = CollapseOrdering::kPasses,
   };
   SimplifyResult result = runCollapseEngine(prepared, model, engine_options);
   result.stats.seconds =
