@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <utility>
 
 namespace duolod::mesh {
 namespace {
@@ -279,8 +280,14 @@ struct Neighbor {
 
 class Engine {
  public:
-  Engine(const core::Mesh& base, CostModel& model, const EngineOptions& options)
-      : base_(base), model_(model), options_(options) {}
+  // `position_ids` (may be null): PreparedMesh::position_ids of `base`.
+  Engine(const core::Mesh& base, const std::vector<uint32_t>* position_ids,
+         uint32_t position_count, CostModel& model, const EngineOptions& options)
+      : base_(base),
+        given_position_ids_(position_ids),
+        given_position_count_(position_count),
+        model_(model),
+        options_(options) {}
 
   SimplifyResult run();
 
@@ -335,6 +342,8 @@ class Engine {
   }
 
   const core::Mesh& base_;
+  const std::vector<uint32_t>* given_position_ids_;
+  uint32_t given_position_count_;
   CostModel& model_;
   EngineOptions options_;
   EngineState state_;
@@ -369,7 +378,11 @@ void Engine::buildState() {
 
   s.layout = attributeLayout(m);
   s.attributes = packAttributes(m, s.layout);
-  const uint32_t position_count = positionIds(m.positions, s.wedge_position);
+  uint32_t position_count = given_position_count_;
+  if (given_position_ids_ && given_position_ids_->size() == wedges)
+    s.wedge_position = *given_position_ids_;
+  else
+    position_count = positionIds(m.positions, s.wedge_position);
 
   core::Bounds bounds;
   for (core::Vec3 p : m.positions)
@@ -398,23 +411,33 @@ void Engine::buildState() {
       v = (v | v << 2) & 0x9249249;
       return v;
     };
-    std::vector<uint64_t> keyed(position_count);
+    std::vector<uint32_t> code(position_count);
     for (uint32_t p = 0; p < position_count; ++p) {
       core::Vec3 a = m.positions[representative[p]];
-      uint64_t code = 0x3fffffff;  // non-finite positions last
+      code[p] = 0x3fffffff;  // non-finite positions last
       if (core::isFinite(a)) {
         uint64_t q[3];
         for (int k = 0; k < 3; ++k) {
           double t = (a[k] - (&s.origin.x)[k]) * inverse_scale;
           q[k] = uint64_t(std::clamp(t, 0.0, 1.0) * 1023.0);
         }
-        code = spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2;
+        code[p] = uint32_t(spread(q[0]) | spread(q[1]) << 1 | spread(q[2]) << 2);
       }
-      keyed[p] = code << 32 | p;
     }
-    std::sort(keyed.begin(), keyed.end());
+    // Stable radix sort of the ids by their 30-bit code, two 15-bit digits (ties keep id order).
+    std::vector<uint32_t> order(position_count), sorted(position_count);
+    for (uint32_t p = 0; p < position_count; ++p) order[p] = p;
+    std::vector<uint32_t> bucket(1u << 15);
+    for (int shift : {0, 15}) {
+      std::fill(bucket.begin(), bucket.end(), 0);
+      for (uint32_t p : order) ++bucket[(code[p] >> shift) & 0x7fff];
+      uint32_t sum = 0;
+      for (uint32_t& b : bucket) sum += std::exchange(b, sum);
+      for (uint32_t p : order) sorted[bucket[(code[p] >> shift) & 0x7fff]++] = p;
+      order.swap(sorted);
+    }
     std::vector<uint32_t> new_id(position_count);
-    for (uint32_t rank = 0; rank < position_count; ++rank) new_id[uint32_t(keyed[rank])] = rank;
+    for (uint32_t rank = 0; rank < position_count; ++rank) new_id[order[rank]] = rank;
     for (uint32_t w = 0; w < wedges; ++w) s.wedge_position[w] = new_id[s.wedge_position[w]];
   }
 
@@ -1254,26 +1277,34 @@ SimplifyResult Engine::run() {
 
 }  // namespace
 
-core::Mesh prepareMesh(const core::Mesh& mesh) {
+core::Mesh prepareMesh(const core::Mesh& mesh) { return prepareMeshWithPositions(mesh).mesh; }
+
+PreparedMesh prepareMeshWithPositions(const core::Mesh& mesh) {
   const size_t n = mesh.vertexCount();
   const AttributeLayout layout = attributeLayout(mesh);
-  const std::vector<float> packed = packAttributes(mesh, layout);
   std::vector<uint32_t> position_id;
-  positionIds(mesh.positions, position_id);
+  const uint32_t input_position_count = positionIds(mesh.positions, position_id);
 
-  // Wedges: equal position id and bitwise-equal attributes.
+  // Wedges: equal position id and bitwise-equal attributes. Without attributes that is the first
+  // vertex of each position id, no hashing needed.
   std::vector<uint32_t> representative(n);
-  {
+  if (layout.stride == 0) {
+    std::vector<uint32_t> first_of_id(input_position_count, kAbsent);
+    for (uint32_t v = 0; v < n; ++v) {
+      uint32_t& first = first_of_id[position_id[v]];
+      if (first == kAbsent) first = v;
+      representative[v] = first;
+    }
+  } else {
+    const std::vector<float> packed = packAttributes(mesh, layout);
     IndexTable table(n);
     const uint32_t stride = layout.stride;
     for (uint32_t v = 0; v < n; ++v) {
-      const float* a = packed.data() + size_t(v) * stride;  // (no attributes: stride 0)
-      uint64_t h = stride ? hashWords(reinterpret_cast<const uint32_t*>(a), stride, position_id[v])
-                          : mixHash(position_id[v]);
+      const float* a = packed.data() + size_t(v) * stride;
+      uint64_t h = hashWords(reinterpret_cast<const uint32_t*>(a), stride, position_id[v]);
       representative[v] = table.findOrInsert(v, h, [&](uint32_t other) {
         return position_id[other] == position_id[v] &&
-               (stride == 0 ||
-                std::memcmp(a, packed.data() + size_t(other) * stride, stride * 4) == 0);
+               std::memcmp(a, packed.data() + size_t(other) * stride, stride * 4) == 0;
       });
     }
   }
@@ -1303,7 +1334,11 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
     uint32_t key[3] = {p[first], p[(first + 1) % 3], p[(first + 2) % 3]};
     uint32_t index = uint32_t(kept_groups.size());
     for (uint32_t k : key) kept_keys.push_back(k);
-    uint32_t found = triangle_table.findOrInsert(index, hashWords(key, 3), [&](uint32_t other) {
+    // One mixing round over the three ids (the triangles are many; hashWords would mix three
+    // times).
+    const uint64_t hash =
+        mixHash((uint64_t(key[0]) << 32 | key[1]) ^ (uint64_t(key[2]) * 0x9e3779b97f4a7c15ull));
+    uint32_t found = triangle_table.findOrInsert(index, hash, [&](uint32_t other) {
       return std::memcmp(key, &kept_keys[size_t(other) * 3], 12) == 0;
     });
     if (found != index) {  // duplicate of an earlier triangle
@@ -1324,7 +1359,18 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
     remap[v] = uint32_t(kept_vertices.size());
     kept_vertices.push_back(v);
   }
-  core::Mesh out;
+  PreparedMesh prepared;
+  core::Mesh& out = prepared.mesh;
+  // Position ids of the kept vertices, renumbered densely in order of first use.
+  {
+    std::vector<uint32_t> dense(input_position_count, kAbsent);
+    prepared.position_ids.resize(kept_vertices.size());
+    for (size_t i = 0; i < kept_vertices.size(); ++i) {
+      uint32_t& id = dense[position_id[kept_vertices[i]]];
+      if (id == kAbsent) id = prepared.position_count++;
+      prepared.position_ids[i] = id;
+    }
+  }
   auto copy_stream = [&](auto& to, const auto& from, uint32_t offset) {
     if (offset == kAbsent) return;
     to.resize(kept_vertices.size());
@@ -1353,12 +1399,18 @@ core::Mesh prepareMesh(const core::Mesh& mesh) {
     uint32_t material = mesh.submeshes.empty() ? 0 : mesh.submeshes[0].material;
     out.submeshes = {{0, uint32_t(out.indices.size()), material}};
   }
-  return out;
+  return prepared;
 }
 
 SimplifyResult runCollapseEngine(const core::Mesh& prepared, CostModel& model,
                                  const EngineOptions& options) {
-  Engine engine(prepared, model, options);
+  Engine engine(prepared, nullptr, 0, model, options);
+  return engine.run();
+}
+
+SimplifyResult runCollapseEngine(const PreparedMesh& prepared, CostModel& model,
+                                 const EngineOptions& options) {
+  Engine engine(prepared.mesh, &prepared.position_ids, prepared.position_count, model, options);
   return engine.run();
 }
 

@@ -227,8 +227,20 @@ struct EngineOptions {
 // the index buffer (or none) become one submesh over everything.
 core::Mesh prepareMesh(const core::Mesh& mesh);
 
+// prepareMesh's result with what it found on the way: the position id of every vertex (equal
+// positions, ±0 folded, share an id; ids 0..position_count-1 in order of first use), so that the
+// engine does not hash the positions a second time.
+struct PreparedMesh {
+  core::Mesh mesh;
+  std::vector<uint32_t> position_ids;
+  uint32_t position_count = 0;
+};
+PreparedMesh prepareMeshWithPositions(const core::Mesh& mesh);
+
 // Simplifies a mesh that prepareMesh has already cleaned (the record's base is a copy of it).
 SimplifyResult runCollapseEngine(const core::Mesh& prepared, CostModel& model,
+                                 const EngineOptions& options);
+SimplifyResult runCollapseEngine(const PreparedMesh& prepared, CostModel& model,
                                  const EngineOptions& options);
 
 }  // namespace duolod::mesh

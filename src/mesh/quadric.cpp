@@ -376,8 +376,15 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
 
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
   for (CandidateCollapse& cand : batch) {
-    Quadric geometric, total;
-    mergedQuadrics(state, cand, geometric, total);
+    // (Summed here rather than through mergedQuadrics when there are no attributes: this runs
+    // for every edge of every pass, and the copies through memory cost more than the sums.)
+    Quadric geometric = geometric_[cand.from];
+    addInto(geometric, geometric_[cand.to]);
+    Quadric total;
+    if (dims_ > 0)
+      mergedQuadrics(state, cand, geometric, total);
+    else
+      total = geometric;
     const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
     double value = 0;
     if (cand.endpoint_only) {
@@ -386,9 +393,16 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     } else if (options_.price_at_fixed_points) {
       // Ties go to the survivor, then the other endpoint (input positions are kept exactly).
       // Q(mid) = (Q(a) + Q(b)) / 2 - (a - b)ᵀA(a - b) / 4, one more quadratic form.
-      const double at_b = quadricValue(total, b), at_a = quadricValue(total, a);
+      // Around b, with g = A b + b_q and d = a - b: Q(b + t d) = Q(b) + 2t g·d + t² dᵀAd.
+      const Quadric& q = total;
+      const Vec3d g{q.a00 * b.x + q.a01 * b.y + q.a02 * b.z + q.b0,
+                    q.a01 * b.x + q.a11 * b.y + q.a12 * b.z + q.b1,
+                    q.a02 * b.x + q.a12 * b.y + q.a22 * b.z + q.b2};
       const Vec3d d = a - b;
-      const double at_mid = 0.5 * (at_a + at_b) - 0.25 * quadraticForm(total, d);
+      const double at_b = std::max(dot(b, g) + q.b0 * b.x + q.b1 * b.y + q.b2 * b.z + q.c, 0.0);
+      const double slope = dot(g, d), curvature = quadraticForm(q, d);
+      const double at_a = std::max(at_b + 2 * slope + curvature, 0.0);
+      const double at_mid = at_b + slope + 0.25 * curvature;
       cand.position = b, value = at_b;
       if (at_a < value) value = at_a, cand.position = a;
       if (at_mid < value) value = std::max(at_mid, 0.0), cand.position = (a + b) * 0.5;

@@ -11,7 +11,7 @@ namespace duolod::mesh {
 
 SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& options) {
   auto start = std::chrono::steady_clock::now();
-  core::Mesh prepared = prepareMesh(mesh);
+  PreparedMesh prepared = prepareMeshWithPositions(mesh);
   QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
                       .price_at_fixed_points = true,
                       .attribute_weight = options.attribute_weight});
