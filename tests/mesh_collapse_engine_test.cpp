@@ -2,7 +2,8 @@
 // initial fill comes in large batches, every later batch holds exactly the edges the last
 // collapse invalidated (all touching the survivor, or its ring with invalidation_ring = 2), both
 // directions of an edge are priced under endpoint placement, the survivor stays put when
-// endpoint_only, and placeAttributes/onCollapse run once per applied collapse.
+// endpoint_only, and placeAttributes/onCollapse run once per applied collapse. With pass ordering
+// (the quadric mode's), one evaluate() per pass and no overlapping collapses within a pass.
 #include <gtest/gtest.h>
 
 #include <set>
@@ -142,6 +143,60 @@ TEST(CollapseEngine, StateStaysConsistent) {
   auto result = mesh::runCollapseEngine(mesh::prepareMesh(grid), model, {.target_triangles = 40});
   EXPECT_LE(result.mesh.triangleCount(), 60u);
   EXPECT_GT(model.applied_collapses.size(), 100u);
+}
+
+// Pass ordering: each evaluate() call prices one pass; within a pass no two applied collapses
+// share an endpoint (a second one would use a price made stale by the first), every applied
+// collapse is one of that pass's priced candidates, and within a pass they come cheapest first.
+TEST(CollapseEngine, PassesNeverApplyOverlappingEdgesInOnePass) {
+  core::Mesh sphere = test::icosphere(3, 1.0f, test::lumps);  // 1280 triangles
+  class PassModel : public RecordingModel {
+   public:
+    void onCollapse(const mesh::EngineState& state, const mesh::AppliedCollapse& applied) override {
+      RecordingModel::onCollapse(state, applied);
+      pass_of.push_back(batches.size() - 1);
+    }
+    std::vector<size_t> pass_of;
+  } model;
+  mesh::EngineOptions options{.target_triangles = 100,
+                              .ordering = mesh::CollapseOrdering::kPasses,
+                              .greedy_tail_triangles = 0};
+  auto result = mesh::runCollapseEngine(mesh::prepareMesh(sphere), model, options);
+  EXPECT_EQ(result.mesh.triangleCount(), 100u);
+  ASSERT_EQ(model.pass_of.size(), model.applied_collapses.size());
+  EXPECT_GT(model.batches.size(), 2u);  // several passes were needed
+  std::set<uint32_t> touched;
+  std::set<std::pair<uint32_t, uint32_t>> priced;
+  size_t pass = SIZE_MAX;
+  double last_cost = 0;
+  for (size_t k = 0; k < model.applied_collapses.size(); ++k) {
+    const auto& c = model.applied_collapses[k].candidate;
+    if (model.pass_of[k] != pass) {
+      pass = model.pass_of[k];
+      touched.clear();
+      priced.clear();
+      for (const auto& p : model.batches[pass]) priced.insert({p.from, p.to});
+      last_cost = 0;
+    }
+    EXPECT_TRUE(touched.insert(c.from).second) << "collapse " << k << " reuses " << c.from;
+    EXPECT_TRUE(touched.insert(c.to).second) << "collapse " << k << " reuses " << c.to;
+    EXPECT_TRUE(priced.count({c.from, c.to})) << "collapse " << k << " was not priced this pass";
+    EXPECT_GE(c.cost, last_cost);
+    last_cost = c.cost;
+  }
+}
+
+// Both orderings run the same rules and reach the target on a seamed, curved grid.
+TEST(CollapseEngine, PassesAndGreedyBothReachTheTarget) {
+  core::Mesh grid = test::seamGrid(12, [](float x, float y) { return 0.1f * x * y; });
+  for (auto ordering : {mesh::CollapseOrdering::kGreedy, mesh::CollapseOrdering::kPasses}) {
+    RecordingModel model;
+    auto result = mesh::runCollapseEngine(
+        mesh::prepareMesh(grid), model,
+        {.target_triangles = 60, .ordering = ordering, .greedy_tail_triangles = 0});
+    EXPECT_LE(result.mesh.triangleCount(), 60u);
+    EXPECT_GT(result.stats.collapses, 100u);
+  }
 }
 
 }  // namespace

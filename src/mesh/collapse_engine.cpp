@@ -1155,7 +1155,12 @@ bool Engine::tryPassCollapse(const CandidateCollapse& priced) {
 void Engine::runPasses() {
   EngineState& s = state_;
   pass_lock_.assign(s.positions.size(), 0);
-  auto reached = [&] { return s.live_triangles <= options_.target_triangles; };
+  // The passes stop greedy_tail_triangles short of the target; the greedy queue does the rest.
+  const size_t pass_target = options_.target_triangles > 0
+                                 ? options_.target_triangles + options_.greedy_tail_triangles
+                                 : 0;
+  auto reached = [&] { return s.live_triangles <= pass_target; };
+  model_.setPassPricing(true);
   auto cost_bits = [](double cost) {
     float f = std::isfinite(cost) ? float(cost) : std::numeric_limits<float>::max();
     if (!(f >= 0)) f = f < 0 ? 0.0f : std::numeric_limits<float>::max();
@@ -1177,8 +1182,7 @@ void Engine::runPasses() {
     // Goal: the collapses still needed (each removes about two triangles). Edges up to
     // pass_cost_slack times the goal-rank cost are taken in order; the rest wait for the next pass,
     // unless none of the taken ones could be applied.
-    const size_t goal =
-        options_.target_triangles > 0 ? (s.live_triangles - options_.target_triangles + 1) / 2 : 0;
+    const size_t goal = pass_target > 0 ? (s.live_triangles - pass_target + 1) / 2 : 0;
     auto first_rest = pass_order_.end();
     if (goal > 0 && goal < pass_order_.size()) {
       std::nth_element(pass_order_.begin(), pass_order_.begin() + goal, pass_order_.end());
@@ -1261,8 +1265,8 @@ SimplifyResult Engine::run() {
   if (options_.ordering == CollapseOrdering::kPasses && model_.refineBatchSize() == 0 &&
       options_.invalidation_ring <= 1)
     runPasses();
-  else
-    runGreedy();
+  model_.setPassPricing(false);
+  runGreedy();  // all of it, or the tail after the passes
 
   model_.end(state_);
   SimplifyResult result;

@@ -180,6 +180,10 @@ class CostModel {
   virtual void refinePlacement(const EngineState& state, CandidateCollapse& chosen) {
     (void)state, (void)chosen;
   }
+  // Which ordering the next evaluate() calls serve: true while the engine runs passes (a model
+  // may then price cheaply and place in refinePlacement), false for the greedy queue (price and
+  // place exactly: the queue never calls refinePlacement).
+  virtual void setPassPricing(bool passes) { (void)passes; }
   // Once, when the engine stops (state final).
   virtual void end(const EngineState& state) { (void)state; }
   // After the collapse is applied (state already updated), for incremental model data.
@@ -197,7 +201,8 @@ class CostModel {
 //     an endpoint with a collapse already applied in this pass (its price is stale), up to the
 //     pass's cost limit (pass_cost_slack times the cost of the edge at the pass's goal rank, the
 //     number of collapses still needed); then the next pass re-prices what is left. No queue
-//     maintenance and no re-pricing per collapse, so several times fewer instructions.
+//     maintenance and no re-pricing per collapse, so several times fewer instructions. The last
+//     greedy_tail_triangles go through the greedy queue.
 enum class CollapseOrdering : uint8_t { kGreedy, kPasses };
 
 struct EngineOptions {
@@ -219,6 +224,11 @@ struct EngineOptions {
   CollapseOrdering ordering = CollapseOrdering::kGreedy;
   // kPasses: a pass applies edges up to this multiple of the cost at its goal rank.
   double pass_cost_slack = 1.5;
+  // kPasses: the last collapses, from this many triangles above the target down to it, use the
+  // greedy queue: the coarsest levels, where each collapse moves the surface most, are ordered
+  // exactly (this is where the passes' looser order cost Hausdorff distance), and the queue over
+  // a mesh that small is cheap.
+  size_t greedy_tail_triangles = 2000;
 };
 
 // Welds wedges (equal position and attributes), drops unreferenced vertices, triangles with an

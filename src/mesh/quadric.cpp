@@ -233,6 +233,7 @@ void QuadricModel::begin(const EngineState& state) {
   attribute_stride_ = dims_ > 0 ? 11 + 4 * dims_ : 0;
 
   geometric_.assign(state.positions.size(), Quadric{});
+  total_area_ = 0;
   attribute_.assign(wedge_count * attribute_stride_, 0.0);
   scratch_.assign(attribute_stride_, 0.0);
   std::vector<double> triangle_quadric(attribute_stride_);
@@ -256,6 +257,7 @@ void QuadricModel::begin(const EngineState& state) {
     const double double_area = std::sqrt(dot(cross_product, cross_product));
     if (!(double_area > 0)) continue;
     const double area = 0.5 * double_area;
+    total_area_ += area;
     const Vec3d n = cross_product * (1.0 / double_area);
     const Quadric plane = planeQuadric(n, -dot(n, p[0]), area, area);  // eq. (2), area-weighted
     for (int k = 0; k < 3; ++k) addInto(geometric_[position[k]], plane);
@@ -375,6 +377,7 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
 }
 
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
+  setAreaFloor(state);
   for (CandidateCollapse& cand : batch) {
     // (Summed here rather than through mergedQuadrics when there are no attributes: this runs
     // for every edge of every pass, and the copies through memory cost more than the sums.)
@@ -390,7 +393,7 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     if (cand.endpoint_only) {
       cand.position = b;
       value = quadricValue(total, b);
-    } else if (options_.price_at_fixed_points) {
+    } else if (fixed_point_pricing_) {
       // Ties go to the survivor, then the other endpoint (input positions are kept exactly).
       // Q(mid) = (Q(a) + Q(b)) / 2 - (a - b)ᵀA(a - b) / 4, one more quadratic form.
       // Around b, with g = A b + b_q and d = a - b: Q(b + t d) = Q(b) + 2t g·d + t² dᵀAd.
@@ -415,24 +418,31 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     // area, i.e. ordering by mean squared distance, was measured worse: bench/simplify's mean
     // distance 10-40% higher, Hausdorff worse on 6 of 21 cells instead of 3.) The reported error
     // is the root mean squared distance in asset units.
-    cand.cost = value;
     const double area = geometric.weight > 0 ? geometric.weight : 1.0;
+    cand.cost = orderingCost(value, area);
     const double geometric_value = dims_ == 0 ? value : quadricValue(geometric, cand.position);
     cand.error = std::sqrt(geometric_value / area) * state.scale;
   }
 }
 
+void QuadricModel::setAreaFloor(const EngineState& state) {
+  area_floor_ = state.live_triangles > 0
+                    ? options_.area_floor * total_area_ / double(state.live_triangles)
+                    : 0.0;
+}
+
 void QuadricModel::refinePlacement(const EngineState& state, CandidateCollapse& chosen) {
-  if (chosen.endpoint_only || !options_.price_at_fixed_points) return;
+  if (chosen.endpoint_only || !fixed_point_pricing_) return;
   Quadric geometric, total;
   mergedQuadrics(state, chosen, geometric, total);
   double value = 0;
   const Vec3d p = minimizeOnEdge(total, state.positions[chosen.from], state.positions[chosen.to],
                                  &value);
-  if (!(value < chosen.cost)) return;
-  chosen.position = p;
-  chosen.cost = value;
   const double area = geometric.weight > 0 ? geometric.weight : 1.0;
+  const double cost = orderingCost(value, area);
+  if (!(cost < chosen.cost)) return;
+  chosen.position = p;
+  chosen.cost = cost;
   chosen.error = std::sqrt(quadricValue(geometric, p) / area) * state.scale;
 }
 

@@ -1,6 +1,7 @@
 // simplifyQuadric: the collapse engine driven by the quadric cost (quadric.hpp). The fast mode and
 // the geometric baseline of the paper's mesh simplification (§4.2 uses the same engine with an
-// image-driven cost).
+// image-driven cost). Pass ordering with fixed-point pricing (optimal placement solved only for
+// the collapses applied), then the greedy queue for the last collapses (collapse_engine.hpp).
 #include <chrono>
 
 #include "duolod/mesh.hpp"
@@ -14,6 +15,7 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
   PreparedMesh prepared = prepareMeshWithPositions(mesh);
   QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
                       .price_at_fixed_points = true,
+                      .area_floor = 0.0,
                       .attribute_weight = options.attribute_weight});
   EngineOptions engine_options{
       .target_triangles = options.target_triangles,
