@@ -130,6 +130,7 @@ int main(int argc, char** argv) {
   size_t samples = 100000;
   bool endpoint = false;
   bool progressive = true;
+  std::string rows = "both";
   float attribute_weight = 1.0f;
   std::string gltfpack = "/usr/bin/gltfpack";
   app.add_option("meshes", meshes,
@@ -141,6 +142,11 @@ int main(int argc, char** argv) {
   app.add_option("--samples", samples, "surface samples per mesh and direction (0: no distances)")
       ->capture_default_str();
   app.add_flag("--endpoint", endpoint, "duolod with Placement::kEndpoint (like meshopt 0.18)");
+  app.add_option("--rows", rows,
+                 "for files with attributes: 'both' rows, only the 'default' (attribute-aware) "
+                 "one, or only the 'positions' one (for profiling one configuration)")
+      ->check(CLI::IsMember({"both", "default", "positions"}))
+      ->capture_default_str();
   app.add_flag("!--no-progressive", progressive,
                "skip the progressive-record table (for profiling the simplifiers alone)");
   app.add_option("--attribute-weight", attribute_weight, "duolod SimplifyOptions::attribute_weight")
@@ -261,8 +267,10 @@ int main(int argc, char** argv) {
       const core::Mesh* mesh;
       bool speed_row;  // position-only input: the row whose time ratio is the target
     };
-    std::vector<Variant> variants = {{name, &input, !has_attributes}};
-    if (has_attributes) variants.push_back({name + " (positions only)", &positions_only, true});
+    std::vector<Variant> variants;
+    if (!has_attributes || rows != "positions") variants.push_back({name, &input, !has_attributes});
+    if (has_attributes && rows != "default")
+      variants.push_back({name + " (positions only)", &positions_only, true});
 
     for (const Variant& variant : variants) {
       for (double r : ratios) {

@@ -161,10 +161,10 @@ TEST(SimplifyQuadric, ScaleInvariant) {
 
 // The pass ordering (sorting, partitioning at the goal rank) must not depend on anything but the
 // input: two runs give the same record and the same mesh, bit for bit.
-// (20480 triangles: large enough that the passes run before the greedy tail.)
+// (20480 triangles, positions only: the pass ordering runs before the greedy tail.)
 TEST(SimplifyQuadric, Deterministic) {
   Mesh sphere = test::icosphere(5, 1.0f, test::lumps);
-  core::computeNormals(sphere);
+  ASSERT_TRUE(sphere.normals.empty() && sphere.uv0.empty());
   auto a = mesh::simplifyQuadric(sphere, {.target_triangles = 300});
   auto b = mesh::simplifyQuadric(sphere, {.target_triangles = 300});
   EXPECT_EQ(a.mesh.triangleCount(), 300u);
@@ -177,7 +177,6 @@ TEST(SimplifyQuadric, Deterministic) {
   ASSERT_EQ(a.mesh.vertexCount(), b.mesh.vertexCount());
   for (size_t v = 0; v < a.mesh.vertexCount(); ++v) {
     EXPECT_EQ(a.mesh.positions[v], b.mesh.positions[v]);
-    EXPECT_EQ(a.mesh.normals[v], b.mesh.normals[v]);
   }
   ASSERT_EQ(a.record.steps.size(), b.record.steps.size());
   for (size_t i = 0; i < a.record.steps.size(); ++i) {

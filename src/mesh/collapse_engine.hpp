@@ -224,10 +224,10 @@ struct EngineOptions {
   CollapseOrdering ordering = CollapseOrdering::kGreedy;
   // kPasses: a pass applies edges up to this multiple of the cost at its goal rank.
   double pass_cost_slack = 1.5;
-  // kPasses: the last collapses, from this many triangles above the target down to it, use the
-  // greedy queue: the coarsest levels, where each collapse moves the surface most, are ordered
-  // exactly (this is where the passes' looser order cost Hausdorff distance), and the queue over
-  // a mesh that small is cheap.
+  // kPasses: the last collapses, from this many triangles above the target (at most 1/16 of the
+  // input) down to it, use the greedy queue: the coarsest levels, where each collapse moves the
+  // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
+  // distance), and the queue over a mesh that small is cheap.
   size_t greedy_tail_triangles = 2000;
 };
 

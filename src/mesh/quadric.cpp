@@ -233,7 +233,6 @@ void QuadricModel::begin(const EngineState& state) {
   attribute_stride_ = dims_ > 0 ? 11 + 4 * dims_ : 0;
 
   geometric_.assign(state.positions.size(), Quadric{});
-  total_area_ = 0;
   attribute_.assign(wedge_count * attribute_stride_, 0.0);
   scratch_.assign(attribute_stride_, 0.0);
   std::vector<double> triangle_quadric(attribute_stride_);
@@ -257,7 +256,6 @@ void QuadricModel::begin(const EngineState& state) {
     const double double_area = std::sqrt(dot(cross_product, cross_product));
     if (!(double_area > 0)) continue;
     const double area = 0.5 * double_area;
-    total_area_ += area;
     const Vec3d n = cross_product * (1.0 / double_area);
     const Quadric plane = planeQuadric(n, -dot(n, p[0]), area, area);  // eq. (2), area-weighted
     for (int k = 0; k < 3; ++k) addInto(geometric_[position[k]], plane);
@@ -377,7 +375,6 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
 }
 
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
-  setAreaFloor(state);
   for (CandidateCollapse& cand : batch) {
     // (Summed here rather than through mergedQuadrics when there are no attributes: this runs
     // for every edge of every pass, and the copies through memory cost more than the sums.)
@@ -418,17 +415,11 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
     // area, i.e. ordering by mean squared distance, was measured worse: bench/simplify's mean
     // distance 10-40% higher, Hausdorff worse on 6 of 21 cells instead of 3.) The reported error
     // is the root mean squared distance in asset units.
+    cand.cost = value;
     const double area = geometric.weight > 0 ? geometric.weight : 1.0;
-    cand.cost = orderingCost(value, area);
     const double geometric_value = dims_ == 0 ? value : quadricValue(geometric, cand.position);
     cand.error = std::sqrt(geometric_value / area) * state.scale;
   }
-}
-
-void QuadricModel::setAreaFloor(const EngineState& state) {
-  area_floor_ = state.live_triangles > 0
-                    ? options_.area_floor * total_area_ / double(state.live_triangles)
-                    : 0.0;
 }
 
 void QuadricModel::refinePlacement(const EngineState& state, CandidateCollapse& chosen) {
@@ -438,11 +429,10 @@ void QuadricModel::refinePlacement(const EngineState& state, CandidateCollapse& 
   double value = 0;
   const Vec3d p = minimizeOnEdge(total, state.positions[chosen.from], state.positions[chosen.to],
                                  &value);
-  const double area = geometric.weight > 0 ? geometric.weight : 1.0;
-  const double cost = orderingCost(value, area);
-  if (!(cost < chosen.cost)) return;
+  if (!(value < chosen.cost)) return;
   chosen.position = p;
-  chosen.cost = cost;
+  chosen.cost = value;
+  const double area = geometric.weight > 0 ? geometric.weight : 1.0;
   chosen.error = std::sqrt(quadricValue(geometric, p) / area) * state.scale;
 }
 

@@ -42,14 +42,6 @@ struct QuadricModelOptions {
   // solve) and solve the optimal placement only in refinePlacement, for the collapses the engine
   // applies (CollapseOrdering::kPasses). The price is then an upper bound of the optimal cost.
   bool price_at_fixed_points = false;
-  // The ordering cost is Q(v) * (1 + floor / area) with floor = area_floor mean current triangle
-  // areas: the area-weighted quadric (Garland & Heckbert), except that a collapse over a small
-  // area (a thin feature, a tip) is priced as if it covered at least ~floor more, i.e. more by
-  // its squared distance than by its area. Area weighting alone lets such collapses go early with
-  // large distances (Hausdorff error); pure mean-squared-distance ordering was measured worse in
-  // mean distance (see QuadricModel::evaluate). 0 = plain area weighting. simplifyQuadric uses 2,
-  // the best of 0, 2, 6, 20 on bench/simplify (fewest cells with Hausdorff worse than meshopt).
-  double area_floor = 0;
   float attribute_weight = 1.0f;
 };
 
@@ -77,14 +69,7 @@ class QuadricModel final : public CostModel {
   void mergedQuadrics(const EngineState& state, const CandidateCollapse& candidate,
                       Quadric& geometric, Quadric& total) const;
 
-  void setAreaFloor(const EngineState& state);
-  double orderingCost(double value, double area) const {
-    return area_floor_ > 0 ? value * (1 + area_floor_ / area) : value;
-  }
-
   QuadricModelOptions options_;
-  double total_area_ = 0;   // of the input, normalized units
-  double area_floor_ = 0;   // see setAreaFloor
   bool fixed_point_pricing_ = false;
   // Per position: plane quadrics plus feature-line penalty planes.
   std::vector<Quadric> geometric_;
