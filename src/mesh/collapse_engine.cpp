@@ -11,14 +11,31 @@
 // versions. Positions are numbered along a Morton curve. No allocation happens per collapse once
 // the scratch buffers have grown.
 //
-// Cost, measured (callgrind, bunny 75k triangles -> 10%): 716M instructions, 4.7x meshoptimizer
-// 0.18's meshopt_simplify (153M), which orders collapses by sorting once per pass instead of a
-// strict greedy queue and places vertices only at endpoints. About 40% is setup before the first
-// collapse (welding, adjacency, classification, quadrics, pricing every edge once); then pricing
-// the ~7 edges around each survivor with optimal placement ~20%, neighbour gathering ~15%, the
-// queue ~15%. Lazy re-pricing (an edge keeps its old queued cost as a lower bound, since merged
-// quadrics only grow, and is re-priced when it reaches the top) was tried: 29% fewer pricings,
-// but each stale entry then needs a neighbour gather to be re-priced, 15% more instructions.
+// Two orderings (EngineOptions::ordering). kGreedy: the strict queue above, re-pricing the edges
+// a collapse invalidated (the image-driven mode needs it: lazy refinement, ring-2 invalidation).
+// kPasses (simplifyQuadric on position-only meshes): per pass, every live edge is priced once
+// (edges with a free endpoint read straight off the triangles, no neighbour gathering), the
+// prices are partitioned at the goal rank (nth_element) and the cheap part sorted; edges are
+// applied in order, skipping any that shares an endpoint with one applied in this pass (so no
+// stale price is ever used), up to 1.5x the goal-rank price; the last <= 2000 triangles
+// (<= 1/16 of the input) go through the greedy queue. The quadric model prices pass candidates
+// at the best of the endpoints and the midpoint and solves the optimal placement only for the
+// collapse being applied (CostModel::refinePlacement).
+//
+// Cost, measured (callgrind, `LP_NUM_THREADS=0 valgrind --tool=callgrind build/bench/bench_simplify
+// bunny00.off --gltfpack "" --samples 0 --repeats 1 --ratios 0.1 --no-progressive`, bunny 75k
+// triangles -> 10%): 430M instructions for simplifyQuadric (was 706M with the greedy queue
+// alone), 2.8x meshoptimizer 0.18's meshopt_simplify (153M). Where it goes: applying the ~34k
+// collapses 128M (3.8k each: the flip test of both fans 36M, gathering `from` 24M, the link
+// condition 24M, optimal placement 19M, the splice and bookkeeping 15M); pricing ~305k pass
+// candidates ~65M; classification 57M (a neighbour gather per position); preparation (welding,
+// triangle dedup) 31M; quadrics 26M; engine state and Morton order 19M; the greedy tail ~30M;
+// candidate collection, partition and sort ~40M. meshopt does the same kinds of work with float
+// quadrics, endpoint placement, no link condition and no seam/material classification. The
+// remaining factor needs a different data layout (per-pass compact adjacency instead of
+// per-position corner lists walked by gatherNeighbors, float quadrics around a local origin),
+// not a change of ordering. Lazy re-pricing in the greedy queue was tried earlier: 29% fewer
+// pricings but 15% more instructions (each stale entry needs a gather to be re-priced).
 #include "mesh/collapse_engine.hpp"
 
 #include <algorithm>
