@@ -209,7 +209,7 @@ std::vector<RuleSite> findOperationRemovalSites(const ShaderProgram& program, co
           std::vector<ir::Id> operands = valueOperands(instruction);
           std::string call = operationName(instruction) + "(";
           for (size_t i = 0; i < operands.size(); ++i)
-            call += (i ? ", " : "") + describeValue(module, uses, operands[i]);
+            call += (i ? ", " : "") + describeOperand(module, uses, operands[i]);
           call += ")";
           for (uint32_t choice : keptOperandChoices(uses, instruction)) {
             RuleSite site{.kind = RuleKind::kOperationRemoval,
@@ -218,7 +218,7 @@ std::vector<RuleSite> findOperationRemovalSites(const ShaderProgram& program, co
                           .choice = choice,
                           .description = {}};
             site.description = stageName(stage) + " " + functionName(module, f) + ": " + call +
-                               " → " + describeValue(module, uses, operands[choice]);
+                               " → " + describeOperand(module, uses, operands[choice]);
             sites.push_back(std::move(site));
           }
         }

@@ -103,7 +103,7 @@ std::string valueName(const ir::Module& module, ir::Id id) {
   return name.empty() ? "%" + std::to_string(id) : name;
 }
 
-std::string describeValue(const ir::Module& module, const ir::DefUse& uses, ir::Id id) {
+std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id) {
   if (std::string name = module.name(id); !name.empty()) return name;
   const ir::Instruction* definition = uses.def(id);
   if (!definition) return valueName(module, id);

@@ -62,9 +62,9 @@ core::Error siteError(const RuleSite& site, const std::string& reason);
 
 // A readable name for a value in descriptions: its OpName, else "%<id>".
 std::string valueName(const ir::Module& module, ir::Id id);
-// The same, looking through a load to the variable or uniform-block member it reads, and showing
+// The same for an operand, looking through a load to the variable or uniform-block member it reads, and showing
 // scalar constants by value: "vUV", "uBaseColorFactor", "0.5", else "%<id>".
-std::string describeValue(const ir::Module& module, const ir::DefUse& uses, ir::Id id);
+std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id);
 // The source-level name of function `function_index` ("fbm" for glslang's "fbm(vf3;").
 std::string functionName(const ir::Module& module, size_t function_index);
 
