@@ -3,8 +3,6 @@
 // one file per rule family (Liang et al. §4.1).
 #include "shader/rules.hpp"
 
-#include <spirv-tools/optimizer.hpp>
-
 #include <algorithm>
 #include <optional>
 #include <unordered_map>
@@ -16,36 +14,16 @@ namespace {
 
 using core::Error;
 
-// SPIRV-Tools' public optimisation recipe (-O: inlining, dead-code and dead-branch elimination,
-// constant folding, local load/store elimination) on a validated module, for the copy that is
-// compiled and timed: a rule leaves dead code and foldable constants behind, and the driver should
-// not be credited or blamed for them (§5.2's cost is the cost of what really runs).
-core::Result<std::vector<uint32_t>> optimizeWords(const std::vector<uint32_t>& words,
-                                                  const std::string& what) {
-  spvtools::Optimizer optimizer(SPV_ENV_OPENGL_4_5);
-  std::string messages;
-  optimizer.SetMessageConsumer([&](spv_message_level_t level, const char*,
-                                   const spv_position_t& position, const char* message) {
-    if (level <= SPV_MSG_ERROR)
-      messages += "word " + std::to_string(position.index) + ": " + message + "\n";
-  });
-  optimizer.RegisterPerformancePasses();
-  std::vector<uint32_t> optimized;
-  if (!optimizer.Run(words.data(), words.size(), &optimized))
-    return Error{what + ": SPIRV-Tools optimiser failed: " + messages};
-  return optimized;
-}
-
+// The emitted words of one stage, validated. With `optimize`, SPIRV-Tools' performance recipe
+// (optimizeForEvaluation: inlining, dead code, folding) runs on the copy that is compiled and timed:
+// a rule leaves dead code and foldable constants behind, and the driver should not be credited or
+// blamed for them (§5.2's cost is the cost of what really runs).
 core::Result<std::vector<uint32_t>> emitStage(const ir::Module& module, bool optimize,
                                               const std::string& what) {
   std::vector<uint32_t> words = ir::emitModule(module);
+  if (optimize) return optimizeForEvaluation(words, what);  // validates before and after
   if (auto valid = validateSpirv(words, what); !valid.ok()) return valid.error();
-  if (!optimize) return words;
-  auto optimized = optimizeWords(words, what);
-  if (!optimized.ok()) return optimized.error();
-  if (auto valid = validateSpirv(*optimized, what + " (optimised)"); !valid.ok())
-    return valid.error();
-  return optimized;
+  return words;
 }
 
 // Module order of every result id and block label, for enumerateSites' ordering.
