@@ -3,10 +3,12 @@
 // Deterministic only: counts of ops and of block executions, never time.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <numeric>
 #include <sstream>
 
+#include "duolod/render.hpp"
 #include "duolod/shader.hpp"
 #include "shader/cost_model.hpp"
 #include "shader/instrument.hpp"
@@ -108,7 +110,7 @@ TEST(ShaderCostModel, DynamicCountsScaleBlocksByExecutions) {
   // Every block once reproduces the static count.
   std::vector<double> once(blocks.size(), 1.0);
   EXPECT_EQ(dynamicOpCounts(module, once), staticOpCounts(module));
-  // The sine's block (the only transcendental) at half the invocations: 4 × 0.5 sines.
+  // The sine's block (the only transcendental: a vec4 sine, 4 ops) at half the invocations: 2.
   std::vector<double> half = once;
   int sine_blocks = 0;
   for (size_t b = 0; b < blocks.size(); ++b)
@@ -195,6 +197,98 @@ TEST(ShaderCostModel, PredictionIsTheWeightedSum) {
   ASSERT_TRUE(calibrated.ok()) << calibrated.error().message;
   for (size_t i = 0; i < set.size(); ++i)
     EXPECT_NEAR(predictCost(set[i], *calibrated), seconds[i], 1e-6 * seconds[i]);
+}
+
+// ---- block counts from an instrumented render ----
+
+// The 2×2 square z = 0 seen head-on so that it covers exactly the middle half of the image side:
+// at 64 px, 32 × 32 = 1024 covered pixels, half of them at object x < 0.
+core::Asset squareAsset() {
+  core::Asset asset;
+  asset.source_path = "square";
+  asset.mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+  asset.mesh.normals.assign(4, core::Vec3{0, 0, 1});
+  asset.mesh.indices = {0, 1, 2, 0, 2, 3};
+  asset.mesh.submeshes = {{0, 6, 0}};
+  asset.materials = {core::Material{}};
+  return asset;
+}
+
+render::Sample headOnSample() {
+  render::Sample sample;
+  sample.eye = {0, 0, 4};
+  sample.light = sample.eye;
+  sample.view = core::lookAt(sample.eye, {0, 0, 0}, {0, 1, 0});
+  sample.projection = core::perspective(2 * std::atan(2.0f / 4.0f), 1.0f, 0.1f, 100.0f);
+  return sample;
+}
+
+const char* kPositionVertexShader = R"(#version 450
+layout(location = 0) in vec3 inPosition;
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) out vec3 vObjectPosition;
+void main() {
+  vObjectPosition = inPosition;
+  gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0)));
+}
+)";
+
+// A loop of exactly 4 iterations and a branch taken where object x < 0 (half the pixels).
+const char* kLoopBranchShader = R"(#version 450
+layout(location = 0) in vec3 vObjectPosition;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec4 sum = vec4(0.0);
+  for (int i = 0; i < 4; ++i) sum += vec4(vObjectPosition, 1.0) * float(i);
+  if (vObjectPosition.x < 0.0) sum = sin(sum);
+  outColor = sum;
+}
+)";
+
+TEST(ShaderCostProfile, LoopAndBranchCountsPerInvocation) {
+  auto renderer = render::Renderer::create();
+  if (!renderer.ok()) GTEST_SKIP() << "SKIPPED: no OpenGL context: " << renderer.error().message;
+  auto asset = (*renderer)->uploadAsset(squareAsset());
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  ir::Module vertex = compileModule(kPositionVertexShader, Stage::kVertex, "position.vert");
+  ir::Module fragment = compileModule(kLoopBranchShader, Stage::kFragment, "loop.frag");
+  std::vector<render::Sample> samples{headOnSample()};
+  auto profile = profileBlockCounts(**renderer, *asset, vertex, fragment, samples, 64);
+  ASSERT_TRUE(profile.ok()) << profile.error().message;
+
+  // Every pixel centre inside the square ran the shader once; llvmpipe's statistics count whole
+  // 4×4 blocks, so at least as many.
+  EXPECT_EQ(profile->fragment_runs, 32u * 32u);
+  EXPECT_GE(profile->fragment_invocations, profile->fragment_runs);
+  EXPECT_GE(profile->vertex_runs, 4u);
+
+  std::vector<BlockOps> blocks = blockOpCounts(fragment);
+  ASSERT_EQ(profile->fragment_executions.size(), blocks.size());
+  EXPECT_EQ(profile->fragment_executions[0], 1.0);  // the entry block, once per invocation
+  int loop_bodies = 0, branches = 0;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    // The loop body is the block converting i to float; the branch the one with the sine.
+    if (at(blocks[b].ops, OpClass::kConversionComposite) > 0 &&
+        at(blocks[b].ops, OpClass::kFloatArithmetic) >= 4) {
+      EXPECT_EQ(profile->fragment_executions[b], 4.0) << "loop body";
+      ++loop_bodies;
+    }
+    if (at(blocks[b].ops, OpClass::kTranscendental) > 0) {
+      EXPECT_EQ(profile->fragment_executions[b], 0.5) << "branch taken at x < 0";
+      ++branches;
+    }
+  }
+  EXPECT_EQ(loop_bodies, 1);
+  EXPECT_EQ(branches, 1);
+  // Dynamic counts: the vec4 sine is 4 transcendental ops, run by half the pixels: 2 per invocation.
+  OpClassCounts dynamic = dynamicOpCounts(fragment, profile->fragment_executions);
+  EXPECT_EQ(at(dynamic, OpClass::kTranscendental), 2);
+  // The vertex stage has no control flow: its one block runs once per vertex.
+  ASSERT_EQ(profile->vertex_executions.size(), 1u);
+  EXPECT_EQ(profile->vertex_executions[0], 1.0);
 }
 
 }  // namespace

@@ -372,4 +372,30 @@ core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> fea
   return weightsFromVector(*solution, std::move(version));
 }
 
+// Version "llvmpipe-2026-11-22b": calibrated on Mesa 22.3.6 llvmpipe (LLVM 15, 256-bit SIMD;
+// 2 cores shared with other jobs, no GPU) by
+//   build/bench/bench_shader_cost --resolutions 128 64 --repeats 7
+// (49 variants of pbr / noise_phong / blend on WaterBottle / Spot / Avocado, 20 views, at 128 and
+// 64 px: 98 configurations), from its "weights calibrated on all points" line. bench/RESULTS.md
+// checks them against a later, independent run. Units: seconds per op, per invocation, per draw.
+// NNLS zeroes the classes whose cost the others already explain on this device (llvmpipe's JIT
+// folds most conversions and moves into the arithmetic around them).
+const CostWeights& calibratedCostWeights() {
+  static const CostWeights weights = weightsFromVector(
+      std::array<double, kCostModelParameterCount>{
+          8.345776e-11,  // float arithmetic (per component)
+          1.414071e-11,  // integer/logic
+          0.0,           // transcendental
+          3.017172e-08,  // texture sample
+          6.564002e-09,  // memory
+          0.0,           // conversion/composite
+          0.0,           // control flow
+          1.867042e-07,  // per vertex invocation
+          0.0,           // per fragment invocation
+          0.0,           // per draw
+      },
+      "llvmpipe-2026-11-22b");
+  return weights;
+}
+
 }  // namespace duolod::shader

@@ -98,7 +98,7 @@ struct CostWeights {
   double per_vertex_invocation = 0;  // launching one vertex invocation
   double per_fragment_invocation = 0;
   double per_draw = 0;               // fixed cost of one draw (state, binning, setup)
-  std::string version;               // which calibration (see kCalibratedWeights)
+  std::string version;               // which calibration (see calibratedCostWeights())
 };
 
 // The features with every block counted once per invocation (no profile): "static counts × V, F",
@@ -129,5 +129,9 @@ core::Result<std::vector<double>> solveNonNegativeLeastSquares(
 core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> features,
                                                std::span<const double> measured_seconds,
                                                std::string version);
+
+// The weights calibrated on this project's reference machine (bench/shader_cost.cpp, Mesa
+// llvmpipe), with the command that produced them in cost_model.cpp.
+const CostWeights& calibratedCostWeights();
 
 }  // namespace duolod::shader

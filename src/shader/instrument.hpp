@@ -1,16 +1,19 @@
 // Basic-block execution counting for the cost model (Liang et al. §5.2; shader/cost_model.hpp):
 // a COPY of a stage's module in which every basic block atomically adds 1 to its own counter in a
-// shader storage buffer, so one render of the training samples tells how often each block runs.
-// Divided by the stage's invocation count (ARB_pipeline_statistics_query) that gives per-block
-// executions per invocation, which loop trip counts and branch probabilities make differ from 1.
+// shader storage buffer, so one render of the training samples tells how often each block runs;
+// loop trip counts and branch probabilities make that differ from once per invocation.
 //
 // Why atomics in an SSBO rather than a CPU interpretation of the SPIR-V: the counts then come from
 // the real inputs (interpolated varyings, textures, uniforms) of every shaded vertex and pixel, and
 // the work is a single render per variant; the counts are exact integers, so they are
-// deterministic for a device and input (unlike time). Fragment helper invocations (the unused
-// lanes of llvmpipe's 4×4 blocks, or of a GPU's 2×2 quads) do not execute atomics, so a fragment
-// entry block counts covered pixels while the pipeline statistics count every shaded lane: the
-// per-invocation counts then fold that coverage ratio in, which is what a cost per invocation needs.
+// deterministic for a device and input (unlike time).
+//
+// Per invocation means per invocation that RAN the shader, i.e. counter / entry-block counter, not
+// counter / pipeline-statistics invocations: fragment helper lanes (the uncovered lanes of
+// llvmpipe's 4×4 blocks, or of a GPU's 2×2 quads) execute the shader but not its atomics, and
+// ARB_pipeline_statistics_query counts them. Dividing by the entry block's count gives the work
+// of one invocation; the model then multiplies it by the statistics' count, which includes the
+// helper lanes that do the same work (measured on llvmpipe: tests/render_counters_test.cpp).
 #pragma once
 
 #include <cstdint>
@@ -45,10 +48,12 @@ core::Result<InstrumentedModule> instrumentBlockCounts(const ir::Module& module,
 
 // Block execution counts of both stages of a program over some samples.
 struct BlockProfile {
-  std::vector<double> vertex_executions;    // per vertex invocation, one per block
-  std::vector<double> fragment_executions;  // per fragment invocation, one per block
+  std::vector<double> vertex_executions;    // per vertex invocation that ran, one per block
+  std::vector<double> fragment_executions;  // per fragment invocation that ran, one per block
   std::vector<uint64_t> vertex_totals, fragment_totals;  // raw counter values
-  // Invocations of the instrumented render (ARB_pipeline_statistics_query).
+  // Invocations that ran (the entry blocks' counters), and the pipeline statistics' invocation
+  // counts of the same render (these include fragment helper lanes).
+  uint64_t vertex_runs = 0, fragment_runs = 0;
   uint64_t vertex_invocations = 0, fragment_invocations = 0;
 };
 
