@@ -12,8 +12,6 @@
 // compiled with glslang and cleaned up by SPIRV-Tools' performance passes (the form the search
 // compiles and times). Times: Renderer::measureDrawTimes (wall clock around glFinish, median of
 // interleaved repeats minus a clear-only pass; never GL_TIME_ELAPSED, DESIGN.md "Measuring cost").
-#include <spirv-tools/optimizer.hpp>
-
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -191,13 +189,9 @@ core::Result<ir::Module> compileStage(const std::string& source, shader::Stage s
                                       const std::string& name) {
   auto words = shader::compileToSpirv(source, stage, name);
   if (!words.ok()) return words.error();
-  spvtools::Optimizer optimizer(SPV_ENV_OPENGL_4_5);
-  optimizer.RegisterPerformancePasses();
-  std::vector<uint32_t> optimized;
-  if (!optimizer.Run(words->data(), words->size(), &optimized))
-    return core::Error{name + ": SPIRV-Tools optimiser failed"};
-  if (auto valid = shader::validateSpirv(optimized, name); !valid.ok()) return valid.error();
-  auto module = shader::ir::parseModule(optimized);
+  auto optimized = shader::optimizeForEvaluation(*words, name);
+  if (!optimized.ok()) return optimized.error();
+  auto module = ir::parseModule(*optimized);
   if (!module.ok()) return core::Error{name + ": " + module.error().message};
   return std::move(*module);
 }
