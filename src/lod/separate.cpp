@@ -1,0 +1,113 @@
+// The separate optimization's decisions (Liang et al. §5 Algorithm 1, §6.1 Algorithm 3, §6.2).
+#include "lod/separate.hpp"
+
+#include <string>
+
+namespace duolod::lod {
+namespace {
+
+core::Status checkProblem(const SeparateProblem& problem) {
+  const size_t levels = static_cast<size_t>(problem.level_count);
+  if (problem.level_count < 1) return core::Error{"separate optimization: no levels"};
+  if (problem.error_bounds.size() != levels || problem.mesh_counts.size() != levels)
+    return core::Error{"separate optimization: one error bound and one mesh count per level needed"};
+  for (int count : problem.mesh_counts)
+    if (count < 1) return core::Error{"separate optimization: a level has no mesh candidate"};
+  if (problem.shader_count < 1) return core::Error{"separate optimization: no shader candidate"};
+  if (!problem.evaluate || !problem.transition || !problem.cost_at)
+    return core::Error{"separate optimization: an evaluator is missing"};
+  return core::okStatus();
+}
+
+}  // namespace
+
+core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
+                                                const SeparateOptions& options) {
+  if (auto valid = checkProblem(problem); !valid) return valid.error();
+  SeparateSolution solution;
+  const int level_count = problem.level_count;
+
+  // Algorithm 1, lines 5–10.
+  for (int level = 0; level < level_count; ++level) {
+    // Line 6, SortByError: every shader on the original mesh at d_i.
+    std::vector<double> errors(problem.shader_count);
+    for (int shader = 0; shader < problem.shader_count; ++shader) {
+      auto evaluation = problem.evaluate(level, 0, shader);
+      if (!evaluation)
+        return core::Error{"SortByError at level " + std::to_string(level) + ": " +
+                           evaluation.error().message};
+      errors[shader] = evaluation->error;
+      ++solution.evaluations;
+    }
+    solution.shader_orders.push_back(sortByError(errors));
+
+    // Line 8, SearchPairs (Algorithm 2) or the 2D brute force.
+    PairSearchOptions search_options{.error_bound = problem.error_bounds[level],
+                                     .time_tolerance = options.time_tolerance};
+    PairEvaluator evaluate = [&](int mesh, int shader) {
+      return problem.evaluate(level, mesh, shader);
+    };
+    auto search = options.brute_force
+                      ? searchPairsBruteForce(problem.mesh_counts[level],
+                                              solution.shader_orders.back(), evaluate, search_options)
+                      : searchPairs(problem.mesh_counts[level], solution.shader_orders.back(),
+                                    evaluate, search_options);
+    if (!search) return core::Error{"level " + std::to_string(level) + ": " + search.error().message};
+    solution.evaluations += search->evaluations;
+
+    // No pair within the bound (at d_near the bound is 0, and the original's own aliasing against
+    // the supersampled reference counts): the level keeps the original pair, flagged, because
+    // no LOD can be better than drawing the original.
+    std::vector<EvaluatedPair> pairs = search->optimal;
+    bool fallback = pairs.empty();
+    if (fallback) {
+      auto original = problem.evaluate(level, 0, 0);
+      if (!original) return original.error();
+      pairs.push_back(EvaluatedPair{.mesh = 0,
+                                    .shader = 0,
+                                    .shader_rank = 0,
+                                    .error = original->error,
+                                    .cost = original->cost,
+                                    .within_bound = false});
+    }
+    solution.searches.push_back(std::move(*search));
+    solution.level_pairs.push_back(std::move(pairs));
+    solution.fallback_to_original.push_back(fallback);
+    if (options.on_level) options.on_level(level, solution.evaluations);
+  }
+
+  // §6.1, Algorithm 3; without smoothing each level takes its cheapest pair (the baseline the
+  // smoothest path is compared with).
+  if (options.smooth) {
+    auto path = smoothestPath(solution.level_pairs, problem.transition);
+    if (!path) return path.error();
+    solution.path = std::move(*path);
+  } else {
+    solution.path.choice.assign(level_count, 0);
+    for (int level = 0; level + 1 < level_count; ++level) {
+      auto error = problem.transition(level, solution.level_pairs[level][0],
+                                      solution.level_pairs[level + 1][0]);
+      if (!error) return error.error();
+      solution.path.transition.push_back(*error);
+      solution.path.total_transition += *error;
+    }
+  }
+  for (int level = 0; level < level_count; ++level)
+    solution.chosen.push_back(solution.level_pairs[level][solution.path.choice[level]]);
+
+  // §6.2: merge levels whose pair hardly beats the previous kept level's pair at their distance.
+  auto merged = mergeInefficientLevels(
+      level_count,
+      [&](int pair_level, int distance_level) {
+        return problem.cost_at(pair_level, solution.chosen[pair_level], distance_level);
+      },
+      [&](int distance_level) {
+        return problem.cost_at(distance_level, EvaluatedPair{}, distance_level);
+      },
+      options.merge_min_gain);
+  if (!merged) return merged.error();
+  solution.merge = std::move(*merged);
+  return solution;
+}
+
+}  // namespace duolod::lod

@@ -1,0 +1,57 @@
+// The separate optimization's decision core (Liang et al. §5, Algorithm 1, then §6): for every
+// distance level, SortByError of the shader candidates on M_0 and SearchPairs (Algorithm 2) over
+// that level's mesh candidates; then the smoothest path through the levels' pair sets (Algorithm 3)
+// and the merging of inefficient levels (§6.2). Private to src/lod.
+//
+// Everything that renders or times is a callback, so the decisions are tested on hand-made tables
+// (tests/lod_separate_test.cpp) and driven by real renders in generate.cpp.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "duolod/lod.hpp"
+
+namespace duolod::lod {
+
+struct SeparateProblem {
+  int level_count = 0;
+  std::vector<double> error_bounds;  // per level: e_a(d_i)·s_{d_i} (eq. 3)
+  std::vector<int> mesh_counts;      // per level: K_i candidates, index 0 = the original M_0
+  int shader_count = 0;              // shared by all levels, index 0 = the original S_0
+  // ε_a and cost of (mesh j of level i's set, shader k) at d_i.
+  std::function<core::Result<PairEvaluation>(int level, int mesh, int shader)> evaluate;
+  // ε_t of eq. (5): the pair `from` (of level `level`'s sets) and `to` (of level + 1), at d_{level+1}.
+  TransitionEvaluator transition;
+  // Cost of level `pair_level`'s chosen pair drawn at distance level `distance_level` (§6.2).
+  std::function<core::Result<double>(int pair_level, const EvaluatedPair& pair,
+                                     int distance_level)>
+      cost_at;
+};
+
+struct SeparateOptions {
+  double time_tolerance = 0.05;   // T of Algorithm 2
+  double merge_min_gain = 0.04;   // W of §6.2
+  bool brute_force = false;       // the 2D search over all K·L pairs instead of Algorithm 2
+  bool smooth = true;             // Algorithm 3; off: each level takes its cheapest pair
+  // Called as each level's search finishes (level, evaluations so far).
+  std::function<void(int, int)> on_level;
+};
+
+struct SeparateSolution {
+  std::vector<std::vector<int>> shader_orders;  // per level, SortByError on M_0
+  std::vector<PairSearchResult> searches;       // per level
+  // The pair sets the path chose from: the search's optimal pairs, or the original pair (0, 0)
+  // when no pair is within the bound (then `fallback_to_original` is set for that level).
+  std::vector<std::vector<EvaluatedPair>> level_pairs;
+  std::vector<bool> fallback_to_original;
+  SmoothPath path;
+  std::vector<EvaluatedPair> chosen;  // per level, the pair on the path
+  MergeResult merge;                  // kept_levels index into chosen
+  int evaluations = 0;                // pair evaluations (SortByError + SearchPairs)
+};
+
+core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
+                                                const SeparateOptions& options);
+
+}  // namespace duolod::lod
