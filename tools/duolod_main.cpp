@@ -11,9 +11,11 @@
 #include <limits>
 #include <span>
 #include <sstream>
+#include <unistd.h>
 
 #include "duolod/core.hpp"
 #include "duolod/io.hpp"
+#include "duolod/lod.hpp"
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
@@ -548,6 +550,181 @@ int runSimplify(SimplifyFlags& flags) {
   return 0;
 }
 
+
+// ---------------------------------------------------------------------------------------------
+// duolod generate: the joint mesh + shader LOD (issue 5).
+
+struct GenerateFlags {
+  ShadingFlags shading;
+  std::string in, out;
+  bool force = false;
+  std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
+  lod::GenerateOptions options;
+  bool quiet = false;
+
+  void add(CLI::App* command) {
+    command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
+    shading.add(command);
+    command->add_option("--out", out, "output folder (must not exist or be empty)")->required();
+    command->add_flag("--force", force, "write into a non-empty --out folder");
+    command->add_option("--optimizer", optimizer, "separate (§5) or interleaved (§4.3)")
+        ->check(CLI::IsMember({"separate", "interleaved"}))
+        ->capture_default_str();
+    command->add_option("--only", only,
+                        "joint, or a baseline with the same thresholds: mesh (original shader) "
+                        "or shader (original mesh)")
+        ->check(CLI::IsMember({"joint", "mesh", "shader"}))
+        ->capture_default_str();
+    command->add_option("--cost", cost,
+                        "cost of a pair: predicted (cost model) or measured (wall clock around "
+                        "glFinish for the chosen pairs)")
+        ->check(CLI::IsMember({"predicted", "measured"}))
+        ->capture_default_str();
+    command->add_option("--mesh-mode", mesh_mode,
+                        "mesh candidates: image (image-driven per level, the paper) or quadric "
+                        "(one quadric record, fast)")
+        ->check(CLI::IsMember({"image", "quadric"}))
+        ->capture_default_str();
+    command->add_option("--levels", options.levels.level_count, "number of distance levels N")
+        ->capture_default_str();
+    command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
+        ->capture_default_str();
+    command->add_option("--q", options.levels.bound.q, "quality falloff Q (eq. 4)")
+        ->capture_default_str();
+    command->add_option("--d-near", options.levels.bound.d_near,
+                        "nearest level's distance (0: where the object spans --near-pixels)");
+    command->add_option("--d-far", options.levels.bound.d_far,
+                        "farthest level's distance (0: where the object spans --far-pixels)");
+    command->add_option("--near-pixels", options.near_footprint_px)->capture_default_str();
+    command->add_option("--far-pixels", options.far_footprint_px)->capture_default_str();
+    command->add_option("--candidates", options.mesh_candidates, "mesh candidates K per level")
+        ->capture_default_str();
+    command->add_option("--shader-levels", options.shader_search_levels,
+                        "levels whose meshes get a GP shader search")
+        ->capture_default_str();
+    command->add_option("--shader-meshes", options.shader_search_meshes,
+                        "meshes per such level searched")
+        ->capture_default_str();
+    command->add_option("--population", options.population)->capture_default_str();
+    command->add_option("--generations", options.generations)->capture_default_str();
+    command->add_option("--seed", options.seed)->capture_default_str();
+    command->add_option("--time-tolerance", options.time_tolerance, "T of Algorithm 2")
+        ->capture_default_str();
+    command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")->capture_default_str();
+    command->add_flag("--brute-force", options.brute_force,
+                      "search all mesh × shader pairs (the paper's 2D comparison)");
+    command->add_flag("--quiet", quiet, "no progress display");
+  }
+};
+
+// A one-line progress display with the stage, a bar and an ETA; only on a terminal.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool enabled) : enabled_(enabled) {}
+  ~ProgressLine() { finish(); }
+  void update(const lod::GenerateProgress& progress) {
+    if (!enabled_) return;
+    auto now = std::chrono::steady_clock::now();
+    if (progress.stage != stage_) {
+      finish();
+      stage_ = std::string(progress.stage);
+      stage_start_ = now;
+    }
+    double elapsed = std::chrono::duration<double>(now - stage_start_).count();
+    double fraction = std::clamp(progress.fraction, 0.0, 1.0);
+    int filled = static_cast<int>(fraction * 30);
+    std::string bar(filled, '#');
+    bar.resize(30, '.');
+    char eta[32] = "";
+    if (fraction > 0.02) std::snprintf(eta, sizeof eta, "ETA %.0f s", elapsed * (1 - fraction) / fraction);
+    std::fprintf(stderr, "\r  %-18s [%s] %3.0f%% %6.1f s %s   ", stage_.c_str(), bar.c_str(),
+                 fraction * 100, elapsed, eta);
+    std::fflush(stderr);
+    shown_ = true;
+  }
+  void finish() {
+    if (shown_) std::fprintf(stderr, "\n");
+    shown_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool shown_ = false;
+  std::string stage_;
+  std::chrono::steady_clock::time_point stage_start_;
+};
+
+int runGenerate(GenerateFlags& flags) {
+  auto start = std::chrono::steady_clock::now();
+  auto asset = loadWithWarnings(flags.in);
+  if (!asset) return fail(asset.error().message);
+  auto source = flags.shading.source();
+  if (!source) return fail(source.error().message);
+  lod::GenerateOptions options = flags.options;
+  options.levels.display = flags.shading.display();
+  options.device = flags.shading.device;
+  options.optimizer =
+      flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;
+  options.scope = flags.only == "mesh"     ? lod::LodScope::kMeshOnly
+                  : flags.only == "shader" ? lod::LodScope::kShaderOnly
+                                           : lod::LodScope::kJoint;
+  options.cost_source =
+      flags.cost == "measured" ? lod::CostSource::kMeasured : lod::CostSource::kPredicted;
+  options.mesh_mode = flags.mesh_mode == "quadric" ? lod::MeshCandidateMode::kQuadric
+                                                   : lod::MeshCandidateMode::kImage;
+  // Refuse a bad output folder before the long work, not after.
+  std::error_code ec;
+  if (fs::exists(flags.out, ec) && !flags.force &&
+      (!fs::is_directory(flags.out, ec) || !fs::is_empty(flags.out, ec)))
+    return fail(flags.out + ": exists and is not an empty folder (use --force to write into it)");
+  ProgressLine line(!flags.quiet && isatty(fileno(stderr)));
+  options.progress = [&](const lod::GenerateProgress& progress) { line.update(progress); };
+  std::printf("generate  %s: %zu triangles, shader %s + %s\n", flags.in.c_str(),
+              asset->mesh.triangleCount(), source->vertex_name.c_str(),
+              source->fragment_name.c_str());
+  auto result = lod::generateLod(*asset, *source, options);
+  line.finish();
+  if (!result) return fail(result.error().message);
+  auto export_start = std::chrono::steady_clock::now();
+  if (auto written = lod::writeLodOutput(*result, *asset, options, flags.out, flags.force); !written)
+    return fail(written.error().message);
+  result->timings.export_seconds = secondsSince(export_start);
+
+  std::printf("device    %s\n", result->device.c_str());
+  std::printf("levels    %zu of %zu kept; %d shader candidates; %d pair evaluations, %d transitions\n",
+              result->levels.size(), result->all_levels.size(), result->shader_candidates,
+              result->pair_evaluations, result->transition_evaluations);
+  std::printf("\n  level  distance  pixels  triangles  error      bound      cost (%s)  shader\n",
+              flags.cost.c_str());
+  for (size_t k = 0; k < result->levels.size(); ++k) {
+    const lod::GeneratedLevel& level = result->levels[k];
+    double cost = flags.cost == "measured" ? level.measured_cost : level.predicted_cost;
+    std::printf("  %5zu  %8.3f  %6d  %9zu  %-9.4g  %-9.4g  %-9.3g%s  %s\n", k, level.level.distance,
+                level.level.footprint_px, level.mesh.triangleCount(), level.error, level.error_bound,
+                cost * 1e3, " ms", level.original_fallback ? "(original: nothing within the bound)"
+                                                          : level.shader_summary.c_str());
+  }
+  std::printf("\n  held-out views and lights (icosahedron, light cross turned 45 deg)\n");
+  std::printf("  level  error      bound      within\n");
+  int violations = 0;
+  for (const lod::HeldOutCheck& check : result->held_out) {
+    std::printf("  %5d  %-9.4g  %-9.4g  %s\n", check.level, check.error, check.bound,
+                check.within ? "yes" : (check.original_fallback ? "no (original)" : "NO"));
+    if (!check.within && !check.original_fallback) ++violations;
+  }
+  const lod::GenerateTimings& t = result->timings;
+  std::printf("\ntime      mesh %.1f s, shader %.1f s, optimization %.1f s, export %.1f s, total %.1f s\n",
+              t.mesh_seconds, t.shader_seconds, t.optimization_seconds, t.export_seconds,
+              secondsSince(start));
+  std::printf("wrote     %s/{lod.gltf, lod.json, report.html, level*.*, autolod.*}\n",
+              flags.out.c_str());
+  if (violations > 0) {
+    std::fprintf(stderr, "duolod: warning: %d level(s) exceed their bound on held-out views\n",
+                 violations);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -606,6 +783,13 @@ int main(int argc, char** argv) {
       "simplify", "Simplify an asset's mesh (quadric, image-driven or clustering) and write it");
   simplify_flags.add(simplify_cmd);
 
+  GenerateFlags generate_flags;
+  CLI::App* generate_cmd = app.add_subcommand(
+      "generate",
+      "Generate the joint mesh + shader LOD of an asset: levels, glTF chain, shaders, lod.json, "
+      "report.html");
+  generate_flags.add(generate_cmd);
+
   CLI11_PARSE(app, argc, argv);
 
   if (*info) return runInfo(info_path);
@@ -614,5 +798,6 @@ int main(int argc, char** argv) {
                      render_out, render_force);
   if (*error_cmd) return runError(error_a, error_b, error_flags, error_supersample, bound);
   if (*simplify_cmd) return runSimplify(simplify_flags);
+  if (*generate_cmd) return runGenerate(generate_flags);
   return 0;
 }

@@ -294,4 +294,115 @@ std::string renderReportHtml(const ReportData& data);
 // Writes renderReportHtml() atomically.
 core::Status writeReport(const ReportData& data, const std::string& path);
 
+
+// ---------------------------------------------------------------------------------------------
+// Generating a joint mesh + shader LOD (Algorithm 1 end to end; src/lod/generate.cpp).
+
+enum class Optimizer {
+  kSeparate,     // §5: mesh and shader candidates made apart, then searched in 1D (Algorithm 2)
+  kInterleaved,  // §4.3: GP generations, each variant paired with a mesh simplified to the bound
+};
+enum class LodScope {
+  kJoint,       // mesh and shader
+  kMeshOnly,    // the original shader throughout (Lindstrom & Turk style mesh LOD)
+  kShaderOnly,  // the original mesh throughout (He et al. style shader LOD)
+};
+enum class CostSource {
+  kPredicted,  // the cost model (shader/cost_model.hpp): deterministic
+  kMeasured,   // wall clock around glFinish, median of repeats, on the active device
+};
+enum class MeshCandidateMode {
+  kImage,    // §4.2/§5.1: image-driven simplification per level against f̄ of the original
+  kQuadric,  // one quadric record shared by all levels (fast; the pair search still renders)
+};
+
+struct GenerateProgress {
+  std::string_view stage;  // "mesh candidates", "shader candidates", "pair search", ...
+  double fraction = 0;     // of this stage, in [0, 1]
+};
+
+struct GenerateOptions {
+  LevelOptions levels;
+  // When levels.bound.d_near / d_far are 0, they are placed where the object's footprint is
+  // near_footprint_px / far_footprint_px pixels on levels.display.
+  int near_footprint_px = 256;
+  int far_footprint_px = 16;
+  Optimizer optimizer = Optimizer::kSeparate;
+  LodScope scope = LodScope::kJoint;
+  CostSource cost_source = CostSource::kPredicted;
+  MeshCandidateMode mesh_mode = MeshCandidateMode::kImage;
+  size_t mesh_candidates = 500;  // K (§5.1)
+  // Shader candidates (§5.2): GP Pareto fronts at this many evenly chosen levels, each on this
+  // many of the level's mesh candidates (the paper: 4 levels × top-10 meshes).
+  int shader_search_levels = 4;
+  int shader_search_meshes = 1;
+  int population = 16;
+  int generations = 8;
+  uint64_t seed = 1;
+  int max_shader_candidates = 24;  // the union of the fronts is thinned to this many
+  double time_tolerance = 0.05;    // T (Algorithm 2)
+  double merge_min_gain = 0.04;    // W (§6.2)
+  int supersample = 4;             // k of f̄
+  bool brute_force = false;        // 2D search over all pairs (the paper's comparison column)
+  // Interleaved optimizer (§4.3): the top N% of each generation seed the next; generation depth.
+  double interleaved_top_fraction = 0.2;
+  int interleaved_generations = 3;
+  int device = -1;  // EGL device; -1 = Mesa surfaceless
+  std::function<void(const GenerateProgress&)> progress;
+};
+
+struct GeneratedLevel {
+  DistanceLevel level;
+  double switch_distance = 0;  // where the runtime starts using this level
+  core::Mesh mesh;
+  render::SpirvBinary readable;   // unoptimised SPIR-V (for cross-compilation and reading)
+  render::SpirvBinary optimized;  // what was rendered and timed
+  std::vector<render::UniformValue> parameters;  // values the CPU sets (moving to parameter)
+  std::vector<std::string> parameter_names;      // one per parameter
+  std::string shader_summary;
+  int mesh_candidate = 0, shader_candidate = 0;
+  double error = 0, error_bound = 0;  // ε_a (eq. 6) and e_a(d_i)·s_d (eq. 3)
+  double transition_error = 0;        // ε_t to the next kept level (eq. 5), 0 for the last
+  bool original_fallback = false;     // no pair was within the bound: the original is kept
+  double predicted_cost = 0;          // seconds per draw, the cost model
+  double measured_cost = 0;           // seconds per draw (wall clock), 0 when not measured
+  double original_measured_cost = 0;  // the original pair, measured in the same call
+};
+
+struct HeldOutCheck {
+  int level = 0;
+  double error = 0, bound = 0;
+  bool within = false;
+  bool original_fallback = false;
+};
+
+struct GenerateTimings {
+  double mesh_seconds = 0, shader_seconds = 0, optimization_seconds = 0, export_seconds = 0,
+         total_seconds = 0;
+};
+
+struct GenerateResult {
+  std::vector<GeneratedLevel> levels;  // the kept levels, finest first
+  std::vector<DistanceLevel> all_levels;
+  std::vector<HeldOutCheck> held_out;  // every kept level on held-out views and lights
+  GenerateTimings timings;
+  int pair_evaluations = 0, transition_evaluations = 0, shader_candidates = 0;
+  std::vector<int> mesh_candidates;  // per level
+  std::string device, cost_source;
+  ReportData report;
+};
+
+// Runs the whole pipeline on `asset` with `shader` (the original S_0). Errors: the shader does not
+// compile, the GPU context fails, bad options.
+core::Result<GenerateResult> generateLod(const core::Asset& asset, const render::GlslSource& shader,
+                                         const GenerateOptions& options);
+
+// Writes the output folder: lod.gltf (MSFT_lod chain), per level the shaders (SPIR-V, GLSL 450,
+// GLSL ES 300, HLSL), the single autoLOD shader, lod.json and report.html. `directory` must not
+// exist or be empty unless `force`; it must not be the asset's folder. Files are written
+// atomically.
+core::Status writeLodOutput(const GenerateResult& result, const core::Asset& asset,
+                            const GenerateOptions& options, const std::string& directory,
+                            bool force);
+
 }  // namespace duolod::lod

@@ -1,0 +1,172 @@
+// The output folder of `duolod generate` (issue 5, item 7): the LOD chain as one glTF with
+// MSFT_lod + MSFT_screencoverage, each level's shader in SPIR-V, GLSL 450, GLSL ES 300 and HLSL,
+// Olano's single autoLOD shader over the levels' shaders, lod.json and report.html.
+#include <filesystem>
+
+#include "duolod/io.hpp"
+#include "duolod/lod.hpp"
+#include "duolod/shader.hpp"
+#include "shader/autolod.hpp"
+#include "shader/rules.hpp"
+
+namespace duolod::lod {
+namespace {
+
+namespace fs = std::filesystem;
+
+core::Status writeWords(const fs::path& path, const std::vector<uint32_t>& words) {
+  const auto* bytes = reinterpret_cast<const uint8_t*>(words.data());
+  return io::writeFileAtomic(path.string(), std::span<const uint8_t>(bytes, words.size() * 4));
+}
+
+// name.{vert,frag}.spv and the three cross-compiled sources, each re-compiled as a check. Returns
+// the files written, by kind (the names lod.json lists).
+core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
+    const render::SpirvBinary& readable, const fs::path& directory, const std::string& name) {
+  std::vector<std::pair<std::string, std::string>> files;
+  struct StageWords {
+    const char* suffix;
+    shader::Stage stage;
+    const std::vector<uint32_t>* words;
+  };
+  for (const StageWords& stage : {StageWords{"vert", shader::Stage::kVertex, &readable.vertex},
+                                  StageWords{"frag", shader::Stage::kFragment, &readable.fragment}}) {
+    const std::string base = name + "." + stage.suffix;
+    if (auto ok = writeWords(directory / (base + ".spv"), *stage.words); !ok) return ok.error();
+    files.push_back({std::string("spirv_") + stage.suffix, base + ".spv"});
+    struct Output {
+      shader::Target target;
+      const char* extension;
+      const char* kind;
+    };
+    for (const Output& output : {Output{shader::Target::kGlsl450, ".glsl", "glsl450_"},
+                                 Output{shader::Target::kGlslEs300, ".es.glsl", "glsles300_"},
+                                 Output{shader::Target::kHlsl50, ".hlsl", "hlsl50_"}}) {
+      auto text = shader::crossCompile(*stage.words, output.target, base);
+      if (!text) return text.error();
+      if (auto check = shader::checkCrossCompiled(*text, output.target, stage.stage,
+                                                  base + output.extension);
+          !check)
+        return check.error();
+      if (auto ok = io::writeFileAtomic((directory / (base + output.extension)).string(), *text);
+          !ok)
+        return ok.error();
+      files.push_back({output.kind + std::string(stage.suffix), base + output.extension});
+    }
+  }
+  return files;
+}
+
+core::Status prepareDirectory(const std::string& directory, const core::Asset& asset, bool force) {
+  std::error_code error;
+  fs::path out = fs::weakly_canonical(directory, error);
+  if (!asset.source_path.empty()) {
+    fs::path asset_dir = fs::weakly_canonical(fs::path(asset.source_path).parent_path(), error);
+    if (!asset_dir.empty() && out == asset_dir)
+      return core::Error{directory + ": refusing to write the LOD into the asset's own folder"};
+  }
+  if (fs::exists(out)) {
+    if (!fs::is_directory(out)) return core::Error{directory + ": exists and is not a folder"};
+    if (!fs::is_empty(out) && !force)
+      return core::Error{directory + ": not empty; choose another folder or pass --force"};
+  }
+  fs::create_directories(out, error);
+  if (error) return core::Error{directory + ": cannot create: " + error.message()};
+  return core::okStatus();
+}
+
+}  // namespace
+
+core::Status writeLodOutput(const GenerateResult& result, const core::Asset& asset,
+                            const GenerateOptions& options, const std::string& directory,
+                            bool force) {
+  if (result.levels.empty()) return core::Error{"write LOD: no levels"};
+  if (auto ready = prepareDirectory(directory, asset, force); !ready) return ready;
+  const fs::path out(directory);
+
+  // The glTF chain: each level's coverage is where the next one takes over.
+  std::vector<core::Mesh> meshes;
+  std::vector<double> coverage;
+  for (size_t k = 0; k < result.levels.size(); ++k) {
+    meshes.push_back(result.levels[k].mesh);
+    coverage.push_back(k + 1 < result.levels.size() ? result.levels[k + 1].level.screen_coverage
+                                                    : 0.0);
+  }
+  if (auto ok = io::writeGltfLodChain(asset, meshes, coverage, (out / "lod.gltf").string()); !ok)
+    return ok;
+
+  io::LodJsonDocument document;
+  document.asset_name = fs::path(asset.source_path).stem().string();
+  document.asset_source = asset.source_path;
+  document.bounds = core::computeBoundingSphere(asset.mesh);
+  document.fov_y_deg = options.levels.display.fov_y_deg;
+  document.screen_aspect = options.levels.screen_aspect;
+  document.screen_height_px = options.levels.display.height_px;
+  document.d_near = options.levels.bound.d_near;
+  document.d_far = options.levels.bound.d_far;
+  if (!result.all_levels.empty()) {
+    document.d_near = result.all_levels.front().distance;
+    document.d_far = result.all_levels.back().distance;
+  }
+  document.q = options.levels.bound.q;
+  document.e_max = options.levels.bound.e_max;
+  document.time_tolerance = options.time_tolerance;
+  document.merge_min_gain = options.merge_min_gain;
+  document.optimizer = options.optimizer == Optimizer::kSeparate ? "separate" : "interleaved";
+  document.cost_source = result.cost_source;
+  document.cost_unit = "seconds per draw";
+
+  std::vector<shader::ShaderProgram> programs;
+  std::vector<float> thresholds;
+  for (size_t k = 0; k < result.levels.size(); ++k) {
+    const GeneratedLevel& level = result.levels[k];
+    const std::string name = "level" + std::to_string(k);
+    auto files = writeShaderFiles(level.readable, out, name);
+    if (!files) return files.error();
+    io::LodJsonLevel row;
+    row.level = static_cast<int>(k);
+    row.distance = level.level.distance;
+    row.switch_distance = level.switch_distance;
+    row.screen_coverage = k == 0 ? 1.0 : level.level.screen_coverage;
+    row.triangles = level.mesh.indices.size() / 3;
+    row.vertices = level.mesh.positions.size();
+    row.mesh_file = "lod.gltf#node" + std::to_string(k);
+    row.shader_summary = level.shader_summary;
+    row.shader_files = std::move(*files);
+    row.error = level.error;
+    row.error_bound = level.error_bound;
+    if (k + 1 < result.levels.size()) row.transition_error = level.transition_error;
+    row.predicted_cost = level.predicted_cost;
+    if (level.measured_cost > 0) row.measured_cost = level.measured_cost;
+    document.levels.push_back(std::move(row));
+
+    auto program = shader::parseProgram(level.readable.vertex, level.readable.fragment);
+    if (!program) return program.error();
+    for (size_t i = 0; i < level.parameters.size(); ++i) {
+      const render::UniformValue& value = level.parameters[i];
+      program->parameters.push_back({.name = i < level.parameter_names.size()
+                                                 ? level.parameter_names[i]
+                                                 : "parameter" + std::to_string(value.location),
+                                     .location = static_cast<uint32_t>(value.location),
+                                     .components = value.components,
+                                     .value = value.value});
+    }
+    programs.push_back(std::move(*program));
+    thresholds.push_back(static_cast<float>(k));
+  }
+
+  // Olano's single shader: autoLOD = k runs level k's shader.
+  auto autolod = shader::buildAutoLodShader(programs, thresholds);
+  if (!autolod) return autolod.error();
+  auto autolod_words = shader::emitProgram(autolod->program, /*optimize=*/false);
+  if (!autolod_words) return autolod_words.error();
+  if (auto files = writeShaderFiles({autolod_words->vertex, autolod_words->fragment}, out,
+                                    "autolod");
+      !files)
+    return files.error();
+
+  if (auto ok = io::writeLodJson(document, (out / "lod.json").string()); !ok) return ok;
+  return writeReport(result.report, (out / "report.html").string());
+}
+
+}  // namespace duolod::lod

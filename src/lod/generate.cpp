@@ -1,0 +1,744 @@
+// Joint mesh + shader LOD generation, end to end: Liang et al., "Automatic Mesh and Shader Level of
+// Detail", Algorithm 1 (§3.3, §5) with the smoothest path (§6.1) and merging (§6.2).
+//
+//   levels        N distances between d_near and d_far, bounds e_a(d_i)·s_d (eq. 3/4)
+//   references    f̄(M_0, S_0, d_i) per level, k×k supersampled (eq. 1)
+//   meshes        image-driven simplification per level against that reference, K candidates
+//                 where the error changes most (§4.2, §5.1); or one quadric record (fast mode)
+//   shaders       GP Pareto fronts (predicted cost and error) at a few levels on a few of their
+//                 meshes, united and shared by all levels (§5.2)
+//   pairs         SortByError + SearchPairs per level with rendered errors (Algorithm 2)
+//   path, merge   Algorithm 3 over the pair sets, then §6.2
+//
+// Every rendered pair is cached by (distance level, mesh set, mesh, shader), so the baselines
+// (mesh only, shader only) are the same problem restricted to one axis and cost almost nothing
+// extra. Costs are per draw (one view of the object), in seconds: predicted by the cost model
+// from the pair's own vertex and fragment invocation counts, or measured on the wall clock.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+#include <tuple>
+
+#include "duolod/io.hpp"
+#include "duolod/lod.hpp"
+#include "duolod/mesh.hpp"
+#include "duolod/shader.hpp"
+#include "lod/separate.hpp"
+#include "shader/autolod.hpp"
+#include "shader/cost_model.hpp"
+#include "shader/evaluate.hpp"
+#include "shader/instrument.hpp"
+#include "shader/lod_search.hpp"
+#include "shader/rules.hpp"
+#include "shader/search.hpp"
+
+namespace duolod::lod {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using render::Renderer;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The distance at which the object's footprint is `pixels` (footprint falls with distance).
+float distanceForFootprint(const core::Sphere& bounds, int pixels, const render::Display& display) {
+  float near = bounds.radius * 1.01f, far = bounds.radius * 1e4f;
+  for (int i = 0; i < 60; ++i) {
+    float middle = 0.5f * (near + far);
+    if (render::footprintPixels(bounds, middle, display) > pixels)
+      near = middle;
+    else
+      far = middle;
+  }
+  return far;
+}
+
+struct LevelState {
+  DistanceLevel level;
+  std::vector<render::Sample> samples;
+  render::ImageBatchF reference;  // f̄(M_0, S_0, d_i)
+  double coverage_px = 0;         // s_d, measured on the reference
+  double bound = 0;               // e_a(d_i)·s_d
+};
+
+// The candidates of one level's mesh set; index 0 is the original. Uploaded on first use.
+struct MeshSet {
+  std::vector<core::Mesh> meshes;
+  std::vector<double> errors;  // the simplifier's error of each candidate (image: ε; quadric: 0)
+  std::vector<Renderer::AssetId> uploaded;
+};
+
+struct ShaderCandidate {
+  std::shared_ptr<const shader::ShaderProgram> program;
+  shader::Variant variant;  // optimised: what is rendered and timed
+  std::string summary;
+  bool profiled = false;
+  shader::OpClassCounts vertex_ops{}, fragment_ops{};  // per invocation (the cost model)
+};
+
+struct PairRecord {
+  metric::ImageError error;
+  double cost = 0;  // predicted seconds per draw
+};
+
+class Generator {
+ public:
+  Generator(const core::Asset& asset, const GenerateOptions& options)
+      : asset_(asset), options_(options) {}
+
+  core::Result<GenerateResult> run(const render::GlslSource& source);
+
+ private:
+  void progress(std::string_view stage, double fraction) const {
+    if (options_.progress) options_.progress({stage, fraction});
+  }
+  core::Status setUp(const render::GlslSource& source);
+  core::Status makeLevels();
+  core::Status makeMeshCandidates(const render::GlslSource& source);
+  core::Status makeShaderCandidates();
+  core::Result<ShaderCandidate> candidateFrom(std::shared_ptr<const shader::ShaderProgram> program,
+                                              std::string summary);
+  core::Status profile(ShaderCandidate& candidate);
+  core::Result<Renderer::AssetId> meshAsset(int set, int mesh);
+  core::Result<render::ImageBatch8> renderPair(int distance_level, int set, int mesh, int shader,
+                                               render::WorkCounts* work) {
+    const LevelState& level = levels_[distance_level];
+    return renderPairOn(level.samples, level.level.footprint_px, set, mesh, shader, work);
+  }
+  core::Result<render::ImageBatch8> renderPairOn(std::span<const render::Sample> samples,
+                                                 int resolution, int set, int mesh, int shader,
+                                                 render::WorkCounts* work);
+  core::Result<Renderer::ProgramId> programOf(int shader);
+  int setFor(int level) const {
+    return options_.scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
+  }
+  core::Result<PairRecord> evaluatePair(int distance_level, int set, int mesh, int shader);
+  core::Result<double> transitionError(int level, int from_set, const EvaluatedPair& from,
+                                       int to_set, const EvaluatedPair& to);
+  SeparateProblem problem(LodScope scope);
+  core::Status measureChosen(GenerateResult& result);
+  core::Status checkHeldOut(GenerateResult& result);
+  void fillReport(GenerateResult& result, const SeparateSolution& joint,
+                  const std::map<LodScope, SeparateSolution>& baselines);
+
+  const core::Asset& asset_;
+  GenerateOptions options_;
+  std::unique_ptr<Renderer> renderer_;
+  std::shared_ptr<shader::EvaluationCache> cache_;
+  Renderer::AssetId original_asset_ = -1;
+  core::Sphere bounds_;
+  shader::ShaderProgram original_;
+  std::vector<LevelState> levels_;
+  std::vector<MeshSet> mesh_sets_;
+  std::vector<int> set_of_level_;  // which mesh set each level searches
+  std::vector<ShaderCandidate> shaders_;
+  std::map<std::tuple<int, int, int, int>, PairRecord> pairs_;
+  std::map<std::tuple<int, int, int, int>, render::ImageBatch8> images_;
+  int pair_evaluations_ = 0, transition_evaluations_ = 0;
+};
+
+core::Status Generator::setUp(const render::GlslSource& source) {
+  auto vertex = shader::compileToSpirv(source.vertex, shader::Stage::kVertex, source.vertex_name);
+  if (!vertex) return vertex.error();
+  auto fragment =
+      shader::compileToSpirv(source.fragment, shader::Stage::kFragment, source.fragment_name);
+  if (!fragment) return fragment.error();
+  auto original = shader::parseProgram(*vertex, *fragment);
+  if (!original) return original.error();
+  original_ = std::move(*original);
+
+  auto renderer = Renderer::create({.device = options_.device});
+  if (!renderer) return renderer.error();
+  renderer_ = std::move(*renderer);
+  if (!renderer_->canCountWork())
+    return core::Error{"the GPU context cannot count shader invocations "
+                       "(ARB_pipeline_statistics_query), which the cost model needs"};
+  auto uploaded = renderer_->uploadAsset(asset_);
+  if (!uploaded) return uploaded.error();
+  original_asset_ = *uploaded;
+  cache_ = std::make_shared<shader::EvaluationCache>(*renderer_);
+  bounds_ = core::computeBoundingSphere(asset_.mesh);
+
+  auto candidate = candidateFrom(std::make_shared<shader::ShaderProgram>(original_), "original");
+  if (!candidate) return candidate.error();
+  shaders_.push_back(std::move(*candidate));
+  return core::okStatus();
+}
+
+core::Result<ShaderCandidate> Generator::candidateFrom(
+    std::shared_ptr<const shader::ShaderProgram> program, std::string summary) {
+  auto variant = shader::evaluationVariant(*program);
+  if (!variant) return variant.error();
+  ShaderCandidate candidate;
+  candidate.program = std::move(program);
+  candidate.variant = std::move(*variant);
+  candidate.summary = std::move(summary);
+  return candidate;
+}
+
+core::Status Generator::makeLevels() {
+  LevelOptions level_options = options_.levels;
+  metric::BoundConfig& bound = level_options.bound;
+  if (bound.d_near <= 0)
+    bound.d_near = distanceForFootprint(bounds_, options_.near_footprint_px, level_options.display);
+  if (bound.d_far <= 0)
+    bound.d_far = distanceForFootprint(bounds_, options_.far_footprint_px, level_options.display);
+  options_.levels = level_options;
+  auto levels = distanceLevels(bounds_, level_options);
+  if (!levels) return levels.error();
+
+  auto program = cache_->program(shaders_[0].variant);
+  if (!program) return program.error();
+  for (size_t i = 0; i < levels->size(); ++i) {
+    progress("references", double(i) / levels->size());
+    LevelState state;
+    state.level = (*levels)[i];
+    state.samples = render::domainSamples(bounds_, float(state.level.distance));
+    render::RenderOptions render_options{.resolution = state.level.footprint_px,
+                                         .supersample = options_.supersample};
+    auto reference = renderer_->renderReference(original_asset_, *program, state.samples,
+                                                render_options);
+    if (!reference) return reference.error();
+    state.reference = std::move(*reference);
+    // s_d of eq. (3): the reference's covered pixels (the error of f̄ against itself is 0).
+    state.coverage_px = metric::imageError(state.reference, state.reference).coverage_px;
+    state.bound = errorBound(state.level, state.coverage_px);
+    levels_.push_back(std::move(state));
+  }
+  return core::okStatus();
+}
+
+core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
+  const int level_count = static_cast<int>(levels_.size());
+  auto addSet = [&](const mesh::ProgressiveRecord& record) {
+    std::vector<size_t> steps = mesh::chooseCandidates(record, options_.mesh_candidates);
+    MeshSet set;
+    set.meshes = mesh::extractMeshes(record, steps);
+    for (size_t step : steps)
+      set.errors.push_back(step == 0 ? 0.0 : record.steps[step - 1].cumulative_error);
+    set.uploaded.assign(set.meshes.size(), -1);
+    mesh_sets_.push_back(std::move(set));
+    return static_cast<int>(mesh_sets_.size()) - 1;
+  };
+  // Set 0 is the original alone: level 0 (bound 0) and the shader-only baseline use it.
+  mesh_sets_.push_back(MeshSet{.meshes = {asset_.mesh}, .errors = {0.0}, .uploaded = {-1}});
+  set_of_level_.assign(level_count, 0);
+  if (options_.scope == LodScope::kShaderOnly) return core::okStatus();
+
+  if (options_.mesh_mode == MeshCandidateMode::kQuadric) {
+    mesh::SimplifyOptions quadric{.target_triangles = 4, .record = true};
+    mesh::SimplifyResult simplified = mesh::simplifyQuadric(asset_.mesh, quadric);
+    int set = addSet(simplified.record);
+    for (int level = 1; level < level_count; ++level) set_of_level_[level] = set;
+    return core::okStatus();
+  }
+  for (int level = 1; level < level_count; ++level) {
+    progress("mesh candidates", double(level - 1) / std::max(1, level_count - 1));
+    mesh::ImageSimplifyOptions image{.target_error = levels_[level].bound,
+                                     .distance = float(levels_[level].level.distance),
+                                     .display = options_.levels.display,
+                                     .supersample = options_.supersample};
+    auto simplified = mesh::simplifyImage(*renderer_, asset_, source, image);
+    if (!simplified)
+      return core::Error{"mesh candidates at level " + std::to_string(level) + ": " +
+                         simplified.error().message};
+    set_of_level_[level] = addSet(simplified->record);
+  }
+  return core::okStatus();
+}
+
+core::Result<Renderer::AssetId> Generator::meshAsset(int set, int mesh) {
+  MeshSet& mesh_set = mesh_sets_[set];
+  if (mesh_set.uploaded[mesh] >= 0) return mesh_set.uploaded[mesh];
+  auto uploaded = renderer_->uploadMesh(original_asset_, mesh_set.meshes[mesh]);
+  if (!uploaded) return uploaded.error();
+  mesh_set.uploaded[mesh] = *uploaded;
+  return *uploaded;
+}
+
+// The cost model's per-invocation op counts of a shader candidate: one instrumented render of the
+// original mesh at a middle level, a few views (the counts per invocation hardly depend on the
+// mesh; the invocation counts, which do, come from each pair's own render).
+core::Status Generator::profile(ShaderCandidate& candidate) {
+  if (candidate.profiled) return core::okStatus();
+  auto vertex = ir::parseModule(candidate.variant.spirv.vertex);
+  if (!vertex) return vertex.error();
+  auto fragment = ir::parseModule(candidate.variant.spirv.fragment);
+  if (!fragment) return fragment.error();
+  const LevelState& level = levels_[levels_.size() / 2];
+  std::vector<render::Sample> samples;
+  for (size_t i = 0; i < level.samples.size(); i += 20) samples.push_back(level.samples[i]);
+  auto counts = shader::profileBlockCounts(*renderer_, original_asset_, *vertex, *fragment, samples,
+                                           level.level.footprint_px);
+  if (!counts) return counts.error();
+  candidate.vertex_ops = shader::dynamicOpCounts(*vertex, counts->vertex_executions);
+  candidate.fragment_ops = shader::dynamicOpCounts(*fragment, counts->fragment_executions);
+  candidate.profiled = true;
+  return core::okStatus();
+}
+
+// The shader candidate's program with its CPU-set values applied (program state in GL).
+core::Result<Renderer::ProgramId> Generator::programOf(int shader) {
+  const ShaderCandidate& candidate = shaders_[shader];
+  auto program = cache_->program(candidate.variant);
+  if (!program) return program.error();
+  if (auto set_uniforms = renderer_->setProgramUniforms(*program, candidate.variant.uniforms);
+      !set_uniforms)
+    return set_uniforms.error();
+  return *program;
+}
+
+core::Result<render::ImageBatch8> Generator::renderPairOn(std::span<const render::Sample> samples,
+                                                          int resolution, int set, int mesh,
+                                                          int shader, render::WorkCounts* work) {
+  auto asset = meshAsset(set, mesh);
+  if (!asset) return asset.error();
+  auto program = programOf(shader);
+  if (!program) return program.error();
+  render::RenderOptions render_options{.resolution = resolution, .count_work = work != nullptr};
+  render::RenderStats stats;
+  auto images = renderer_->render(*asset, *program, samples, render_options, &stats);
+  if (!images) return images.error();
+  if (work) *work = stats.work;
+  return images;
+}
+
+core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, int mesh,
+                                                 int shader) {
+  auto key = std::make_tuple(distance_level, set, mesh, shader);
+  if (auto found = pairs_.find(key); found != pairs_.end()) return found->second;
+  render::WorkCounts work;
+  auto images = renderPair(distance_level, set, mesh, shader, &work);
+  if (!images) return images.error();
+  ++pair_evaluations_;
+  ShaderCandidate& candidate = shaders_[shader];
+  if (auto profiled = profile(candidate); !profiled) return profiled.error();
+  const LevelState& level = levels_[distance_level];
+  double draws = static_cast<double>(level.samples.size());
+  shader::CostFeatures features{
+      .vertex_ops = candidate.vertex_ops,
+      .fragment_ops = candidate.fragment_ops,
+      .vertex_invocations = static_cast<double>(work.vertex_invocations) / draws,
+      .fragment_invocations = static_cast<double>(work.fragment_invocations) / draws};
+  PairRecord record{.error = metric::imageError(*images, level.reference),
+                    .cost = shader::predictCost(features, shader::calibratedCostWeights())};
+  pairs_.emplace(key, record);
+  return record;
+}
+
+// ε_t of eq. (5): both pairs rendered at d_{level+1} and compared with each other.
+core::Result<double> Generator::transitionError(int level, int from_set,
+                                                const EvaluatedPair& from, int to_set,
+                                                const EvaluatedPair& to) {
+  const int at = level + 1;
+  auto imageOf = [&](int set, const EvaluatedPair& pair) -> core::Result<const render::ImageBatch8*> {
+    auto key = std::make_tuple(at, set, pair.mesh, pair.shader);
+    auto found = images_.find(key);
+    if (found == images_.end()) {
+      auto images = renderPair(at, set, pair.mesh, pair.shader, nullptr);
+      if (!images) return images.error();
+      found = images_.emplace(key, std::move(*images)).first;
+    }
+    return &found->second;
+  };
+  auto a = imageOf(from_set, from);
+  if (!a) return a.error();
+  auto b = imageOf(to_set, to);
+  if (!b) return b.error();
+  ++transition_evaluations_;
+  return metric::imageError(**a, **b).epsilon;
+}
+
+SeparateProblem Generator::problem(LodScope scope) {
+  SeparateProblem problem;
+  problem.level_count = static_cast<int>(levels_.size());
+  for (int level = 0; level < problem.level_count; ++level) {
+    problem.error_bounds.push_back(levels_[level].bound);
+    int set = scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
+    problem.mesh_counts.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
+  }
+  problem.shader_count = scope == LodScope::kMeshOnly ? 1 : static_cast<int>(shaders_.size());
+  auto setOf = [this, scope](int level) {
+    return scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
+  };
+  problem.evaluate = [this, setOf](int level, int mesh,
+                                   int shader) -> core::Result<PairEvaluation> {
+    auto record = evaluatePair(level, setOf(level), mesh, shader);
+    if (!record) return record.error();
+    return PairEvaluation{.error = record->error.epsilon, .cost = record->cost};
+  };
+  problem.transition = [this, setOf](int level, const EvaluatedPair& from,
+                                     const EvaluatedPair& to) {
+    return transitionError(level, setOf(level), from, setOf(level + 1), to);
+  };
+  problem.cost_at = [this, setOf](int pair_level, const EvaluatedPair& pair,
+                                  int distance_level) -> core::Result<double> {
+    auto record = evaluatePair(distance_level, setOf(pair_level), pair.mesh, pair.shader);
+    if (!record) return record.error();
+    return record->cost;
+  };
+  return problem;
+}
+
+
+// §5.2: GP fronts on (mesh, distance) configurations at a few evenly chosen levels, on the
+// coarsest meshes of each whose own error leaves room for the shader's (half the bound), united.
+core::Status Generator::makeShaderCandidates() {
+  if (options_.scope == LodScope::kMeshOnly) return core::okStatus();
+  const int level_count = static_cast<int>(levels_.size());
+  std::vector<int> search_levels;
+  const int wanted = std::clamp(options_.shader_search_levels, 1, std::max(1, level_count - 1));
+  for (int i = 0; i < wanted; ++i) {
+    int level = level_count == 1 ? 0
+                                 : 1 + static_cast<int>(std::lround(double(i) * (level_count - 2) /
+                                                                    std::max(1, wanted - 1)));
+    if (search_levels.empty() || search_levels.back() != level) search_levels.push_back(level);
+  }
+
+  shader::RuleContext context;
+  context.texture_averages = shader::textureAverages(asset_);
+  std::set<uint64_t> seen{shader::programHash(original_)};
+  std::vector<shader::SearchVariant> found;
+  int configuration = 0;
+  const int configurations = static_cast<int>(search_levels.size()) * options_.shader_search_meshes;
+  for (int level : search_levels) {
+    const int set = set_of_level_[level];
+    const MeshSet& mesh_set = mesh_sets_[set];
+    // The top meshes: the coarsest candidates whose own error is at most half the bound.
+    std::vector<int> meshes;
+    for (int mesh = static_cast<int>(mesh_set.meshes.size()) - 1;
+         mesh >= 0 && static_cast<int>(meshes.size()) < options_.shader_search_meshes; --mesh)
+      if (mesh == 0 || mesh_set.errors[mesh] <= 0.5 * levels_[level].bound) meshes.push_back(mesh);
+    for (int mesh : meshes) {
+      progress("shader candidates", double(configuration++) / std::max(1, configurations));
+      auto asset = meshAsset(set, mesh);
+      if (!asset) return asset.error();
+      shader::EvaluationConfig config;
+      config.distance = float(levels_[level].level.distance);
+      config.display = options_.levels.display;
+      config.supersample = options_.supersample;
+      auto scoring = shader::ConfigurationScorer::create(*renderer_, cache_, *asset,
+                                                         mesh_set.meshes[mesh], original_, config);
+      if (!scoring) return scoring.error();
+      shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
+      shader::GeneticSearchOptions genetic;
+      genetic.population_size = options_.population;
+      genetic.generations = options_.generations;
+      genetic.seed = options_.seed + static_cast<uint64_t>(configuration);
+      // Variants erring far beyond the largest bound can never be chosen.
+      genetic.max_error = 4.0 * options_.levels.bound.e_max;
+      auto searched = shader::searchGenetic(search_cache, genetic);
+      if (!searched) return searched.error();
+      for (shader::SearchVariant& variant : searched->variants)
+        if (seen.insert(shader::programHash(*variant.program)).second)
+          found.push_back(std::move(variant));
+    }
+  }
+  // Thin the union evenly along the predicted error, so the candidates span the whole range.
+  std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
+    return a.predicted_error < b.predicted_error;
+  });
+  const size_t keep = std::min(found.size(), size_t(std::max(0, options_.max_shader_candidates - 1)));
+  for (size_t i = 0; i < keep; ++i) {
+    size_t index = keep == found.size() ? i : i * (found.size() - 1) / std::max<size_t>(1, keep - 1);
+    auto candidate = candidateFrom(found[index].program, shader::describeSites(found[index].sites));
+    if (!candidate) return candidate.error();
+    shaders_.push_back(std::move(*candidate));
+  }
+  return core::okStatus();
+}
+
+core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
+  const auto start = Clock::now();
+  if (options_.optimizer == Optimizer::kInterleaved)
+    return core::Error{"the interleaved optimizer (§4.3) is not implemented yet; use separate"};
+  if (auto ready = setUp(source); !ready) return ready.error();
+  GenerateResult result;
+  result.device = renderer_->deviceDescription();
+  result.cost_source = options_.cost_source == CostSource::kMeasured
+                           ? "measured (chosen pairs; the search used predicted)"
+                           : "predicted (cost model)";
+  if (auto made = makeLevels(); !made) return made.error();
+  for (const LevelState& level : levels_) result.all_levels.push_back(level.level);
+
+  auto mesh_start = Clock::now();
+  if (auto made = makeMeshCandidates(source); !made) return made.error();
+  result.timings.mesh_seconds = secondsSince(mesh_start);
+  for (int set : set_of_level_)
+    result.mesh_candidates.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
+
+  auto shader_start = Clock::now();
+  if (auto made = makeShaderCandidates(); !made) return made.error();
+  result.timings.shader_seconds = secondsSince(shader_start);
+  result.shader_candidates = static_cast<int>(shaders_.size());
+
+  auto optimization_start = Clock::now();
+  SeparateOptions separate{.time_tolerance = options_.time_tolerance,
+                           .merge_min_gain = options_.merge_min_gain,
+                           .brute_force = options_.brute_force};
+  separate.on_level = [&](int level, int) {
+    progress("pair search", double(level + 1) / levels_.size());
+  };
+  auto joint = optimizeSeparate(problem(options_.scope), separate);
+  if (!joint) return joint.error();
+  // The baselines with the same thresholds, on the same cached renders (report plots).
+  std::map<LodScope, SeparateSolution> baselines;
+  if (options_.scope == LodScope::kJoint) {
+    separate.on_level = nullptr;
+    for (LodScope scope : {LodScope::kMeshOnly, LodScope::kShaderOnly}) {
+      auto baseline = optimizeSeparate(problem(scope), separate);
+      if (!baseline) return baseline.error();
+      baselines.emplace(scope, std::move(*baseline));
+    }
+  }
+  result.timings.optimization_seconds = secondsSince(optimization_start);
+
+  // The kept levels.
+  const std::vector<int>& kept = joint->merge.kept_levels;
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const int level = kept[k];
+    const EvaluatedPair& pair = joint->chosen[level];
+    const int set = setFor(level);
+    const ShaderCandidate& candidate = shaders_[pair.shader];
+    GeneratedLevel out;
+    out.level = levels_[level].level;
+    out.switch_distance = k == 0 ? 0.0 : levels_[level].level.distance;
+    out.mesh = mesh_sets_[set].meshes[pair.mesh];
+    auto readable = shader::emitProgram(*candidate.program, /*optimize=*/false);
+    if (!readable) return readable.error();
+    out.readable = {std::move(readable->vertex), std::move(readable->fragment)};
+    out.optimized = candidate.variant.spirv;
+    out.parameters = candidate.variant.uniforms;
+    for (const shader::ParameterValue& parameter : candidate.program->parameters)
+      out.parameter_names.push_back(parameter.name);
+    out.shader_summary = candidate.summary;
+    out.mesh_candidate = pair.mesh;
+    out.shader_candidate = pair.shader;
+    out.error = pair.error;
+    out.error_bound = levels_[level].bound;
+    out.original_fallback = joint->fallback_to_original[level];
+    out.predicted_cost = pair.cost;
+    result.levels.push_back(std::move(out));
+  }
+  // ε_t between consecutive kept levels, at the farther one's distance.
+  for (size_t k = 0; k + 1 < kept.size(); ++k) {
+    auto error = transitionError(kept[k + 1] - 1, setFor(kept[k]), joint->chosen[kept[k]],
+                                 setFor(kept[k + 1]), joint->chosen[kept[k + 1]]);
+    if (!error) return error.error();
+    result.levels[k].transition_error = *error;
+  }
+  if (options_.cost_source == CostSource::kMeasured)
+    if (auto measured = measureChosen(result); !measured) return measured.error();
+  if (auto checked = checkHeldOut(result); !checked) return checked.error();
+  result.pair_evaluations = pair_evaluations_;
+  result.transition_evaluations = transition_evaluations_;
+  fillReport(result, *joint, baselines);
+  result.timings.total_seconds = secondsSince(start);
+  return result;
+}
+
+
+// Cost(f(M, S, d)) on the wall clock for each kept level's pair and for the original pair at the
+// same distance, in one call each (times compare within a call; report both).
+core::Status Generator::measureChosen(GenerateResult& result) {
+  for (size_t k = 0; k < result.levels.size(); ++k) {
+    progress("timing", double(k) / result.levels.size());
+    GeneratedLevel& out = result.levels[k];
+    const LevelState& level = levels_[out.level.index];
+    render::TimingOptions timing{.resolution = level.level.footprint_px};
+    auto measure = [&](int set, int mesh, int shader) -> core::Result<double> {
+      auto asset = meshAsset(set, mesh);
+      if (!asset) return asset.error();
+      auto program = programOf(shader);
+      if (!program) return program.error();
+      auto time = renderer_->measureDrawTime(*asset, *program, level.samples, timing);
+      if (!time) return time.error();
+      return time->seconds / static_cast<double>(level.samples.size());
+    };
+    auto original = measure(0, 0, 0);
+    if (!original) return original.error();
+    auto chosen = measure(setFor(out.level.index), out.mesh_candidate, out.shader_candidate);
+    if (!chosen) return chosen.error();
+    out.original_measured_cost = *original;
+    out.measured_cost = *chosen;
+  }
+  return core::okStatus();
+}
+
+// Every kept level on views and lights the optimization never saw: the icosahedron's 12 views
+// (the training set is the dodecahedron's 20) with the light cross turned by 45°.
+core::Status Generator::checkHeldOut(GenerateResult& result) {
+  auto original = cache_->program(shaders_[0].variant);
+  if (!original) return original.error();
+  for (size_t k = 0; k < result.levels.size(); ++k) {
+    progress("held-out check", double(k) / result.levels.size());
+    const GeneratedLevel& out = result.levels[k];
+    const LevelState& level = levels_[out.level.index];
+    render::DomainOptions held_out{.views = render::ViewSet::kIcosahedron,
+                                   .light_rotation_deg = 45.0f};
+    std::vector<render::Sample> samples =
+        render::domainSamples(bounds_, float(level.level.distance), held_out);
+    const int resolution = level.level.footprint_px;
+    auto reference = renderer_->renderReference(
+        original_asset_, *original, samples,
+        {.resolution = resolution, .supersample = options_.supersample});
+    if (!reference) return reference.error();
+    auto images = renderPairOn(samples, resolution, setFor(out.level.index), out.mesh_candidate,
+                               out.shader_candidate, nullptr);
+    if (!images) return images.error();
+    metric::ImageError error = metric::imageError(*images, *reference);
+    HeldOutCheck check{.level = static_cast<int>(k),
+                       .error = error.epsilon,
+                       .bound = errorBound(level.level, error.coverage_px),
+                       .original_fallback = out.original_fallback};
+    check.within = check.error < check.bound;
+    result.held_out.push_back(check);
+  }
+  return core::okStatus();
+}
+
+// A wireframe of `mesh` seen from `sample`, `size` pixels square, on white (the report's picture
+// of a level's mesh). Edges are drawn once per triangle side with a DDA; no hidden-line removal.
+core::ImageRGBA8 wireframe(const core::Mesh& mesh, const render::Sample& sample, int size) {
+  core::ImageRGBA8 image{size, size, std::vector<uint8_t>(size_t(size) * size * 4, 255)};
+  const core::Mat4 clip = sample.projection * sample.view;
+  std::vector<std::array<float, 2>> screen(mesh.positions.size());
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    core::Vec4 p = core::transform(clip, {mesh.positions[v].x, mesh.positions[v].y,
+                                          mesh.positions[v].z, 1.0f});
+    float w = p.w > 1e-6f ? p.w : 1e-6f;
+    screen[v] = {(p.x / w * 0.5f + 0.5f) * size, (0.5f - p.y / w * 0.5f) * size};
+  }
+  auto line = [&](uint32_t a, uint32_t b) {
+    float dx = screen[b][0] - screen[a][0], dy = screen[b][1] - screen[a][1];
+    int steps = std::max(1, static_cast<int>(std::ceil(std::max(std::abs(dx), std::abs(dy)))));
+    steps = std::min(steps, 4 * size);
+    for (int s = 0; s <= steps; ++s) {
+      int x = static_cast<int>(screen[a][0] + dx * s / steps);
+      int y = static_cast<int>(screen[a][1] + dy * s / steps);
+      if (x < 0 || y < 0 || x >= size || y >= size) continue;
+      uint8_t* pixel = &image.pixels[(size_t(y) * size + x) * 4];
+      pixel[0] = 40, pixel[1] = 60, pixel[2] = 110;
+    }
+  };
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    line(mesh.indices[t], mesh.indices[t + 1]);
+    line(mesh.indices[t + 1], mesh.indices[t + 2]);
+    line(mesh.indices[t + 2], mesh.indices[t]);
+  }
+  return image;
+}
+
+void Generator::fillReport(GenerateResult& result, const SeparateSolution& joint,
+                           const std::map<LodScope, SeparateSolution>& baselines) {
+  ReportData& report = result.report;
+  report.title = "duolod LOD of " + fs::path(asset_.source_path).filename().string();
+  const metric::BoundConfig& bound = options_.levels.bound;
+  report.facts = {
+      {"asset", asset_.source_path},
+      {"triangles", std::to_string(asset_.mesh.indices.size() / 3)},
+      {"device", result.device},
+      {"display", std::to_string(options_.levels.display.height_px) + " px high, FOV " +
+                      std::to_string(options_.levels.display.fov_y_deg) + "°"},
+      {"bound (eq. 4)", "d_near " + std::to_string(bound.d_near) + ", d_far " +
+                            std::to_string(bound.d_far) + ", Q " + std::to_string(bound.q) +
+                            ", e_max " + std::to_string(bound.e_max)},
+      {"levels", std::to_string(levels_.size()) + " → " + std::to_string(result.levels.size()) +
+                     " after merging (W = " + std::to_string(options_.merge_min_gain) + ")"},
+      {"candidates", std::to_string(shaders_.size()) + " shaders; meshes per level up to " +
+                         std::to_string(options_.mesh_candidates)},
+      {"pair evaluations", std::to_string(pair_evaluations_) + " rendered (" +
+                               std::to_string(transition_evaluations_) + " transitions)"},
+      {"cost", result.cost_source},
+  };
+  for (size_t k = 0; k < result.levels.size(); ++k) {
+    const GeneratedLevel& out = result.levels[k];
+    const LevelState& level = levels_[out.level.index];
+    ReportLevel row{.index = static_cast<int>(k),
+                    .distance = out.level.distance,
+                    .screen_coverage = out.level.screen_coverage,
+                    .triangles = out.mesh.indices.size() / 3,
+                    .shader_summary = out.shader_summary,
+                    .error = out.error,
+                    .error_bound = out.error_bound,
+                    .transition_error = out.transition_error,
+                    .predicted_cost = out.predicted_cost,
+                    .measured_cost = out.measured_cost};
+    const int size = std::max(96, level.level.footprint_px);
+    row.images.push_back({"mesh", wireframe(out.mesh, level.samples[0], size)});
+    if (auto images = renderPair(out.level.index, setFor(out.level.index), out.mesh_candidate,
+                                 out.shader_candidate, nullptr))
+      row.images.push_back({"level", render::tileImage(*images, 0)});
+    row.images.push_back({"reference f̄", render::tileImage(level.reference, 0)});
+    report.levels.push_back(std::move(row));
+  }
+  ReportPlot errors{.title = "Error against distance", .x_label = "distance", .y_label = "ε_a"};
+  ReportSeries bound_series{.name = "bound e_a(d)·s_d"}, error_series{.name = "chosen pair"};
+  for (const LevelState& level : levels_) {
+    bound_series.x.push_back(level.level.distance);
+    bound_series.y.push_back(level.bound);
+  }
+  for (size_t level = 0; level < joint.chosen.size(); ++level) {
+    error_series.x.push_back(levels_[level].level.distance);
+    error_series.y.push_back(joint.chosen[level].error);
+  }
+  errors.series = {bound_series, error_series};
+  report.plots.push_back(errors);
+
+  ReportPlot costs{.title = "Cost per draw against distance (" + result.cost_source + ")",
+                   .x_label = "distance",
+                   .y_label = "seconds"};
+  auto costSeries = [&](std::string name, const SeparateSolution& solution) {
+    ReportSeries series{.name = std::move(name)};
+    // The pair in use at each distance: the last kept level at or before it.
+    size_t kept = 0;
+    for (size_t level = 0; level < solution.chosen.size(); ++level) {
+      while (kept + 1 < solution.merge.kept_levels.size() &&
+             solution.merge.kept_levels[kept + 1] <= static_cast<int>(level))
+        ++kept;
+      series.x.push_back(levels_[level].level.distance);
+      series.y.push_back(solution.chosen[solution.merge.kept_levels[kept]].cost);
+    }
+    return series;
+  };
+  ReportSeries no_lod{.name = "no LOD"};
+  for (size_t level = 0; level < levels_.size(); ++level)
+    if (auto original = evaluatePair(static_cast<int>(level), 0, 0, 0)) {
+      no_lod.x.push_back(levels_[level].level.distance);
+      no_lod.y.push_back(original->cost);
+    }
+  costs.series.push_back(no_lod);
+  if (auto found = baselines.find(LodScope::kMeshOnly); found != baselines.end())
+    costs.series.push_back(costSeries("mesh only", found->second));
+  if (auto found = baselines.find(LodScope::kShaderOnly); found != baselines.end())
+    costs.series.push_back(costSeries("shader only", found->second));
+  costs.series.push_back(costSeries("joint", joint));
+  report.plots.push_back(costs);
+
+  for (size_t level = 0; level < joint.searches.size(); ++level)
+    report.searches.push_back(
+        {.title = "level " + std::to_string(level) + ", d = " +
+                  std::to_string(levels_[level].level.distance),
+         .mesh_count = static_cast<int>(mesh_sets_[setFor(static_cast<int>(level))].meshes.size()),
+         .shader_count = static_cast<int>(joint.shader_orders[level].size()),
+         .result = joint.searches[level]});
+  report.transitions = ReportTransitions{.level_pairs = joint.level_pairs, .path = joint.path};
+}
+
+}  // namespace
+
+core::Result<GenerateResult> generateLod(const core::Asset& asset, const render::GlslSource& shader,
+                                         const GenerateOptions& options) {
+  if (asset.mesh.indices.empty()) return core::Error{"generate: the asset has no triangles"};
+  Generator generator(asset, options);
+  return generator.run(shader);
+}
+
+}  // namespace duolod::lod
