@@ -33,6 +33,7 @@
 #include "shader/evaluate.hpp"
 #include "shader/instrument.hpp"
 #include "shader/lod_search.hpp"
+#include "shader/nsga2.hpp"
 #include "shader/rules.hpp"
 #include "shader/search.hpp"
 
@@ -123,6 +124,10 @@ class Generator {
   core::Result<double> transitionError(int level, int from_set, const EvaluatedPair& from,
                                        int to_set, const EvaluatedPair& to);
   SeparateProblem problem(LodScope scope);
+  core::Result<SeparateSolution> runInterleaved(const SeparateOptions& options);
+  core::Result<int> coarsestMeshWithin(int level, int shader);
+  core::Result<int> addShaderCandidate(std::shared_ptr<const shader::ShaderProgram> program,
+                                       std::string summary);
   core::Status measureChosen(GenerateResult& result);
   core::Status checkHeldOut(GenerateResult& result);
   void fillReport(GenerateResult& result, const SeparateSolution& joint,
@@ -457,8 +462,6 @@ core::Status Generator::makeShaderCandidates() {
 
 core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   const auto start = Clock::now();
-  if (options_.optimizer == Optimizer::kInterleaved)
-    return core::Error{"the interleaved optimizer (§4.3) is not implemented yet; use separate"};
   if (auto ready = setUp(source); !ready) return ready.error();
   GenerateResult result;
   result.device = renderer_->deviceDescription();
@@ -474,20 +477,23 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   for (int set : set_of_level_)
     result.mesh_candidates.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
 
-  auto shader_start = Clock::now();
-  if (auto made = makeShaderCandidates(); !made) return made.error();
-  result.timings.shader_seconds = secondsSince(shader_start);
-  result.shader_candidates = static_cast<int>(shaders_.size());
-
-  auto optimization_start = Clock::now();
   SeparateOptions separate{.time_tolerance = options_.time_tolerance,
                            .merge_min_gain = options_.merge_min_gain,
                            .brute_force = options_.brute_force};
+  const bool interleaved = options_.optimizer == Optimizer::kInterleaved;
+  auto shader_start = Clock::now();
+  if (!interleaved)
+    if (auto made = makeShaderCandidates(); !made) return made.error();
+  result.timings.shader_seconds = secondsSince(shader_start);
+
+  auto optimization_start = Clock::now();
   separate.on_level = [&](int level, int) {
     progress("pair search", double(level + 1) / levels_.size());
   };
-  auto joint = optimizeSeparate(problem(options_.scope), separate);
+  auto joint = interleaved ? runInterleaved(separate)
+                           : optimizeSeparate(problem(options_.scope), separate);
   if (!joint) return joint.error();
+  result.shader_candidates = static_cast<int>(shaders_.size());
   // The baselines with the same thresholds, on the same cached renders (report plots).
   std::map<LodScope, SeparateSolution> baselines;
   if (options_.scope == LodScope::kJoint) {
@@ -730,6 +736,180 @@ void Generator::fillReport(GenerateResult& result, const SeparateSolution& joint
          .shader_count = static_cast<int>(joint.shader_orders[level].size()),
          .result = joint.searches[level]});
   report.transitions = ReportTransitions{.level_pairs = joint.level_pairs, .path = joint.path};
+}
+
+
+core::Result<int> Generator::addShaderCandidate(
+    std::shared_ptr<const shader::ShaderProgram> program, std::string summary) {
+  auto candidate = candidateFrom(std::move(program), std::move(summary));
+  if (!candidate) return candidate.error();
+  shaders_.push_back(std::move(*candidate));
+  return static_cast<int>(shaders_.size()) - 1;
+}
+
+// The coarsest mesh of the level's set that, with `shader`, stays within the bound, by bisection
+// over the candidates (their error grows with simplification); -1 when not even M_0 does.
+core::Result<int> Generator::coarsestMeshWithin(int level, int shader) {
+  const int set = set_of_level_[level];
+  const double bound = levels_[level].bound;
+  auto within = [&](int mesh) -> core::Result<bool> {
+    auto record = evaluatePair(level, set, mesh, shader);
+    if (!record) return record.error();
+    return record->error.epsilon < bound;
+  };
+  auto finest = within(0);
+  if (!finest) return finest.error();
+  if (!*finest) return -1;
+  int good = 0, bad = static_cast<int>(mesh_sets_[set].meshes.size());
+  while (bad - good > 1) {
+    int middle = (good + bad) / 2;
+    auto ok = within(middle);
+    if (!ok) return ok.error();
+    (*ok ? good : bad) = middle;
+  }
+  return good;
+}
+
+// §4.3: per level, GP generations of shader variants. Each generation applies one rule to each
+// seed (a seeded sample of the sites); the variants on the Pareto front of predicted (cost, error)
+// are each paired with the coarsest mesh that keeps the pair within the bound (the progressive
+// record replaces re-simplifying, §5.1); the pairs are sorted by cost and the top N% seed the next
+// generation. The levels' pairs then go through the same smoothing and merging.
+core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& options) {
+  const int level_count = static_cast<int>(levels_.size());
+  shader::RuleContext context;
+  context.texture_averages = shader::textureAverages(asset_);
+  SeparateSolution solution;
+  std::map<uint64_t, int> candidate_of_hash{{shader::programHash(original_), 0}};
+  for (int level = 0; level < level_count; ++level) {
+    progress("interleaved", double(level) / level_count);
+    std::vector<EvaluatedPair> pairs;
+    auto addPair = [&](int mesh, int shader) -> core::Status {
+      auto record = evaluatePair(level, set_of_level_[level], mesh, shader);
+      if (!record) return record.error();
+      pairs.push_back({.mesh = mesh,
+                       .shader = shader,
+                       .error = record->error.epsilon,
+                       .cost = record->cost,
+                       .within_bound = record->error.epsilon < levels_[level].bound});
+      return core::okStatus();
+    };
+    auto original_mesh = coarsestMeshWithin(level, 0);
+    if (!original_mesh) return original_mesh.error();
+    if (*original_mesh >= 0)
+      if (auto added = addPair(*original_mesh, 0); !added) return added.error();
+    if (level > 0 && options_.scope != LodScope::kMeshOnly) {
+      const int set = set_of_level_[level];
+      auto asset = meshAsset(set, 0);
+      if (!asset) return asset.error();
+      shader::EvaluationConfig config;
+      config.distance = float(levels_[level].level.distance);
+      config.display = options_.levels.display;
+      config.supersample = options_.supersample;
+      auto scoring = shader::ConfigurationScorer::create(*renderer_, cache_, *asset,
+                                                         mesh_sets_[set].meshes[0], original_, config);
+      if (!scoring) return scoring.error();
+      shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
+      shader::SearchRandom rng(options_.seed * 7919 + static_cast<uint64_t>(level));
+      std::vector<std::vector<shader::RuleSite>> seeds{{}};
+      for (int generation = 0; generation < options_.interleaved_generations; ++generation) {
+        struct Child {
+          std::vector<shader::RuleSite> sites;
+          std::shared_ptr<const shader::ShaderProgram> program;
+          double cost = 0, error = 0;
+        };
+        std::vector<Child> children;
+        for (const auto& seed : seeds) {
+          auto parent = search_cache.materialise(seed);
+          if (!parent) continue;
+          std::vector<shader::RuleSite> sites = shader::enumerateSites(**parent, context);
+          // A seeded sample of the sites, at most `population` per seed.
+          for (size_t i = sites.size(); i > 1; --i) std::swap(sites[i - 1], sites[rng.index(i)]);
+          if (static_cast<int>(sites.size()) > options_.population) sites.resize(options_.population);
+          for (const shader::RuleSite& site : sites) {
+            std::vector<shader::RuleSite> genome = seed;
+            genome.push_back(site);
+            auto program = search_cache.materialise(genome);
+            if (!program) continue;
+            auto score = search_cache.score(**program);
+            if (!score) continue;
+            children.push_back({genome, *program, score->cost, score->error});
+          }
+        }
+        // The Pareto front of the generation (neither cheaper-and-better dominated).
+        std::vector<Child> front;
+        for (const Child& child : children) {
+          bool dominated = false;
+          for (const Child& other : children)
+            if ((other.cost < child.cost && other.error <= child.error) ||
+                (other.cost <= child.cost && other.error < child.error)) {
+              dominated = true;
+              break;
+            }
+          if (!dominated) front.push_back(child);
+        }
+        struct Scored {
+          std::vector<shader::RuleSite> sites;
+          double cost = 0;
+        };
+        std::vector<Scored> paired;
+        for (const Child& child : front) {
+          uint64_t hash = shader::programHash(*child.program);
+          auto known = candidate_of_hash.find(hash);
+          int shader_index;
+          if (known != candidate_of_hash.end()) {
+            shader_index = known->second;
+          } else {
+            auto added = addShaderCandidate(child.program, shader::describeSites(child.sites));
+            if (!added) return added.error();
+            shader_index = *added;
+            candidate_of_hash.emplace(hash, shader_index);
+          }
+          auto mesh = coarsestMeshWithin(level, shader_index);
+          if (!mesh) return mesh.error();
+          if (*mesh < 0) continue;  // not even the original mesh keeps this shader in bounds
+          if (auto added = addPair(*mesh, shader_index); !added) return added.error();
+          paired.push_back({child.sites, pairs.back().cost});
+        }
+        if (paired.empty()) break;
+        std::stable_sort(paired.begin(), paired.end(),
+                         [](const Scored& a, const Scored& b) { return a.cost < b.cost; });
+        const size_t top = std::max<size_t>(
+            1, static_cast<size_t>(std::ceil(options_.interleaved_top_fraction * paired.size())));
+        seeds.clear();
+        for (size_t i = 0; i < top && i < paired.size(); ++i) seeds.push_back(paired[i].sites);
+      }
+      solution.evaluations += search_cache.counters().variants_predicted;
+    }
+    // The level's optimal set: within the bound and within T of the cheapest (Algorithm 2's rule).
+    std::vector<EvaluatedPair> feasible;
+    for (const EvaluatedPair& pair : pairs)
+      if (pair.within_bound) feasible.push_back(pair);
+    std::stable_sort(feasible.begin(), feasible.end(),
+                     [](const auto& a, const auto& b) { return a.cost < b.cost; });
+    std::vector<EvaluatedPair> optimal;
+    for (const EvaluatedPair& pair : feasible)
+      if (pair.cost - feasible.front().cost <= options.time_tolerance * feasible.front().cost)
+        optimal.push_back(pair);
+    const bool fallback = optimal.empty();
+    if (fallback) {
+      auto record = evaluatePair(level, set_of_level_[level], 0, 0);
+      if (!record) return record.error();
+      optimal.push_back({.mesh = 0, .shader = 0, .error = record->error.epsilon,
+                         .cost = record->cost});
+    }
+    PairSearchResult search;
+    search.visited = pairs;
+    search.optimal = optimal;
+    search.evaluations = static_cast<int>(pairs.size());
+    solution.searches.push_back(std::move(search));
+    solution.shader_orders.emplace_back();
+    solution.level_pairs.push_back(std::move(optimal));
+    solution.fallback_to_original.push_back(fallback);
+  }
+  SeparateProblem whole = problem(LodScope::kJoint);
+  if (auto finished = smoothAndMerge(whole, options, solution); !finished) return finished.error();
+  return solution;
 }
 
 }  // namespace

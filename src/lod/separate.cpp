@@ -76,6 +76,17 @@ core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
     if (options.on_level) options.on_level(level, solution.evaluations);
   }
 
+  if (auto finished = smoothAndMerge(problem, options, solution); !finished)
+    return finished.error();
+  return solution;
+}
+
+core::Status smoothAndMerge(const SeparateProblem& problem, const SeparateOptions& options,
+                            SeparateSolution& solution) {
+  const int level_count = problem.level_count;
+  if (static_cast<int>(solution.level_pairs.size()) != level_count)
+    return core::Error{"smoothest path: one pair set per level needed"};
+  solution.chosen.clear();
   // §6.1, Algorithm 3; without smoothing each level takes its cheapest pair (the baseline the
   // smoothest path is compared with).
   if (options.smooth) {
@@ -107,7 +118,7 @@ core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
       options.merge_min_gain);
   if (!merged) return merged.error();
   solution.merge = std::move(*merged);
-  return solution;
+  return core::okStatus();
 }
 
 }  // namespace duolod::lod

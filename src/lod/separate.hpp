@@ -54,4 +54,10 @@ struct SeparateSolution {
 core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
                                                 const SeparateOptions& options);
 
+// The second half, for optimizers that make the levels' pair sets another way (the interleaved
+// one, §4.3): given solution.level_pairs and fallback_to_original, picks the smoothest path
+// (or the cheapest pairs) and merges inefficient levels.
+core::Status smoothAndMerge(const SeparateProblem& problem, const SeparateOptions& options,
+                            SeparateSolution& solution);
+
 }  // namespace duolod::lod
