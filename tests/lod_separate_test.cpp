@@ -85,6 +85,37 @@ TEST(LodSeparate, OneDimensionalWalkFindsTheBruteForceOptimum) {
   }
 }
 
+TEST(LodSeparate, BisectionFindsTheLinearWalksPairsWithFewerRenders) {
+  // 200 mesh candidates whose error grows linearly, 6 shaders: the bisecting walk must choose what
+  // the linear walk chooses, with O(L log K) instead of O(K + L) evaluations.
+  lod::SeparateProblem problem;
+  problem.level_count = 1;
+  problem.mesh_counts = {200};
+  problem.shader_count = 6;
+  problem.evaluate = [](int, int mesh, int shader) -> core::Result<lod::PairEvaluation> {
+    return lod::PairEvaluation{.error = 0.05 * mesh + 1.5 * shader,
+                               .cost = 400.0 - mesh + 30.0 * (6 - shader)};
+  };
+  problem.transition = [](int, const lod::EvaluatedPair&, const lod::EvaluatedPair&)
+      -> core::Result<double> { return 0.0; };
+  problem.cost_at = [](int, const lod::EvaluatedPair& pair, int) -> core::Result<double> {
+    return 400.0 - pair.mesh + 30.0 * (6 - pair.shader);
+  };
+  for (double bound : {0.5, 3.0, 7.7, 9.99}) {
+    problem.error_bounds = {bound};
+    lod::SeparateOptions options;
+    options.bisect_meshes = false;
+    auto linear = lod::optimizeSeparate(problem, options);
+    options.bisect_meshes = true;
+    auto bisected = lod::optimizeSeparate(problem, options);
+    ASSERT_TRUE(linear.ok() && bisected.ok());
+    EXPECT_EQ(bisected->chosen[0].mesh, linear->chosen[0].mesh) << "bound " << bound;
+    EXPECT_EQ(bisected->chosen[0].shader, linear->chosen[0].shader) << "bound " << bound;
+    EXPECT_LT(bisected->searches[0].evaluations, linear->searches[0].evaluations) << bound;
+    EXPECT_LE(bisected->searches[0].evaluations, 6 * (2 + 8) + 1);  // L·(2 + log2 K)
+  }
+}
+
 TEST(LodSeparate, SmoothingNeverRaisesTheTotalTransitionError) {
   // With a tolerance, each level has several optimal pairs; the smoothest path's total ε_t is at
   // most that of taking each level's cheapest pair.

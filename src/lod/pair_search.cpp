@@ -76,15 +76,37 @@ core::Result<PairSearchResult> searchPairs(int mesh_count, std::span<const int> 
   int mesh = mesh_count - 1;
   int rank = 0;
   const int shader_count = static_cast<int>(shader_order.size());
-  while (mesh >= 0 && rank < shader_count) {
-    auto pair = evaluatePair(evaluate, mesh, rank, shader_order, options.error_bound);
+  auto visit = [&](int at_mesh) -> core::Result<bool> {
+    auto pair = evaluatePair(evaluate, at_mesh, rank, shader_order, options.error_bound);
     if (!pair) return pair.error();
     ++result.evaluations;
     result.visited.push_back(*pair);
-    if (pair->within_bound)
+    return pair->within_bound;
+  };
+  while (mesh >= 0 && rank < shader_count) {
+    auto within = visit(mesh);
+    if (!within) return within.error();
+    if (*within) {
       ++rank;  // the next shader errs more: its boundary mesh is this one or a finer one
-    else
+    } else if (!options.bisect_meshes || mesh == 0) {
       --mesh;
+    } else {
+      // The coarsest feasible mesh in [0, mesh) for this shader: probe M_0 first (if even the
+      // original mesh fails, nothing finer exists and the linear walk would end too), then
+      // bisect, keeping `good` feasible and `bad` infeasible.
+      auto finest = visit(0);
+      if (!finest) return finest.error();
+      if (!*finest) break;
+      int good = 0, bad = mesh;
+      while (bad - good > 1) {
+        int middle = (good + bad) / 2;
+        auto ok = visit(middle);
+        if (!ok) return ok.error();
+        (*ok ? good : bad) = middle;
+      }
+      mesh = good;
+      ++rank;  // (good, rank) was visited and is feasible
+    }
   }
   result.optimal = optimalPairs(result.visited, options.time_tolerance);
   return result;

@@ -43,7 +43,8 @@ core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
 
     // Line 8, SearchPairs (Algorithm 2) or the 2D brute force.
     PairSearchOptions search_options{.error_bound = problem.error_bounds[level],
-                                     .time_tolerance = options.time_tolerance};
+                                     .time_tolerance = options.time_tolerance,
+                                     .bisect_meshes = options.bisect_meshes};
     PairEvaluator evaluate = [&](int mesh, int shader) {
       return problem.evaluate(level, mesh, shader);
     };

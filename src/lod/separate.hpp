@@ -33,6 +33,7 @@ struct SeparateOptions {
   double time_tolerance = 0.05;   // T of Algorithm 2
   double merge_min_gain = 0.04;   // W of §6.2
   bool brute_force = false;       // the 2D search over all K·L pairs instead of Algorithm 2
+  bool bisect_meshes = true;      // PairSearchOptions::bisect_meshes
   bool smooth = true;             // Algorithm 3; off: each level takes its cheapest pair
   // Called as each level's search finishes (level, evaluations so far).
   std::function<void(int, int)> on_level;
