@@ -32,7 +32,7 @@
 #include "shader/cost_model.hpp"
 #include "shader/evaluate.hpp"
 #include "shader/instrument.hpp"
-#include "shader/lod_search.hpp"
+#include "shader/scoring.hpp"
 #include "shader/nsga2.hpp"
 #include "shader/rules.hpp"
 #include "shader/search.hpp"

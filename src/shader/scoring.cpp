@@ -1,0 +1,135 @@
+// Scoring shader variants for one configuration (shader/scoring.hpp).
+#include "shader/scoring.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "shader/cost_model.hpp"
+#include "shader/instrument.hpp"
+
+namespace duolod::shader {
+namespace {
+
+// A few evenly spaced views, centre light only: where the cost model's instrumented run looks
+// (block counts per invocation hardly depend on the view; invocation counts are per draw).
+std::vector<render::Sample> profileSamples(const std::vector<render::Sample>& domain, int views) {
+  int view_count = 0, light_count = 0;
+  for (const render::Sample& sample : domain) {
+    view_count = std::max(view_count, sample.view_index + 1);
+    light_count = std::max(light_count, sample.light_index + 1);
+  }
+  views = std::clamp(views, 1, std::max(1, view_count));
+  std::vector<render::Sample> kept;
+  for (int v = 0; v < views; ++v)
+    kept.push_back(domain[size_t(v * view_count / views) * light_count]);
+  return kept;
+}
+
+float srgbToLinear(float encoded) {
+  return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
+}  // namespace
+
+std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset) {
+  std::map<uint32_t, std::array<float, 4>> averages;
+  if (asset.materials.empty()) return averages;
+  const core::Material& material = asset.materials.front();
+  render::Bindings bindings;  // shaders/INTERFACE.md's texture units
+  const std::pair<int, int> textures[] = {
+      {bindings.base_color, material.base_color_texture},
+      {bindings.metallic_roughness, material.metallic_roughness_texture},
+      {bindings.normal_map, material.normal_texture},
+      {bindings.occlusion, material.occlusion_texture},
+      {bindings.emissive, material.emissive_texture}};
+  for (const auto& [binding, index] : textures) {
+    if (index < 0 || index >= static_cast<int>(asset.textures.size())) continue;
+    const core::Texture& texture = asset.textures[index];
+    const size_t texels = size_t(texture.image.width) * texture.image.height;
+    if (texels == 0) continue;
+    std::array<double, 4> sum{};
+    for (size_t t = 0; t < texels; ++t)
+      for (int c = 0; c < 4; ++c) {
+        float value = texture.image.pixels[t * 4 + c] / 255.0f;
+        sum[c] += texture.srgb && c < 3 ? srgbToLinear(value) : value;
+      }
+    std::array<float, 4> average{};
+    for (int c = 0; c < 4; ++c) average[c] = static_cast<float>(sum[c] / double(texels));
+    averages[static_cast<uint32_t>(binding)] = average;
+  }
+  return averages;
+}
+
+core::Result<Variant> evaluationVariant(const ShaderProgram& program) {
+  auto words = emitProgram(program, /*optimize=*/true);
+  if (!words) return words.error();
+  Variant variant;
+  variant.spirv = {std::move(words->vertex), std::move(words->fragment)};
+  for (const ParameterValue& parameter : program.parameters)
+    variant.uniforms.push_back(
+        {static_cast<int>(parameter.location), parameter.components, parameter.value});
+  return variant;
+}
+
+core::Result<std::unique_ptr<ConfigurationScorer>> ConfigurationScorer::create(
+    render::Renderer& renderer, std::shared_ptr<EvaluationCache> cache,
+    render::Renderer::AssetId asset, const core::Mesh& mesh, const ShaderProgram& original,
+    const EvaluationConfig& config) {
+  auto original_variant = evaluationVariant(original);
+  if (!original_variant) return original_variant.error();
+  auto evaluator = VariantEvaluator::create(std::move(cache), asset, mesh, *original_variant, config);
+  if (!evaluator) return evaluator.error();
+  std::unique_ptr<ConfigurationScorer> scorer(new ConfigurationScorer());
+  scorer->renderer_ = &renderer;
+  scorer->asset_ = asset;
+  scorer->evaluator_ = std::move(*evaluator);
+  std::vector<render::Sample> domain =
+      render::domainSamples(core::computeBoundingSphere(mesh), config.distance, config.domain);
+  scorer->cost_samples_ = profileSamples(domain, config.predicted_views);
+  return scorer;
+}
+
+const core::Result<Variant>& ConfigurationScorer::optimised(const ShaderProgram& program) {
+  uint64_t hash = programHash(program);
+  if (hash != memo_hash_ || !memo_) {
+    memo_hash_ = hash;
+    memo_ = evaluationVariant(program);
+  }
+  return memo_;
+}
+
+VariantScorer ConfigurationScorer::scorer() {
+  VariantScorer scorer;
+  scorer.predicted_cost = [this](const ShaderProgram& program) -> core::Result<double> {
+    // Predicted on the optimised modules: the code that is drawn and timed.
+    const core::Result<Variant>& variant = optimised(program);
+    if (!variant) return variant.error();
+    auto vertex = ir::parseModule(variant->spirv.vertex);
+    if (!vertex) return vertex.error();
+    auto fragment = ir::parseModule(variant->spirv.fragment);
+    if (!fragment) return fragment.error();
+    auto profile = profileBlockCounts(*renderer_, asset_, *vertex, *fragment, cost_samples_,
+                                      evaluator_->footprint());
+    if (!profile) return profile.error();
+    ++cost_profiles_;
+    const double draws = static_cast<double>(cost_samples_.size());
+    CostFeatures features;
+    features.vertex_ops = dynamicOpCounts(*vertex, profile->vertex_executions);
+    features.fragment_ops = dynamicOpCounts(*fragment, profile->fragment_executions);
+    features.vertex_invocations = static_cast<double>(profile->vertex_invocations) / draws;
+    features.fragment_invocations = static_cast<double>(profile->fragment_invocations) / draws;
+    return predictCost(features, calibratedCostWeights());
+  };
+  auto errorOf = [this](const ShaderProgram& program, bool rendered) -> core::Result<double> {
+    const core::Result<Variant>& variant = optimised(program);
+    if (!variant) return variant.error();
+    auto error = rendered ? evaluator_->renderedError(*variant) : evaluator_->predictedError(*variant);
+    if (!error) return error.error();
+    return error->per_pixel;
+  };
+  scorer.predicted_error = [errorOf](const ShaderProgram& program) { return errorOf(program, false); };
+  scorer.rendered_error = [errorOf](const ShaderProgram& program) { return errorOf(program, true); };
+  return scorer;
+}
+
+}  // namespace duolod::shader

@@ -1,0 +1,57 @@
+// Scoring shader variants for one (mesh, distance) configuration (Liang et al. §5.2): the cost
+// model's prediction (instrumented block counts × calibrated weights × the configuration's
+// vertex and fragment invocations) and the evaluator's predicted and rendered eq. (6) errors, as
+// the VariantScorer the searches use. Shared by the shader LOD pipeline and the joint optimizers.
+#pragma once
+
+#include <array>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "duolod/render.hpp"
+#include "shader/evaluate.hpp"
+#include "shader/rules.hpp"
+#include "shader/search.hpp"
+
+namespace duolod::shader {
+
+// The form of a program that is compiled, rendered and timed: both stages emitted with
+// SPIRV-Tools' clean-up passes (dead code a rule leaves behind is gone), its CPU-set parameters
+// as uniforms.
+core::Result<Variant> evaluationVariant(const ShaderProgram& program);
+
+// Average linear RGBA of the textures of the asset's first material, by the sampler binding of
+// shaders/INTERFACE.md: what texture removal substitutes (Olano et al. 2003).
+std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset);
+
+class ConfigurationScorer {
+ public:
+  // `asset` is `mesh` uploaded to `renderer`; renders the original's references for `config`.
+  static core::Result<std::unique_ptr<ConfigurationScorer>> create(
+      render::Renderer& renderer, std::shared_ptr<EvaluationCache> cache,
+      render::Renderer::AssetId asset, const core::Mesh& mesh, const ShaderProgram& original,
+      const EvaluationConfig& config);
+
+  // Scores for the searches; valid while this object lives. Errors are per-pixel (ε / s_d).
+  VariantScorer scorer();
+  VariantEvaluator& evaluator() { return *evaluator_; }
+  int costProfiles() const { return cost_profiles_; }
+  int footprint() const { return evaluator_->footprint(); }
+
+ private:
+  ConfigurationScorer() = default;
+  // The optimised variant of `program`, made once per program (a one-entry memo: the searches
+  // score a program's cost and then its error back to back).
+  const core::Result<Variant>& optimised(const ShaderProgram& program);
+
+  render::Renderer* renderer_ = nullptr;
+  render::Renderer::AssetId asset_ = -1;
+  std::unique_ptr<VariantEvaluator> evaluator_;
+  std::vector<render::Sample> cost_samples_;
+  int cost_profiles_ = 0;
+  uint64_t memo_hash_ = 0;
+  core::Result<Variant> memo_ = core::Error{"nothing scored yet"};
+};
+
+}  // namespace duolod::shader
