@@ -327,9 +327,14 @@ struct GenerateProgress {
 };
 
 struct GenerateOptions {
-  LevelOptions levels;
-  // When levels.bound.d_near / d_far are 0, they are placed where the object's footprint is
-  // near_footprint_px / far_footprint_px pixels on levels.display.
+  // When levels.bound.d_near / d_far are 0 (the default here), they are placed where the object's
+  // footprint is near_footprint_px / far_footprint_px pixels on levels.display.
+  LevelOptions levels = [] {
+    LevelOptions automatic;
+    automatic.bound.d_near = 0;
+    automatic.bound.d_far = 0;
+    return automatic;
+  }();
   int near_footprint_px = 256;
   int far_footprint_px = 16;
   Optimizer optimizer = Optimizer::kSeparate;

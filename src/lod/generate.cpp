@@ -273,9 +273,9 @@ core::Result<Renderer::AssetId> Generator::meshAsset(int set, int mesh) {
 // mesh; the invocation counts, which do, come from each pair's own render).
 core::Status Generator::profile(ShaderCandidate& candidate) {
   if (candidate.profiled) return core::okStatus();
-  auto vertex = ir::parseModule(candidate.variant.spirv.vertex);
+  auto vertex = shader::ir::parseModule(candidate.variant.spirv.vertex);
   if (!vertex) return vertex.error();
-  auto fragment = ir::parseModule(candidate.variant.spirv.fragment);
+  auto fragment = shader::ir::parseModule(candidate.variant.spirv.fragment);
   if (!fragment) return fragment.error();
   const LevelState& level = levels_[levels_.size() / 2];
   std::vector<render::Sample> samples;
@@ -477,9 +477,10 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   for (int set : set_of_level_)
     result.mesh_candidates.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
 
-  SeparateOptions separate{.time_tolerance = options_.time_tolerance,
-                           .merge_min_gain = options_.merge_min_gain,
-                           .brute_force = options_.brute_force};
+  SeparateOptions separate;
+  separate.time_tolerance = options_.time_tolerance;
+  separate.merge_min_gain = options_.merge_min_gain;
+  separate.brute_force = options_.brute_force;
   const bool interleaved = options_.optimizer == Optimizer::kInterleaved;
   auto shader_start = Clock::now();
   if (!interleaved)
@@ -667,16 +668,17 @@ void Generator::fillReport(GenerateResult& result, const SeparateSolution& joint
   for (size_t k = 0; k < result.levels.size(); ++k) {
     const GeneratedLevel& out = result.levels[k];
     const LevelState& level = levels_[out.level.index];
-    ReportLevel row{.index = static_cast<int>(k),
-                    .distance = out.level.distance,
-                    .screen_coverage = out.level.screen_coverage,
-                    .triangles = out.mesh.indices.size() / 3,
-                    .shader_summary = out.shader_summary,
-                    .error = out.error,
-                    .error_bound = out.error_bound,
-                    .transition_error = out.transition_error,
-                    .predicted_cost = out.predicted_cost,
-                    .measured_cost = out.measured_cost};
+    ReportLevel row;
+    row.index = static_cast<int>(k);
+    row.distance = out.level.distance;
+    row.screen_coverage = out.level.screen_coverage;
+    row.triangles = out.mesh.indices.size() / 3;
+    row.shader_summary = out.shader_summary;
+    row.error = out.error;
+    row.error_bound = out.error_bound;
+    row.transition_error = out.transition_error;
+    row.predicted_cost = out.predicted_cost;
+    row.measured_cost = out.measured_cost;
     const int size = std::max(96, level.level.footprint_px);
     row.images.push_back({"mesh", wireframe(out.mesh, level.samples[0], size)});
     if (auto images = renderPair(out.level.index, setFor(out.level.index), out.mesh_candidate,
@@ -685,8 +687,20 @@ void Generator::fillReport(GenerateResult& result, const SeparateSolution& joint
     row.images.push_back({"reference f̄", render::tileImage(level.reference, 0)});
     report.levels.push_back(std::move(row));
   }
-  ReportPlot errors{.title = "Error against distance", .x_label = "distance", .y_label = "ε_a"};
-  ReportSeries bound_series{.name = "bound e_a(d)·s_d"}, error_series{.name = "chosen pair"};
+  auto plot = [](std::string title, std::string y_label) {
+    ReportPlot made;
+    made.title = std::move(title);
+    made.x_label = "distance";
+    made.y_label = std::move(y_label);
+    return made;
+  };
+  auto series = [](std::string name) {
+    ReportSeries made;
+    made.name = std::move(name);
+    return made;
+  };
+  ReportPlot errors = plot("Error against distance", "ε_a");
+  ReportSeries bound_series = series("bound e_a(d)·s_d"), error_series = series("chosen pair");
   for (const LevelState& level : levels_) {
     bound_series.x.push_back(level.level.distance);
     bound_series.y.push_back(level.bound);
@@ -698,23 +712,21 @@ void Generator::fillReport(GenerateResult& result, const SeparateSolution& joint
   errors.series = {bound_series, error_series};
   report.plots.push_back(errors);
 
-  ReportPlot costs{.title = "Cost per draw against distance (" + result.cost_source + ")",
-                   .x_label = "distance",
-                   .y_label = "seconds"};
+  ReportPlot costs = plot("Cost per draw against distance (" + result.cost_source + ")", "seconds");
   auto costSeries = [&](std::string name, const SeparateSolution& solution) {
-    ReportSeries series{.name = std::move(name)};
+    ReportSeries cost_series = series(std::move(name));
     // The pair in use at each distance: the last kept level at or before it.
     size_t kept = 0;
     for (size_t level = 0; level < solution.chosen.size(); ++level) {
       while (kept + 1 < solution.merge.kept_levels.size() &&
              solution.merge.kept_levels[kept + 1] <= static_cast<int>(level))
         ++kept;
-      series.x.push_back(levels_[level].level.distance);
-      series.y.push_back(solution.chosen[solution.merge.kept_levels[kept]].cost);
+      cost_series.x.push_back(levels_[level].level.distance);
+      cost_series.y.push_back(solution.chosen[solution.merge.kept_levels[kept]].cost);
     }
-    return series;
+    return cost_series;
   };
-  ReportSeries no_lod{.name = "no LOD"};
+  ReportSeries no_lod = series("no LOD");
   for (size_t level = 0; level < levels_.size(); ++level)
     if (auto original = evaluatePair(static_cast<int>(level), 0, 0, 0)) {
       no_lod.x.push_back(levels_[level].level.distance);

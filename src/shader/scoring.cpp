@@ -123,7 +123,8 @@ VariantScorer ConfigurationScorer::scorer() {
   auto errorOf = [this](const ShaderProgram& program, bool rendered) -> core::Result<double> {
     const core::Result<Variant>& variant = optimised(program);
     if (!variant) return variant.error();
-    auto error = rendered ? evaluator_->renderedError(*variant) : evaluator_->predictedError(*variant);
+    const Variant& value = variant.value();
+    auto error = rendered ? evaluator_->renderedError(value) : evaluator_->predictedError(value);
     if (!error) return error.error();
     return error->per_pixel;
   };

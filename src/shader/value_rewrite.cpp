@@ -382,7 +382,7 @@ std::string describeComputedValue(const Module& module, const ir::DefUse& uses, 
       return stored_into;
     }
   }
-  return temporary.empty() ? describeValue(module, uses, value) : temporary;
+  return temporary.empty() ? describeOperand(module, uses, value) : temporary;
 }
 
 }  // namespace duolod::shader

@@ -60,7 +60,7 @@ std::vector<ir::Id> candidateValues(const ir::Module& module, const ir::DefUse& 
 int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& sources);
 
 // A readable name for a computed `value` in descriptions: its OpName, else the GLSL variable it is
-// stored into (glslang names variables, not the results stored into them), else describeValue.
+// stored into (glslang names variables, not the results stored into them), else describeOperand (rules.cpp).
 std::string describeComputedValue(const ir::Module& module, const ir::DefUse& uses, ir::Id value);
 
 }  // namespace duolod::shader
