@@ -75,6 +75,7 @@ TEST(LodSeparate, OneDimensionalWalkFindsTheBruteForceOptimum) {
     int walk_evaluations = 0, brute_evaluations = 0;
     lod::SeparateOptions options;
     options.time_tolerance = 0.0;
+    options.bisect_meshes = false;  // the paper's linear walk: at most K + L evaluations
     auto walk = lod::optimizeSeparate(additiveProblem({bound}, &walk_evaluations), options);
     options.brute_force = true;
     auto brute = lod::optimizeSeparate(additiveProblem({bound}, &brute_evaluations), options);
