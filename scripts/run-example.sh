@@ -24,4 +24,8 @@ echo "== duolod simplify: quadric to 25%, measured in geometry and in the image 
 "$duolod" simplify "$asset" "$out/simplified_25.glb" --ratio 0.25 --pixels 128 --force
 echo "== duolod simplify: the paper's image-driven mode at 48 px, to 50% =="
 "$duolod" simplify "$asset" "$out/image_driven_50.glb" --mode image --ratio 0.5 --pixels 48 --force
+echo "== duolod generate: the joint mesh + shader LOD of Spot with the noise/Phong shader (fast settings) =="
+"$duolod" generate "$root/../shared/assets/obj/spot/spot.obj" --shader noise_phong --mesh-mode quadric \
+  --levels 4 --shader-levels 1 --population 6 --generations 2 --candidates 50 \
+  --out "$out/spot_lod" --force
 echo "Results written to $out"
