@@ -707,21 +707,29 @@ namespace {
 
 // Replaces every load of the loose uniform at each value's location by the value as a constant.
 core::Status freezeModule(Module& module, std::span<const ParameterValue> values) {
-  ir::DefUse uses(module);
-  std::map<Id, Id> constant_of_variable;
-  for (const ir::LooseUniform& uniform : ir::looseUniforms(module, uses)) {
-    if (!uniform.location) continue;
-    for (const ParameterValue& value : values) {
-      if (value.location != *uniform.location) continue;
-      if (ir::componentCount(uses, uniform.value_type) != static_cast<uint32_t>(value.components) ||
-          !ir::isFloatScalarOrVector(uses, uniform.value_type))
-        return core::Error{"freezing '" + uniform.name + "' at location " +
-                           std::to_string(value.location) + ": it is not a float" +
-                           (value.components > 1 ? "vec" + std::to_string(value.components) : "")};
-      constant_of_variable[uniform.variable] = module.constantFloatVector(
-          std::span<const float>(value.value.data(), static_cast<size_t>(value.components)));
+  // Check and pair first, add the constants after: adding one may move the module's instructions,
+  // which `uses` points into.
+  std::vector<std::pair<Id, const ParameterValue*>> frozen;
+  {
+    ir::DefUse uses(module);
+    for (const ir::LooseUniform& uniform : ir::looseUniforms(module, uses)) {
+      if (!uniform.location) continue;
+      for (const ParameterValue& value : values) {
+        if (value.location != *uniform.location) continue;
+        if (ir::componentCount(uses, uniform.value_type) !=
+                static_cast<uint32_t>(value.components) ||
+            !ir::isFloatScalarOrVector(uses, uniform.value_type))
+          return core::Error{"freezing '" + uniform.name + "' at location " +
+                             std::to_string(value.location) + ": it is not a float" +
+                             (value.components > 1 ? "vec" + std::to_string(value.components) : "")};
+        frozen.push_back({uniform.variable, &value});
+      }
     }
   }
+  std::map<Id, Id> constant_of_variable;
+  for (const auto& [variable, value] : frozen)
+    constant_of_variable[variable] = module.constantFloatVector(
+        std::span<const float>(value->value.data(), static_cast<size_t>(value->components)));
   std::map<Id, Id> replacement;  // load result -> constant
   for (const ir::Function& function : module.functions)
     for (const ir::Block& block : function.blocks)
