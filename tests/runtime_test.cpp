@@ -52,7 +52,9 @@ constexpr const char* kThreeLevels = R"({
   "levels": [
     {"level": 0, "switch_distance": 0, "screen_coverage": 1, "triangles": 1000, "mesh": "lod0.gltf",
      "shader": {"summary": "original", "files": {"glsl450_frag": "lod0.frag"}}},
-    {"level": 1, "switch_distance": 10, "screen_coverage": 0.04, "triangles": 400, "mesh": "lod1.gltf"},
+    {"level": 1, "switch_distance": 10, "screen_coverage": 0.04, "triangles": 400, "mesh": "lod1.gltf",
+     "shader": {"summary": "noise moved to parameter", "files": {},
+                "parameters": [{"name": "n", "location": 40, "value": [0.5, 0.25, 0.125]}]}},
     {"level": 2, "switch_distance": 20, "screen_coverage": 0.01, "triangles": 50, "mesh": "lod2.gltf"}
   ]})";
 
@@ -72,6 +74,12 @@ TEST(RuntimePolicy, ParsesLevels) {
   EXPECT_EQ(policy.levels[2].mesh, "lod2.gltf");
   EXPECT_EQ(policy.levels[0].shader_summary, "original");
   EXPECT_EQ(policy.levels[0].shader_files.at("glsl450_frag"), "lod0.frag");
+  EXPECT_TRUE(policy.levels[0].shader_parameters.empty());
+  ASSERT_EQ(policy.levels[1].shader_parameters.size(), 1u);
+  const runtime::Level::Parameter& parameter = policy.levels[1].shader_parameters[0];
+  EXPECT_EQ(parameter.name, "n");
+  EXPECT_EQ(parameter.location, 40);
+  EXPECT_EQ(parameter.value, (std::vector<float>{0.5f, 0.25f, 0.125f}));
 }
 
 TEST(RuntimePolicy, BadPoliciesNameTheField) {
@@ -96,6 +104,9 @@ TEST(RuntimePolicy, BadPoliciesNameTheField) {
                {"switch_distance": 0, "screen_coverage": 0.1},
                {"switch_distance": 5, "screen_coverage": 0.5}]})",
             "levels[1].screen_coverage"},
+           {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
+               "screen_coverage": 1, "shader": {"parameters": [{"location": 3, "value": []}]}}]})",
+            "levels[0].shader.parameters"},
            {R"({"format": )", "offset"},
        }) {
     runtime::Policy policy;

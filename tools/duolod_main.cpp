@@ -560,7 +560,7 @@ struct GenerateFlags {
   bool force = false;
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
   lod::GenerateOptions options;
-  bool quiet = false;
+  bool quiet = false, verbose = false;
 
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
@@ -611,25 +611,39 @@ struct GenerateFlags {
     command->add_option("--time-tolerance", options.time_tolerance, "T of Algorithm 2")
         ->capture_default_str();
     command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")->capture_default_str();
+    command->add_option("--bound-margin", options.bound_margin,
+                        "searches aim at (1 - margin) x the error bound, so views and lights "
+                        "outside the training domain stay within it")
+        ->check(CLI::Range(0.0, 0.9))
+        ->capture_default_str();
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
     command->add_flag("--quiet", quiet, "no progress display");
+    command->add_flag("--verbose", verbose,
+                      "log each stage and step with its elapsed time (also when not a terminal)");
   }
 };
 
-// A one-line progress display with the stage, a bar and an ETA; only on a terminal.
+// A one-line progress display with the stage, a bar and an ETA, only on a terminal; and/or a log
+// of stage changes and finished steps with the elapsed time (--verbose, any output).
 class ProgressLine {
  public:
-  explicit ProgressLine(bool enabled) : enabled_(enabled) {}
+  ProgressLine(bool bar, bool log) : bar_(bar), log_(log), start_(Clock::now()) {}
   ~ProgressLine() { finish(); }
   void update(const lod::GenerateProgress& progress) {
-    if (!enabled_) return;
-    auto now = std::chrono::steady_clock::now();
+    if (!bar_ && !log_) return;
+    auto now = Clock::now();
     if (progress.stage != stage_) {
       finish();
       stage_ = std::string(progress.stage);
       stage_start_ = now;
+      if (log_) logLine(now, "stage: " + stage_);
     }
+    if (log_ && !progress.detail.empty()) {
+      finish();
+      logLine(now, std::string(progress.detail));
+    }
+    if (!bar_) return;
     double elapsed = std::chrono::duration<double>(now - stage_start_).count();
     double fraction = std::clamp(progress.fraction, 0.0, 1.0);
     int filled = static_cast<int>(fraction * 30);
@@ -648,10 +662,16 @@ class ProgressLine {
   }
 
  private:
-  bool enabled_;
+  using Clock = std::chrono::steady_clock;
+  void logLine(Clock::time_point now, const std::string& text) {
+    std::fprintf(stderr, "[%7.1f s] %s\n", std::chrono::duration<double>(now - start_).count(),
+                 text.c_str());
+    std::fflush(stderr);
+  }
+  bool bar_, log_;
   bool shown_ = false;
   std::string stage_;
-  std::chrono::steady_clock::time_point stage_start_;
+  Clock::time_point start_, stage_start_;
 };
 
 int runGenerate(GenerateFlags& flags) {
@@ -677,7 +697,7 @@ int runGenerate(GenerateFlags& flags) {
   if (fs::exists(flags.out, ec) && !flags.force &&
       (!fs::is_directory(flags.out, ec) || !fs::is_empty(flags.out, ec)))
     return fail(flags.out + ": exists and is not an empty folder (use --force to write into it)");
-  ProgressLine line(!flags.quiet && isatty(fileno(stderr)));
+  ProgressLine line(!flags.quiet && !flags.verbose && isatty(fileno(stderr)), flags.verbose);
   options.progress = [&](const lod::GenerateProgress& progress) { line.update(progress); };
   std::printf("generate  %s: %zu triangles, shader %s + %s\n", flags.in.c_str(),
               asset->mesh.triangleCount(), source->vertex_name.c_str(),

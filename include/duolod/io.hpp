@@ -58,6 +58,14 @@ struct LodJsonLevel {
   std::string mesh_file;
   std::string shader_summary;   // in words
   std::vector<std::pair<std::string, std::string>> shader_files;  // kind -> file name
+  // Uniforms the CPU sets for this level's shader (moving to parameter, He et al. 2015): a
+  // default-block uniform at `location` with value.size() components (float .. vec4).
+  struct Parameter {
+    std::string name;
+    int location = 0;
+    std::vector<float> value;
+  };
+  std::vector<Parameter> shader_parameters;
   double error = 0, error_bound = 0;        // ε_a and e_a(d_i)·s_d (eq. 3)
   std::optional<double> transition_error;   // ε_t to the next level (eq. 5); none for the last
   std::optional<double> predicted_cost, measured_cost;

@@ -129,6 +129,12 @@ struct ImageSimplifyOptions {
   bool allow_material_border_collapse = false;
   bool record = true;
   size_t refine_batch = 32;  // candidates priced by rendering per batch
+  // Start from this simplification of asset.mesh instead of asset.mesh itself (the reference is
+  // still the original asset): lets a farther level continue from a nearer level's result.
+  const core::Mesh* start = nullptr;
+  // f̄ already rendered for this distance (render::domainSamples of the original's bounding
+  // sphere, the footprint of `display`, `supersample`): saves rendering it again.
+  const render::ImageBatchF* reference = nullptr;
 };
 
 struct ImageSimplifyStats {

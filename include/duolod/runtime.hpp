@@ -11,7 +11,9 @@
 //   { "format": "duolod-lod", "version": 1,
 //     "levels": [ { "level": 0, "switch_distance": 0, "screen_coverage": 1,
 //                   "triangles": 4510, "mesh": "lod0.gltf",
-//                   "shader": { "summary": "...", "files": { "glsl450_frag": "..." } } }, ... ] }
+//                   "shader": { "summary": "...", "files": { "glsl450_frag": "..." },
+//                               "parameters": [ { "name": "n", "location": 40,
+//                                                 "value": [0.5, 0.2, 0.1] } ] } }, ... ] }
 // switch_distance increases and screen_coverage decreases from level to level. Other fields
 // (errors, costs, the asset, display and bound) are for tools and people; they are skipped.
 //
@@ -289,6 +291,14 @@ struct Level {
   std::string shader_summary;  // in words
   std::map<std::string, std::string>
       shader_files;  // kind ("spirv_frag", "glsl450_frag", ...) → file
+  // Uniforms to set before drawing with this level's shader (values averaged over the training
+  // domain when the shader was simplified: "moving to parameter").
+  struct Parameter {
+    std::string name;
+    int location = 0;
+    std::vector<float> value;  // 1..4 components
+  };
+  std::vector<Parameter> shader_parameters;
 };
 
 struct Policy {
@@ -336,6 +346,21 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
         level.shader_summary = summary->string();
       if (const JsonValue* files = shader->find("files"))
         for (const auto& [kind, file] : files->members()) level.shader_files[kind] = file.string();
+      if (const JsonValue* parameters = shader->find("parameters")) {
+        for (const JsonValue& item : parameters->items()) {
+          Level::Parameter parameter;
+          if (const JsonValue* name = item.find("name")) parameter.name = name->string();
+          const JsonValue* location = item.find("location");
+          const JsonValue* value = item.find("value");
+          if (!location || !location->isNumber() || !value || !value->isArray() ||
+              value->items().empty() || value->items().size() > 4)
+            return fail(where + ".shader.parameters: each needs a location and 1-4 values");
+          parameter.location = static_cast<int>(location->number());
+          for (const JsonValue& component : value->items())
+            parameter.value.push_back(static_cast<float>(component.number()));
+          level.shader_parameters.push_back(std::move(parameter));
+        }
+      }
     }
     if (!parsed.levels.empty()) {
       const Level& previous = parsed.levels.back();

@@ -40,6 +40,10 @@ std::string lodJsonText(const LodJsonDocument& document) {
   for (const LodJsonLevel& level : document.levels) {
     ordered_json files = ordered_json::object();
     for (const auto& [kind, file] : level.shader_files) files[kind] = file;
+    ordered_json parameters = ordered_json::array();
+    for (const LodJsonLevel::Parameter& parameter : level.shader_parameters)
+      parameters.push_back(
+          {{"name", parameter.name}, {"location", parameter.location}, {"value", parameter.value}});
     levels.push_back({
         {"level", level.level},
         {"distance", level.distance},
@@ -48,7 +52,8 @@ std::string lodJsonText(const LodJsonDocument& document) {
         {"triangles", level.triangles},
         {"vertices", level.vertices},
         {"mesh", level.mesh_file},
-        {"shader", {{"summary", level.shader_summary}, {"files", files}}},
+        {"shader",
+         {{"summary", level.shader_summary}, {"files", files}, {"parameters", parameters}}},
         {"error",
          {{"absolute", level.error},
           {"bound", level.error_bound},

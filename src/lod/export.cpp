@@ -133,6 +133,14 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
     row.mesh_file = "lod.gltf#node" + std::to_string(k);
     row.shader_summary = level.shader_summary;
     row.shader_files = std::move(*files);
+    for (size_t i = 0; i < level.parameters.size(); ++i) {
+      const render::UniformValue& value = level.parameters[i];
+      row.shader_parameters.push_back(
+          {.name = i < level.parameter_names.size() ? level.parameter_names[i]
+                                                    : "parameter" + std::to_string(value.location),
+           .location = value.location,
+           .value = std::vector<float>(value.value.begin(), value.value.begin() + value.components)});
+    }
     row.error = level.error;
     row.error_bound = level.error_bound;
     if (k + 1 < result.levels.size()) row.transition_error = level.transition_error;

@@ -36,6 +36,7 @@
 #include "shader/nsga2.hpp"
 #include "shader/rules.hpp"
 #include "shader/search.hpp"
+#include "shader/summary.hpp"
 
 namespace duolod::lod {
 namespace {
@@ -67,6 +68,7 @@ struct LevelState {
   render::ImageBatchF reference;  // f̄(M_0, S_0, d_i)
   double coverage_px = 0;         // s_d, measured on the reference
   double bound = 0;               // e_a(d_i)·s_d
+  double search_bound = 0;        // what the searches aim at: bound × (1 − bound_margin)
 };
 
 // The candidates of one level's mesh set; index 0 is the original. Uploaded on first use.
@@ -98,7 +100,7 @@ class Generator {
 
  private:
   void progress(std::string_view stage, double fraction) const {
-    if (options_.progress) options_.progress({stage, fraction});
+    if (options_.progress) options_.progress({stage, fraction, {}});
   }
   core::Status setUp(const render::GlslSource& source);
   core::Status makeLevels();
@@ -215,9 +217,23 @@ core::Status Generator::makeLevels() {
     // s_d of eq. (3): the reference's covered pixels (the error of f̄ against itself is 0).
     state.coverage_px = metric::imageError(state.reference, state.reference).coverage_px;
     state.bound = errorBound(state.level, state.coverage_px);
+    state.search_bound = state.bound * (1.0 - std::clamp(options_.bound_margin, 0.0, 0.9));
     levels_.push_back(std::move(state));
   }
   return core::okStatus();
+}
+
+// Keeps at most `limit` of the set's meshes, evenly by index, always the first and the last.
+void thinEvenly(MeshSet& set, size_t limit) {
+  const size_t count = set.meshes.size();
+  if (limit < 2 || count <= limit) return;
+  MeshSet thinned;
+  for (size_t i = 0; i < limit; ++i) {
+    size_t index = i * (count - 1) / (limit - 1);
+    thinned.meshes.push_back(std::move(set.meshes[index]));
+    thinned.errors.push_back(set.errors[index]);
+  }
+  set = std::move(thinned);
 }
 
 core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
@@ -244,17 +260,64 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     for (int level = 1; level < level_count; ++level) set_of_level_[level] = set;
     return core::okStatus();
   }
+  // Levels in order of distance, each continuing from the previous level's coarsest mesh: the
+  // bounds grow with distance, so a farther level's image-driven run (§5.1) would first redo the
+  // nearer level's collapses. Continuing makes the whole cascade cost about one simplification of
+  // the input instead of one per level. The finer meshes a farther level then lacks are the
+  // nearer level's candidates (simplified against a nearer reference, so if anything more
+  // conservative); the set keeps them so a costlier shader can still pair with a finer mesh.
+  int previous_set = -1;  // an index: addSet may move the sets
+  int previous_level = 0;
   for (int level = 1; level < level_count; ++level) {
     progress("mesh candidates", double(level - 1) / std::max(1, level_count - 1));
-    mesh::ImageSimplifyOptions image{.target_error = levels_[level].bound,
+    mesh::ImageSimplifyOptions image{.target_error = levels_[level].search_bound,
                                      .distance = float(levels_[level].level.distance),
                                      .display = options_.levels.display,
                                      .supersample = options_.supersample};
-    auto simplified = mesh::simplifyImage(*renderer_, asset_, source, image);
+    image.start = previous_set >= 0 ? &mesh_sets_[previous_set].meshes.back() : nullptr;
+    image.reference = &levels_[level].reference;
+    mesh::ImageSimplifyStats stats;
+    auto simplified = mesh::simplifyImage(*renderer_, asset_, source, image, &stats);
     if (!simplified)
       return core::Error{"mesh candidates at level " + std::to_string(level) + ": " +
                          simplified.error().message};
-    set_of_level_[level] = addSet(simplified->record);
+    const int own = addSet(simplified->record);
+    if (previous_set >= 0) {
+      const MeshSet& carried = mesh_sets_[previous_set];
+      // Carried meshes first (finer), then this level's own after its start mesh. Their errors
+      // were measured nearer, summed over more covered pixels: scaled to this level's coverage
+      // (the per-pixel error is what carries over), and none above this level's start (they
+      // are finer).
+      MeshSet& set = mesh_sets_[own];
+      MeshSet combined;
+      combined.meshes = carried.meshes;
+      const double coverage_scale =
+          levels_[level].coverage_px / std::max(1e-9, levels_[previous_level].coverage_px);
+      for (double error : carried.errors)
+        combined.errors.push_back(std::min(error * coverage_scale, stats.initial_error));
+      combined.meshes.pop_back();  // == this level's start, set.meshes[0]
+      combined.errors.pop_back();
+      for (size_t k = 0; k < set.meshes.size(); ++k) {
+        combined.meshes.push_back(std::move(set.meshes[k]));
+        combined.errors.push_back(k == 0 ? stats.initial_error : set.errors[k]);
+      }
+      thinEvenly(combined, options_.mesh_candidates);
+      combined.uploaded.assign(combined.meshes.size(), -1);
+      set = std::move(combined);
+    }
+    set_of_level_[level] = own;
+    previous_set = own;
+    previous_level = level;
+    if (options_.progress) {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "mesh level %d (%d px): %zu -> %zu triangles, eps %.2f (aim %.2f), %zu "
+                    "renders, %.1f s",
+                    level, stats.footprint_px, simplified->record.base.triangleCount(),
+                    simplified->mesh.triangleCount(), stats.final_error, levels_[level].search_bound,
+                    stats.rendered_evaluations, stats.total_seconds);
+      options_.progress({"mesh candidates", double(level) / std::max(1, level_count - 1), line});
+    }
   }
   return core::okStatus();
 }
@@ -323,6 +386,9 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
   auto images = renderPair(distance_level, set, mesh, shader, &work);
   if (!images) return images.error();
   ++pair_evaluations_;
+  // Kept: the transition error (eq. 5) compares pairs at these very distances (a few MB each;
+  // the renders are what costs).
+  auto kept = images_.emplace(key, std::move(*images)).first;
   ShaderCandidate& candidate = shaders_[shader];
   if (auto profiled = profile(candidate); !profiled) return profiled.error();
   const LevelState& level = levels_[distance_level];
@@ -332,7 +398,7 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
       .fragment_ops = candidate.fragment_ops,
       .vertex_invocations = static_cast<double>(work.vertex_invocations) / draws,
       .fragment_invocations = static_cast<double>(work.fragment_invocations) / draws};
-  PairRecord record{.error = metric::imageError(*images, level.reference),
+  PairRecord record{.error = metric::imageError(kept->second, level.reference),
                     .cost = shader::predictCost(features, shader::calibratedCostWeights())};
   pairs_.emplace(key, record);
   return record;
@@ -365,7 +431,7 @@ SeparateProblem Generator::problem(LodScope scope) {
   SeparateProblem problem;
   problem.level_count = static_cast<int>(levels_.size());
   for (int level = 0; level < problem.level_count; ++level) {
-    problem.error_bounds.push_back(levels_[level].bound);
+    problem.error_bounds.push_back(levels_[level].search_bound);
     int set = scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
     problem.mesh_counts.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
   }
@@ -420,7 +486,8 @@ core::Status Generator::makeShaderCandidates() {
     std::vector<int> meshes;
     for (int mesh = static_cast<int>(mesh_set.meshes.size()) - 1;
          mesh >= 0 && static_cast<int>(meshes.size()) < options_.shader_search_meshes; --mesh)
-      if (mesh == 0 || mesh_set.errors[mesh] <= 0.5 * levels_[level].bound) meshes.push_back(mesh);
+      if (mesh == 0 || mesh_set.errors[mesh] <= 0.5 * levels_[level].search_bound)
+        meshes.push_back(mesh);
     for (int mesh : meshes) {
       progress("shader candidates", double(configuration++) / std::max(1, configurations));
       auto asset = meshAsset(set, mesh);
@@ -439,8 +506,21 @@ core::Status Generator::makeShaderCandidates() {
       genetic.seed = options_.seed + static_cast<uint64_t>(configuration);
       // Variants erring far beyond the largest bound can never be chosen.
       genetic.max_error = 4.0 * options_.levels.bound.e_max;
+      auto config_start = Clock::now();
       auto searched = shader::searchGenetic(search_cache, genetic);
       if (!searched) return searched.error();
+      if (options_.progress) {
+        const shader::EvaluationCache::Counters& compiled = cache_->counters();
+        char line[240];
+        std::snprintf(line, sizeof line,
+                      "shader search level %d (mesh %d): %zu variants on the front; so far %d "
+                      "programs compiled in %.1f s, %d cost profiles; %.1f s",
+                      level, mesh, searched->variants.size(), compiled.programs_compiled,
+                      compiled.compile_seconds, (*scoring)->costProfiles(),
+                      secondsSince(config_start));
+        options_.progress({"shader candidates", double(configuration) / std::max(1, configurations),
+                           line});
+      }
       for (shader::SearchVariant& variant : searched->variants)
         if (seen.insert(shader::programHash(*variant.program)).second)
           found.push_back(std::move(variant));
@@ -453,7 +533,7 @@ core::Status Generator::makeShaderCandidates() {
   const size_t keep = std::min(found.size(), size_t(std::max(0, options_.max_shader_candidates - 1)));
   for (size_t i = 0; i < keep; ++i) {
     size_t index = keep == found.size() ? i : i * (found.size() - 1) / std::max<size_t>(1, keep - 1);
-    auto candidate = candidateFrom(found[index].program, shader::describeSites(found[index].sites));
+    auto candidate = candidateFrom(found[index].program, shader::summarizeSites(found[index].sites));
     if (!candidate) return candidate.error();
     shaders_.push_back(std::move(*candidate));
   }
@@ -488,20 +568,43 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   result.timings.shader_seconds = secondsSince(shader_start);
 
   auto optimization_start = Clock::now();
-  separate.on_level = [&](int level, int) {
-    progress("pair search", double(level + 1) / levels_.size());
+  auto level_start = Clock::now();
+  int level_renders = pair_evaluations_;
+  separate.on_level = [&](int level, int evaluations) {
+    char line[160];
+    std::snprintf(line, sizeof line, "pairs level %d: %d evaluations so far, %d new renders, %.1f s",
+                  level, evaluations, pair_evaluations_ - level_renders, secondsSince(level_start));
+    level_start = Clock::now();
+    level_renders = pair_evaluations_;
+    if (options_.progress)
+      options_.progress({"pair search", double(level + 1) / levels_.size(), line});
   };
   auto joint = interleaved ? runInterleaved(separate)
                            : optimizeSeparate(problem(options_.scope), separate);
   if (!joint) return joint.error();
+  auto logStep = [&](const char* what, Clock::time_point since, int renders_before,
+                     int transitions_before) {
+    if (!options_.progress) return;
+    char line[200];
+    std::snprintf(line, sizeof line, "%s: %d pair renders, %d transitions, %.1f s", what,
+                  pair_evaluations_ - renders_before, transition_evaluations_ - transitions_before,
+                  secondsSince(since));
+    options_.progress({"smoothing and merging", 1.0, line});
+  };
+  logStep(interleaved ? "interleaved optimization" : "separate optimization (with smoothing, merging)",
+          optimization_start, 0, 0);
   result.shader_candidates = static_cast<int>(shaders_.size());
   // The baselines with the same thresholds, on the same cached renders (report plots).
   std::map<LodScope, SeparateSolution> baselines;
   if (options_.scope == LodScope::kJoint) {
     separate.on_level = nullptr;
     for (LodScope scope : {LodScope::kMeshOnly, LodScope::kShaderOnly}) {
+      const auto baseline_start = Clock::now();
+      const int renders_before = pair_evaluations_, transitions_before = transition_evaluations_;
       auto baseline = optimizeSeparate(problem(scope), separate);
       if (!baseline) return baseline.error();
+      logStep(scope == LodScope::kMeshOnly ? "mesh-only baseline" : "shader-only baseline",
+              baseline_start, renders_before, transitions_before);
       baselines.emplace(scope, std::move(*baseline));
     }
   }
@@ -872,7 +975,7 @@ core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& 
           if (known != candidate_of_hash.end()) {
             shader_index = known->second;
           } else {
-            auto added = addShaderCandidate(child.program, shader::describeSites(child.sites));
+            auto added = addShaderCandidate(child.program, shader::summarizeSites(child.sites));
             if (!added) return added.error();
             shader_index = *added;
             candidate_of_hash.emplace(hash, shader_index);

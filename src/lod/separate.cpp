@@ -29,6 +29,26 @@ core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
 
   // Algorithm 1, lines 5–10.
   for (int level = 0; level < level_count; ++level) {
+    // A bound of 0 (d_near, eq. 4) admits no pair (eq. 3 is strict; errors are never negative),
+    // so the search is skipped: at d_near it would render every shader at the largest footprint
+    // for nothing. The original is kept, flagged, as when a search finds nothing.
+    if (problem.error_bounds[level] <= 0) {
+      auto original = problem.evaluate(level, 0, 0);
+      if (!original) return original.error();
+      ++solution.evaluations;
+      const bool within = original->error < problem.error_bounds[level];  // eq. (3): never
+      solution.shader_orders.emplace_back(1, 0);
+      solution.searches.emplace_back();
+      solution.level_pairs.push_back({EvaluatedPair{.mesh = 0,
+                                                    .shader = 0,
+                                                    .shader_rank = 0,
+                                                    .error = original->error,
+                                                    .cost = original->cost,
+                                                    .within_bound = within}});
+      solution.fallback_to_original.push_back(!within);
+      if (options.on_level) options.on_level(level, solution.evaluations);
+      continue;
+    }
     // Line 6, SortByError: every shader on the original mesh at d_i.
     std::vector<double> errors(problem.shader_count);
     for (int shader = 0; shader < problem.shader_count; ++shader) {

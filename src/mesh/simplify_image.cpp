@@ -19,7 +19,7 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   auto start = std::chrono::steady_clock::now();
   if (!(options.distance > 0)) return Error{"image-driven simplification needs a distance > 0"};
   core::Asset prepared_asset = asset;
-  prepared_asset.mesh = prepareMesh(asset.mesh);
+  prepared_asset.mesh = prepareMesh(options.start ? *options.start : asset.mesh);
   if (prepared_asset.mesh.triangleCount() == 0) return Error{"the mesh has no valid triangles"};
 
   auto program = renderer.compileProgram(shader);
@@ -35,13 +35,23 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
   const int resolution = render::footprintPixels(sphere, options.distance, options.display);
   std::vector<render::Sample> samples = render::domainSamples(sphere, options.distance);
-  auto reference = renderer.renderReference(*original_id, *program, samples,
-                                            {.resolution = resolution,
-                                             .supersample = options.supersample});
-  if (!reference) return reference.error();
+  core::Result<render::ImageBatchF> reference = render::ImageBatchF{};
+  if (options.reference) {
+    if (options.reference->count != int(samples.size()) || options.reference->width != resolution)
+      return Error{"image-driven simplification: the given reference does not match the domain (" +
+                   std::to_string(options.reference->count) + " samples of " +
+                   std::to_string(options.reference->width) + " px, expected " +
+                   std::to_string(samples.size()) + " of " + std::to_string(resolution) + ")"};
+  } else {
+    reference = renderer.renderReference(*original_id, *program, samples,
+                                         {.resolution = resolution,
+                                          .supersample = options.supersample});
+    if (!reference) return reference.error();
+  }
+  const render::ImageBatchF& reference_images = options.reference ? *options.reference : *reference;
   auto current = renderer.render(*prepared_id, *program, samples, {.resolution = resolution});
   if (!current) return current.error();
-  const double initial_error = metric::imageError(*current, *reference).epsilon;
+  const double initial_error = metric::imageError(*current, reference_images).epsilon;
   double reference_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -56,7 +66,7 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   setup.tile_size = options.tile_size;
   setup.max_edge_pixels = options.max_edge_pixels;
   setup.refine_batch = options.refine_batch;
-  setup.reference = &reference.value();
+  setup.reference = &reference_images;
   setup.current = std::move(current.value());
   for (const core::Submesh& sub : prepared_asset.mesh.submeshes)
     setup.group_material.push_back(sub.material);
@@ -85,10 +95,10 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
     auto image = renderer.render(*simplified_id, *program, samples, {.resolution = resolution});
     renderer.releaseAsset(*simplified_id);
     if (!image) return image.error();
-    final_error = metric::imageError(*image, *reference).epsilon;
+    final_error = metric::imageError(*image, reference_images).epsilon;
     if (std::getenv("DUOLOD_DEBUG")) {
       double tracked = model.currentError();
-      double from_images = metric::imageError(model.currentImages(), *reference).epsilon;
+      double from_images = metric::imageError(model.currentImages(), reference_images).epsilon;
       double images_vs_truth = metric::imageError(model.currentImages(), *image).epsilon;
       std::fprintf(stderr,
                    "image model: tracked error %.4f, of its images %.4f, true %.4f; its images "
