@@ -45,6 +45,12 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using render::Renderer;
 
+std::string shortNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -282,6 +288,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
       return core::Error{"mesh candidates at level " + std::to_string(level) + ": " +
                          simplified.error().message};
     const int own = addSet(simplified->record);
+    mesh_sets_[own].errors[0] = stats.initial_error;  // the start mesh's own ε at this distance
     if (previous_set >= 0) {
       const MeshSet& carried = mesh_sets_[previous_set];
       // Carried meshes first (finer), then this level's own after its start mesh. Their errors
@@ -482,12 +489,13 @@ core::Status Generator::makeShaderCandidates() {
   for (int level : search_levels) {
     const int set = set_of_level_[level];
     const MeshSet& mesh_set = mesh_sets_[set];
-    // The top meshes: the coarsest candidates whose own error is at most half the bound.
+    // The top meshes: the coarsest candidates that use at most half of what the bound leaves
+    // above the original mesh's own error (its aliasing against f̄ already takes part of it).
+    const double room = mesh_set.errors[0] + 0.5 * (levels_[level].search_bound - mesh_set.errors[0]);
     std::vector<int> meshes;
     for (int mesh = static_cast<int>(mesh_set.meshes.size()) - 1;
          mesh >= 0 && static_cast<int>(meshes.size()) < options_.shader_search_meshes; --mesh)
-      if (mesh == 0 || mesh_set.errors[mesh] <= 0.5 * levels_[level].search_bound)
-        meshes.push_back(mesh);
+      if (mesh == 0 || mesh_set.errors[mesh] <= room) meshes.push_back(mesh);
     for (int mesh : meshes) {
       progress("shader candidates", double(configuration++) / std::max(1, configurations));
       auto asset = meshAsset(set, mesh);
@@ -756,10 +764,10 @@ void Generator::fillReport(GenerateResult& result, const SeparateSolution& joint
       {"triangles", std::to_string(asset_.mesh.indices.size() / 3)},
       {"device", result.device},
       {"display", std::to_string(options_.levels.display.height_px) + " px high, FOV " +
-                      std::to_string(options_.levels.display.fov_y_deg) + "°"},
-      {"bound (eq. 4)", "d_near " + std::to_string(bound.d_near) + ", d_far " +
-                            std::to_string(bound.d_far) + ", Q " + std::to_string(bound.q) +
-                            ", e_max " + std::to_string(bound.e_max)},
+                      shortNumber(options_.levels.display.fov_y_deg) + "°"},
+      {"bound (eq. 4)", "d_near " + shortNumber(bound.d_near) + ", d_far " +
+                            shortNumber(bound.d_far) + ", Q " + shortNumber(bound.q) +
+                            ", e_max " + shortNumber(bound.e_max)},
       {"levels", std::to_string(levels_.size()) + " → " + std::to_string(result.levels.size()) +
                      " after merging (W = " + std::to_string(options_.merge_min_gain) + ")"},
       {"candidates", std::to_string(shaders_.size()) + " shaders; meshes per level up to " +

@@ -123,10 +123,16 @@ void appendLevels(std::string& html, const ReportData& data) {
             " triangles</h3>\n<p>Shader: " + escaped(level.shader_summary) + "</p>\n";
     for (const ReportImage& image : level.images) {
       if (image.image.pixels.empty()) continue;
+      // Far levels render a few dozen pixels: shown magnified (pixelated, see the style) so
+      // their error is visible; the caption keeps the true size.
+      const int scale = std::max(1, 128 / std::max(1, image.image.width));
       html += "<figure><img alt=\"" + escaped(image.caption) + "\" width=\"" +
-              std::to_string(image.image.width) + "\" height=\"" +
-              std::to_string(image.image.height) + "\" src=\"data:image/png;base64," +
+              std::to_string(image.image.width * scale) + "\" height=\"" +
+              std::to_string(image.image.height * scale) + "\" src=\"data:image/png;base64," +
               base64(io::encodePng(image.image)) + "\"><figcaption>" + escaped(image.caption) +
+              (scale > 1 ? " (" + std::to_string(image.image.width) + " px, ×" +
+                               std::to_string(scale) + ")"
+                         : std::string()) +
               "</figcaption></figure>\n";
     }
     html += "</div>\n";
