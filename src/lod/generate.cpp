@@ -874,7 +874,7 @@ core::Result<int> Generator::addShaderCandidate(
 // over the candidates (their error grows with simplification); -1 when not even M_0 does.
 core::Result<int> Generator::coarsestMeshWithin(int level, int shader) {
   const int set = set_of_level_[level];
-  const double bound = levels_[level].bound;
+  const double bound = levels_[level].search_bound;
   auto within = [&](int mesh) -> core::Result<bool> {
     auto record = evaluatePair(level, set, mesh, shader);
     if (!record) return record.error();
@@ -914,7 +914,7 @@ core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& 
                        .shader = shader,
                        .error = record->error.epsilon,
                        .cost = record->cost,
-                       .within_bound = record->error.epsilon < levels_[level].bound});
+                       .within_bound = record->error.epsilon < levels_[level].search_bound});
       return core::okStatus();
     };
     auto original_mesh = coarsestMeshWithin(level, 0);
