@@ -244,12 +244,15 @@ void thinEvenly(MeshSet& set, size_t limit) {
 
 core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
   const int level_count = static_cast<int>(levels_.size());
-  auto addSet = [&](const mesh::ProgressiveRecord& record) {
+  auto addSet = [&](const mesh::ProgressiveRecord& record, bool from_original) {
     std::vector<size_t> steps = mesh::chooseCandidates(record, options_.mesh_candidates);
     MeshSet set;
     set.meshes = mesh::extractMeshes(record, steps);
     for (size_t step : steps)
       set.errors.push_back(step == 0 ? 0.0 : record.steps[step - 1].cumulative_error);
+    // A record of the original starts with its cleaned (welded) copy: M_0 is the original itself
+    // (every set's M_0 is rendered once, as set 0's).
+    if (from_original && !steps.empty() && steps.front() == 0) set.meshes.front() = asset_.mesh;
     set.uploaded.assign(set.meshes.size(), -1);
     mesh_sets_.push_back(std::move(set));
     return static_cast<int>(mesh_sets_.size()) - 1;
@@ -262,7 +265,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
   if (options_.mesh_mode == MeshCandidateMode::kQuadric) {
     mesh::SimplifyOptions quadric{.target_triangles = 4, .record = true};
     mesh::SimplifyResult simplified = mesh::simplifyQuadric(asset_.mesh, quadric);
-    int set = addSet(simplified.record);
+    int set = addSet(simplified.record, /*from_original=*/true);
     for (int level = 1; level < level_count; ++level) set_of_level_[level] = set;
     return core::okStatus();
   }
@@ -287,7 +290,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     if (!simplified)
       return core::Error{"mesh candidates at level " + std::to_string(level) + ": " +
                          simplified.error().message};
-    const int own = addSet(simplified->record);
+    const int own = addSet(simplified->record, /*from_original=*/previous_set < 0);
     mesh_sets_[own].errors[0] = stats.initial_error;  // the start mesh's own ε at this distance
     if (previous_set >= 0) {
       const MeshSet& carried = mesh_sets_[previous_set];
@@ -330,6 +333,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
 }
 
 core::Result<Renderer::AssetId> Generator::meshAsset(int set, int mesh) {
+  if (mesh == 0) set = 0;  // the original (set 0 holds it alone)
   MeshSet& mesh_set = mesh_sets_[set];
   if (mesh_set.uploaded[mesh] >= 0) return mesh_set.uploaded[mesh];
   auto uploaded = renderer_->uploadMesh(original_asset_, mesh_set.meshes[mesh]);
@@ -387,6 +391,7 @@ core::Result<render::ImageBatch8> Generator::renderPairOn(std::span<const render
 
 core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, int mesh,
                                                  int shader) {
+  if (mesh == 0) set = 0;  // M_0 is the original in every set: one render serves them all
   auto key = std::make_tuple(distance_level, set, mesh, shader);
   if (auto found = pairs_.find(key); found != pairs_.end()) return found->second;
   render::WorkCounts work;
@@ -417,6 +422,7 @@ core::Result<double> Generator::transitionError(int level, int from_set,
                                                 const EvaluatedPair& to) {
   const int at = level + 1;
   auto imageOf = [&](int set, const EvaluatedPair& pair) -> core::Result<const render::ImageBatch8*> {
+    if (pair.mesh == 0) set = 0;  // as in evaluatePair
     auto key = std::make_tuple(at, set, pair.mesh, pair.shader);
     auto found = images_.find(key);
     if (found == images_.end()) {
