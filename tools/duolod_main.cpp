@@ -561,6 +561,7 @@ struct GenerateFlags {
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
   lod::GenerateOptions options;
   bool quiet = false, verbose = false;
+  int jobs = 0;
 
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
@@ -619,6 +620,11 @@ struct GenerateFlags {
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
     command->add_flag("--quiet", quiet, "no progress display");
+    command->add_option("--jobs", jobs,
+                        "threads the renderer may use (Mesa llvmpipe's LP_NUM_THREADS; 0 = one "
+                        "per core, its default)")
+        ->check(CLI::Range(0, 64))
+        ->capture_default_str();
     command->add_flag("--verbose", verbose,
                       "log each stage and step with its elapsed time (also when not a terminal)");
   }
@@ -697,6 +703,8 @@ int runGenerate(GenerateFlags& flags) {
   if (fs::exists(flags.out, ec) && !flags.force &&
       (!fs::is_directory(flags.out, ec) || !fs::is_empty(flags.out, ec)))
     return fail(flags.out + ": exists and is not an empty folder (use --force to write into it)");
+  // llvmpipe reads LP_NUM_THREADS when the context is created (generateLod creates it).
+  if (flags.jobs > 0) setenv("LP_NUM_THREADS", std::to_string(flags.jobs).c_str(), 1);
   ProgressLine line(!flags.quiet && !flags.verbose && isatty(fileno(stderr)), flags.verbose);
   options.progress = [&](const lod::GenerateProgress& progress) { line.update(progress); };
   std::printf("generate  %s: %zu triangles, shader %s + %s\n", flags.in.c_str(),
