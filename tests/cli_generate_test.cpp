@@ -37,6 +37,14 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
   // Coarser levels have fewer triangles than the original.
   for (size_t k = 1; k < policy.levels.size(); ++k)
     EXPECT_LT(policy.levels[k].triangles, policy.levels[0].triangles);
+  // A level whose shader had values moved to parameters lists them (the engine must set them);
+  // the summary is words, never a raw SPIR-V id list.
+  for (const runtime::Level& level : policy.levels) {
+    const bool moved = level.shader_summary.find("constant (domain average)") != std::string::npos;
+    EXPECT_EQ(moved, !level.shader_parameters.empty()) << level.shader_summary;
+    EXPECT_EQ(level.shader_summary.find("computed in the vertex stage"), std::string::npos)
+        << level.shader_summary;
+  }
 
   // The held-out table: "NO" marks a simplified level over its bound (a bug).
   EXPECT_NE(run.out.find("held-out"), std::string::npos) << run.out;
