@@ -113,7 +113,7 @@ void appendLevels(std::string& html, const ReportData& data) {
             escaped(level.shader_summary) + "</td><td" + (over ? " class=\"over\"" : "") + ">" +
             number(level.error) + "</td><td>" + number(level.error_bound) + "</td><td>" +
             number(level.transition_error) + "</td><td>" + number(level.predicted_cost) +
-            "</td><td>" + number(level.measured_cost) + "</td></tr>\n";
+            "</td><td>" + (level.measured_cost > 0 ? number(level.measured_cost) : std::string("not measured")) + "</td></tr>\n";
   }
   html += "</table>\n";
   for (const ReportLevel& level : data.levels) {
