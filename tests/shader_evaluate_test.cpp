@@ -7,6 +7,8 @@
 #include "duolod/shader.hpp"
 #include "mesh_test_meshes.hpp"
 #include "shader/evaluate.hpp"
+#include "shader/instrument.hpp"
+#include "shader/ir.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -305,6 +307,58 @@ TEST_F(EvaluatorTest, NoiseShaderSimplificationsRankAlikeRenderedAndPredicted) {
   EXPECT_LT(rendered[0], rendered[1]);
   EXPECT_LT(rendered[1], rendered[2]);
   EXPECT_DOUBLE_EQ(core::spearmanCorrelation(rendered, predicted), 1.0);
+}
+
+// The searches price a variant's predicted error from the cost model's instrumented render
+// (one compile instead of two): the counters must change no colour, and the variant's CPU-set
+// uniforms must be applied to the instrumented copy too.
+TEST_F(EvaluatorTest, InstrumentedRenderGivesThePredictedErrorOfThePlainRender) {
+  shader::Variant original = shaderVariant("noise_phong");
+  shader::Variant flat = fragmentVariant(kUniformFragment);
+  flat.uniforms = {{.location = 0, .components = 4, .value = {0.66f, 0.61f, 0.53f, 1}}};
+  for (const shader::Variant& variant : {original, flat}) {
+    // Separate caches: the second evaluator must not find the first one's error.
+    auto plain_cache = std::make_shared<shader::EvaluationCache>(*renderer_);
+    auto shared_cache = std::make_shared<shader::EvaluationCache>(*renderer_);
+    auto plain = shader::VariantEvaluator::create(plain_cache, asset_id_, asset_.mesh, original,
+                                                  smallConfig());
+    auto shared = shader::VariantEvaluator::create(shared_cache, asset_id_, asset_.mesh, original,
+                                                   smallConfig());
+    ASSERT_TRUE(plain && shared);
+    ASSERT_EQ((*shared)->predictedResolution(), (*shared)->footprint());
+    auto expected = (*plain)->predictedError(variant);
+    ASSERT_TRUE(expected) << expected.error().message;
+
+    auto vertex = shader::ir::parseModule(variant.spirv.vertex);
+    auto fragment = shader::ir::parseModule(variant.spirv.fragment);
+    ASSERT_TRUE(vertex && fragment);
+    render::ImageBatch8 images;
+    auto profile = shader::profileBlockCounts(*renderer_, asset_id_, *vertex, *fragment,
+                                              (*shared)->predictedSamples(),
+                                              (*shared)->predictedResolution(), variant.uniforms,
+                                              &images);
+    ASSERT_TRUE(profile) << profile.error().message;
+    auto from_images = (*shared)->predictedErrorFromImages(variant, images);
+    ASSERT_TRUE(from_images) << from_images.error().message;
+    EXPECT_GT(expected->epsilon, 0.0);
+    EXPECT_NEAR(from_images->epsilon, expected->epsilon, 1e-6 * expected->epsilon);
+    EXPECT_EQ(from_images->coverage_px, expected->coverage_px);
+    // Served from the cache now: no second render.
+    auto again = (*shared)->predictedError(variant);
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->epsilon, from_images->epsilon);
+    EXPECT_EQ((*shared)->counters().predicted, 1);
+  }
+  // Images of the wrong shape are refused.
+  auto cache = std::make_shared<shader::EvaluationCache>(*renderer_);
+  auto evaluator =
+      shader::VariantEvaluator::create(cache, asset_id_, asset_.mesh, original, smallConfig());
+  ASSERT_TRUE(evaluator);
+  render::ImageBatch8 wrong;
+  wrong.width = wrong.height = 3;
+  wrong.count = 1;
+  wrong.pixels.assign(36, 0);
+  EXPECT_FALSE((*evaluator)->predictedErrorFromImages(original, wrong).ok());
 }
 
 }  // namespace

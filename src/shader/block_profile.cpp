@@ -82,7 +82,9 @@ core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
                                               render::Renderer::AssetId asset,
                                               const ir::Module& vertex, const ir::Module& fragment,
                                               std::span<const render::Sample> samples,
-                                              int resolution) {
+                                              int resolution,
+                                              std::span<const render::UniformValue> uniforms,
+                                              render::ImageBatch8* images_out) {
   auto vertex_copy = instrumentBlockCounts(vertex, kVertexCounterBinding);
   if (!vertex_copy.ok()) return Error{"vertex stage: " + vertex_copy.error().message};
   auto fragment_copy = instrumentBlockCounts(fragment, kFragmentCounterBinding);
@@ -91,6 +93,13 @@ core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
                              ir::emitModule(fragment_copy->module)};
   auto program = renderer.compileProgram(binary);
   if (!program.ok()) return Error{"block profile: " + program.error().message};
+  if (!uniforms.empty()) {
+    const std::vector<render::UniformValue> values(uniforms.begin(), uniforms.end());
+    if (auto set = renderer.setProgramUniforms(*program, values); !set.ok()) {
+      renderer.releaseProgram(*program);
+      return Error{"block profile: " + set.error().message};
+    }
+  }
 
   BlockProfile profile;
   core::Status status = core::okStatus();
@@ -107,6 +116,7 @@ core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
       profile.fragment_totals = fragment_counters.read();
       profile.vertex_invocations = stats.work.vertex_invocations;
       profile.fragment_invocations = stats.work.fragment_invocations;
+      if (images_out) *images_out = std::move(*images);
     }
   }
   renderer.releaseProgram(*program);

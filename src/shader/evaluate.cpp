@@ -213,20 +213,43 @@ core::Result<metric::ImageError> VariantEvaluator::evaluate(const Variant& varia
                                 {.resolution = resolution, .count_work = count_work}, &stats);
   if (!images) return images.error();
   if (count_work) work_[variant_key] = stats.work;
-  metric::ImageError error =
-      metric::imageError(*images, predicted ? predicted_reference_ : reference_);
   counters_.render_seconds += secondsSince(start);
   counters_.sample_renders += static_cast<int>(samples.size());
+  return scoreImages(variant_key, *images, predicted);
+}
+
+core::Result<metric::ImageError> VariantEvaluator::predictedErrorFromImages(
+    const Variant& variant, const render::ImageBatch8& images) {
+  if (!variant.parameter_block.empty())
+    return Error{"predicted error from images: the variant has a parameter block"};
+  if (images.count != static_cast<int>(predicted_samples_.size()) ||
+      images.width != predicted_resolution_ || images.height != predicted_resolution_)
+    return Error{"predicted error from images: " + std::to_string(images.count) + " images of " +
+                 std::to_string(images.width) + " px, expected " +
+                 std::to_string(predicted_samples_.size()) + " of " +
+                 std::to_string(predicted_resolution_)};
+  const uint64_t variant_key = variantKey(variant);
+  if (auto cached = cache_->findError(variant_key, predicted_configuration_key_)) return *cached;
+  return scoreImages(variant_key, images, /*predicted=*/true);
+}
+
+metric::ImageError VariantEvaluator::scoreImages(uint64_t variant_key,
+                                                 const render::ImageBatch8& images,
+                                                 bool predicted) {
+  metric::ImageError error =
+      metric::imageError(images, predicted ? predicted_reference_ : reference_);
   if (predicted) {
     ++counters_.predicted;
     // eq. (6) sums over pixels: rescale to the footprint's pixel count.
+    const int resolution = predicted_resolution_;
     double scale = double(footprint_) * footprint_ / (double(resolution) * resolution);
     error.epsilon *= scale;
     error.coverage_px *= scale;
   } else {
     ++counters_.rendered;
   }
-  cache_->storeError(variant_key, configuration_key, error);
+  cache_->storeError(variant_key, predicted ? predicted_configuration_key_ : configuration_key_,
+                     error);
   return error;
 }
 

@@ -107,6 +107,12 @@ class VariantEvaluator {
   // (footprint / predicted resolution)² so they estimate the full-resolution values; per_pixel is
   // as measured.
   core::Result<metric::ImageError> predictedError(const Variant& variant);
+  // predictedError() from images of the variant already rendered on predictedSamples() at
+  // predictedResolution() (e.g. by the cost model's instrumented render); cached alike. The
+  // variant must not use a parameter block (the images were rendered without one).
+  core::Result<metric::ImageError> predictedErrorFromImages(const Variant& variant,
+                                                            const render::ImageBatch8& images);
+  const std::vector<render::Sample>& predictedSamples() const { return predicted_samples_; }
 
   // The device's work for the variant's whole-domain render (vertex and fragment invocations, the
   // counts §5.2's cost model multiplies): known once renderedError() has rendered it, when the
@@ -131,6 +137,9 @@ class VariantEvaluator {
  private:
   VariantEvaluator() = default;
   core::Result<metric::ImageError> evaluate(const Variant& variant, bool predicted);
+  // eq. (6) of rendered images against the reference of their kind; counted and cached.
+  metric::ImageError scoreImages(uint64_t variant_key, const render::ImageBatch8& images,
+                                 bool predicted);
 
   std::shared_ptr<EvaluationCache> cache_;
   render::Renderer::AssetId asset_ = -1;

@@ -61,11 +61,17 @@ struct BlockProfile {
 // `resolution` and reads the counters back. The renderer's GL context must be current on this
 // thread (it is, on the thread that created it). Counters are 32-bit: a block may run at most
 // 2^32 − 1 times over the whole render (the profile fails loudly if a counter saturates).
+// With `uniforms` set on the instrumented program (a variant's CPU-set parameters) its images
+// are the variant's own (the counters change no colour), returned in `images` when given: the
+// searches then price a variant's predicted error from this same render, one compile instead of
+// two (llvmpipe's shader compiles are most of a search's time).
 core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
                                               render::Renderer::AssetId asset,
                                               const ir::Module& vertex, const ir::Module& fragment,
                                               std::span<const render::Sample> samples,
-                                              int resolution);
+                                              int resolution,
+                                              std::span<const render::UniformValue> uniforms = {},
+                                              render::ImageBatch8* images = nullptr);
 
 // Our model's features (cost_model.hpp) of a program in a configuration: per-invocation op counts
 // from `profile` (of this very program), and the configuration's invocations per draw.

@@ -83,9 +83,16 @@ core::Result<std::unique_ptr<ConfigurationScorer>> ConfigurationScorer::create(
   scorer->renderer_ = &renderer;
   scorer->asset_ = asset;
   scorer->evaluator_ = std::move(*evaluator);
-  std::vector<render::Sample> domain =
-      render::domainSamples(core::computeBoundingSphere(mesh), config.distance, config.domain);
-  scorer->cost_samples_ = profileSamples(domain, config.predicted_views);
+  // The cost model's instrumented run looks where the predicted error looks when that is a
+  // single light per view (block counts per invocation hardly depend on the view or the light):
+  // then one render serves both. Otherwise a few views, centre light.
+  if (config.predicted_lights == 1) {
+    scorer->cost_samples_ = scorer->evaluator_->predictedSamples();
+  } else {
+    std::vector<render::Sample> domain =
+        render::domainSamples(core::computeBoundingSphere(mesh), config.distance, config.domain);
+    scorer->cost_samples_ = profileSamples(domain, config.predicted_views);
+  }
   return scorer;
 }
 
@@ -108,10 +115,21 @@ VariantScorer ConfigurationScorer::scorer() {
     if (!vertex) return vertex.error();
     auto fragment = ir::parseModule(variant->spirv.fragment);
     if (!fragment) return fragment.error();
+    // When the profile looks exactly where the predicted error does (same samples, the
+    // footprint's resolution), its images are the variant's predicted-error render too: one
+    // compile and render per variant instead of two.
+    const bool shared = cost_samples_.size() == evaluator_->predictedSamples().size() &&
+                        evaluator_->predictedResolution() == evaluator_->footprint() &&
+                        variant->parameter_block.empty();
+    render::ImageBatch8 images;
     auto profile = profileBlockCounts(*renderer_, asset_, *vertex, *fragment, cost_samples_,
-                                      evaluator_->footprint());
+                                      evaluator_->footprint(), variant->uniforms,
+                                      shared ? &images : nullptr);
     if (!profile) return profile.error();
     ++cost_profiles_;
+    if (shared)
+      if (auto error = evaluator_->predictedErrorFromImages(variant.value(), images); !error)
+        return error.error();
     const double draws = static_cast<double>(cost_samples_.size());
     CostFeatures features;
     features.vertex_ops = dynamicOpCounts(*vertex, profile->vertex_executions);
