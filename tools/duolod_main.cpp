@@ -19,6 +19,7 @@
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
+#include "shader/lod_search.hpp"
 
 namespace {
 namespace fs = std::filesystem;
@@ -550,7 +551,6 @@ int runSimplify(SimplifyFlags& flags) {
   return 0;
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // duolod generate: the joint mesh + shader LOD (issue 5).
 
@@ -753,6 +753,121 @@ int runGenerate(GenerateFlags& flags) {
   return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// duolod shader: shader LOD for one (mesh, distance) configuration (issue 4).
+
+struct ShaderFlags {
+  std::string in, out;
+  std::string search = "gp";
+  uint64_t seed = 1;
+  int generations = 20;
+  int population = 24;
+  int greedy_steps = 32;
+  int greedy_candidates = 64;
+  bool no_timing = false;
+  bool force = false;
+  ShadingFlags shading;
+
+  void add(CLI::App* command) {
+    command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
+    shading.add(command);
+    command->add_option("--distance", shading.distance,
+                        "camera distance from the bounding-sphere centre, in asset units");
+    command->add_option("--pixels", shading.pixels,
+                        "alternatively: the distance at which the object spans N pixels");
+    command->add_option("--search", search, "gp (genetic programming, NSGA-II) or greedy (He et al.)")
+        ->check(CLI::IsMember({"gp", "greedy"}))
+        ->capture_default_str();
+    command->add_option("--seed", seed, "GP random seed")->capture_default_str();
+    command->add_option("--generations", generations, "GP generations")->capture_default_str();
+    command->add_option("--population", population, "GP population size")->capture_default_str();
+    command->add_option("--steps", greedy_steps, "greedy: most rules applied")->capture_default_str();
+    command->add_option("--candidates", greedy_candidates,
+                        "greedy: sites scored per step, spread evenly over all sites (0: every "
+                        "site; noise_phong offers ~650, each one a compile and two renders)")
+        ->capture_default_str();
+    command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
+    command->add_option("--out", out, "folder for the variants, the autoLOD shader and summary.json")
+        ->required();
+    command->add_flag("--force", force, "write into --out even if it holds files");
+  }
+};
+
+// "operation removal: ... (+3 more)": the first rule of a variant and how many follow.
+std::string rulesInWords(const std::vector<shader::RuleSite>& sites, size_t width) {
+  std::string text = shader::describeSites(sites);
+  if (sites.size() > 1) {
+    std::string first = shader::describeSites({sites.front()});
+    text = first + " (+" + std::to_string(sites.size() - 1) + " more)";
+  }
+  if (text.size() > width) text = text.substr(0, width - 3) + "...";
+  return text;
+}
+
+int runShader(ShaderFlags& flags) {
+  if (!(flags.shading.distance > 0) && !(flags.shading.pixels > 0))
+    return fail("shader: give --distance D (> 0) or --pixels N");
+  if (flags.generations < 0 || flags.population < 2 || flags.greedy_steps < 1 ||
+      flags.greedy_candidates < 0)
+    return fail("shader: --generations must be >= 0, --population >= 2, --steps >= 1, "
+                "--candidates >= 0");
+  auto source = flags.shading.source();
+  if (!source) return fail(source.error().message);
+  std::error_code ec;
+  if (fs::exists(flags.out, ec) && !fs::is_empty(flags.out, ec) && !flags.force)
+    return fail(flags.out + ": already exists and is not empty (use --force to write into it)");
+  // Never over an input, even with --force: not into the folder of the asset or its shaders.
+  for (const std::string& input : {flags.in, flags.shading.vert, flags.shading.frag}) {
+    if (input.empty()) continue;
+    fs::path input_dir = fs::weakly_canonical(fs::absolute(input).parent_path(), ec);
+    if (fs::weakly_canonical(fs::absolute(flags.out), ec) == input_dir)
+      return fail(flags.out + ": is the folder of the input " + input + "; choose another --out");
+  }
+  auto asset = loadWithWarnings(flags.in);
+  if (!asset) return fail(asset.error().message);
+
+  shader::ShaderLodOptions options;
+  options.distance = resolveDistance(flags.shading, core::computeBoundingSphere(asset->mesh));
+  options.display = flags.shading.display();
+  options.device = flags.shading.device;
+  options.method = flags.search == "gp" ? shader::SearchMethod::kGenetic : shader::SearchMethod::kGreedy;
+  options.genetic.seed = flags.seed;
+  options.genetic.generations = flags.generations;
+  options.genetic.population_size = flags.population;
+  options.genetic.on_generation = [](int generation, const shader::SearchCounters& counters) {
+    std::fprintf(stderr, "duolod: generation %d: %d variants predicted, %d genomes\n", generation,
+                 counters.variants_predicted, counters.genomes_evaluated);
+  };
+  options.greedy.max_steps = flags.greedy_steps;
+  options.greedy.max_candidates_per_step = flags.greedy_candidates;
+  options.measure_time = !flags.no_timing;
+  auto report = shader::runShaderLod(*asset, *source, options);
+  if (!report) return fail(report.error().message);
+  if (auto written = shader::writeShaderLod(*report, flags.out, flags.force); !written)
+    return fail(written.error().message);
+
+  std::printf("%s at distance %s (footprint %d px, %d samples), %s search on %s\n", flags.in.c_str(),
+              formatNumber(options.distance).c_str(), report->footprint_px, report->domain_samples,
+              flags.search.c_str(), report->device.c_str());
+  std::printf("%-6s %-52s %14s %10s %10s\n", "level", "rules applied", "pred. ms/draw",
+              "time ratio", "error/px");
+  for (size_t k = 0; k < report->variants.size(); ++k) {
+    const shader::ShaderLodVariant& variant = report->variants[k];
+    std::string ratio = options.measure_time ? formatNumber(variant.time_ratio) : "-";
+    std::printf("%-6zu %-52s %14.4g %10s %10.4g\n", k,
+                rulesInWords(variant.search.sites, 52).c_str(), variant.search.predicted_cost * 1e3,
+                ratio.c_str(), variant.search.rendered_error.value_or(-1));
+  }
+  const shader::SearchCounters& counters = report->search;
+  std::printf("variants: %d generated, %d predicted, %d rendered, %d compiled; search %.1f s, total %.1f s\n",
+              counters.variants_generated, counters.variants_predicted, counters.variants_rendered,
+              report->compile.programs_compiled, report->search_seconds, report->total_seconds);
+  std::printf("wrote %zu levels, the autoLOD shader (uniform float autoLOD at location %u) and "
+              "summary.json to %s\n",
+              report->variants.size(), report->autolod.autolod_location, flags.out.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -817,6 +932,10 @@ int main(int argc, char** argv) {
       "Generate the joint mesh + shader LOD of an asset: levels, glTF chain, shaders, lod.json, "
       "report.html");
   generate_flags.add(generate_cmd);
+  ShaderFlags shader_flags;
+  CLI::App* shader_cmd = app.add_subcommand(
+      "shader", "Simplify an asset's shader for a distance: Pareto variants and an autoLOD shader");
+  shader_flags.add(shader_cmd);
 
   CLI11_PARSE(app, argc, argv);
 
@@ -827,5 +946,6 @@ int main(int argc, char** argv) {
   if (*error_cmd) return runError(error_a, error_b, error_flags, error_supersample, bound);
   if (*simplify_cmd) return runSimplify(simplify_flags);
   if (*generate_cmd) return runGenerate(generate_flags);
+  if (*shader_cmd) return runShader(shader_flags);
   return 0;
 }

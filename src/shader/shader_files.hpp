@@ -1,0 +1,24 @@
+// Writing a program's shader files: per stage the SPIR-V module and its GLSL 450, GLSL ES 300 and
+// HLSL 5.0 translations (SPIRV-Cross), each translation re-compiled by glslang before it is
+// written. Used by `duolod shader` (shader/lod_search.hpp); meant for every writer of shader
+// outputs (lod/export.cpp has its own copy still).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "duolod/core.hpp"
+
+namespace duolod::shader {
+
+// Writes NAME.{vert,frag}.spv, .glsl, .es.glsl and .hlsl into `directory` atomically. Returns the
+// files written as (kind, file name): kinds spirv_vert, glsl450_vert, glsles300_vert,
+// hlsl50_vert and likewise _frag.
+core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
+    const std::vector<uint32_t>& vertex, const std::vector<uint32_t>& fragment,
+    const std::filesystem::path& directory, const std::string& name);
+
+}  // namespace duolod::shader

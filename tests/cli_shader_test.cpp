@@ -1,0 +1,114 @@
+// End-to-end tests of `duolod shader`: the built binary (DUOLOD_CLI) runs a small GP and a small
+// greedy search on Spot with the noise + Phong shader at a far distance; the tests check the table
+// the user reads, every file written (SPIR-V, GLSL, GLSL ES, HLSL per level and for the autoLOD
+// shader), summary.json, and that existing output is never overwritten without --force.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+namespace duolod {
+namespace {
+namespace fs = std::filesystem;
+
+test::CommandRun runCli(const std::vector<std::string>& args) {
+  return test::runCommand(DUOLOD_CLI, args);
+}
+
+// Spot is ~2 units across: at distance 30 it spans ~50 px on a 1080 px display, so a variant's
+// renders are cheap.
+std::vector<std::string> smallSearch(const std::string& asset, const std::string& out,
+                                     const std::string& method) {
+  return {"shader", asset, "--shader", "noise_phong", "--distance", "30", "--search", method,
+          "--seed", "5", "--generations", "1", "--population", "4", "--steps", "2", "--candidates", "4",
+          "--no-timing", "--out", out};
+}
+
+void expectLevelFiles(const fs::path& dir, const std::string& name) {
+  for (const char* stage : {"vert", "frag"})
+    for (const char* extension : {".spv", ".glsl", ".es.glsl", ".hlsl"}) {
+      fs::path file = dir / (name + "." + stage + extension);
+      EXPECT_TRUE(fs::exists(file)) << file;
+      EXPECT_GT(fs::file_size(file), 0u) << file;
+    }
+}
+
+TEST(CliShaderTest, GeneticSearchWritesLevelsAutoLodAndSummary) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  fs::path out = test::scratchDir("cli_shader_gp") / "out";
+  test::CommandRun run = runCli(smallSearch(spot, out.string(), "gp"));
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_TRUE(test::contains(run.out, "rules applied")) << run.out;
+  EXPECT_TRUE(test::contains(run.out, "original")) << run.out;
+  EXPECT_TRUE(test::contains(run.out, "autoLOD")) << run.out;
+
+  nlohmann::json summary = nlohmann::json::parse(test::readText(out / "summary.json"));
+  const nlohmann::json& levels = summary["levels"];
+  ASSERT_GE(levels.size(), 2u);
+  EXPECT_TRUE(levels[0]["rules"].empty());  // the original comes first
+  for (size_t k = 0; k < levels.size(); ++k) {
+    expectLevelFiles(out, levels[k]["files"].get<std::string>());
+    EXPECT_GE(levels[k]["rendered_error"].get<double>(), 0.0);
+    if (k > 0) {
+      EXPECT_LE(levels[k]["predicted_cost"].get<double>(), levels[k - 1]["predicted_cost"].get<double>());
+    }
+  }
+  // The original differs from its supersampled reference by its aliasing only.
+  EXPECT_LT(levels[0]["rendered_error"].get<double>(), 0.05);
+  expectLevelFiles(out, "autolod");
+  EXPECT_TRUE(test::contains(test::readText(out / "autolod.frag.glsl"), "autoLOD"));
+  EXPECT_EQ(summary["autolod"]["thresholds"].size(), levels.size());
+  const nlohmann::json& counters = summary["counters"];
+  EXPECT_GT(counters["variants_predicted"].get<int>(), 1);
+  EXPECT_EQ(counters["variants_rendered"].get<size_t>(), levels.size());
+
+  // The same folder again: refused without --force, nothing touched; accepted with it.
+  auto before = fs::last_write_time(out / "summary.json");
+  test::CommandRun again = runCli(smallSearch(spot, out.string(), "gp"));
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_TRUE(test::contains(again.err, "--force")) << again.err;
+  EXPECT_EQ(fs::last_write_time(out / "summary.json"), before);
+}
+
+TEST(CliShaderTest, GreedySearchRecordsItsSteps) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  fs::path out = test::scratchDir("cli_shader_greedy") / "out";
+  std::vector<std::string> args = smallSearch(spot, out.string(), "greedy");
+  test::CommandRun run = runCli(args);
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  nlohmann::json summary = nlohmann::json::parse(test::readText(out / "summary.json"));
+  const nlohmann::json& levels = summary["levels"];
+  ASSERT_EQ(levels.size(), 3u);  // the original + 2 steps
+  for (size_t k = 0; k < levels.size(); ++k) EXPECT_EQ(levels[k]["rules"].size(), k);
+  args.push_back("--force");
+  EXPECT_EQ(runCli(args).exit_code, 0);
+}
+
+TEST(CliShaderTest, BadFlagsAreClearErrors) {
+  test::CommandRun no_distance = runCli({"shader", "missing.obj", "--out", "x"});
+  EXPECT_NE(no_distance.exit_code, 0);
+  EXPECT_TRUE(test::contains(no_distance.err, "--distance")) << no_distance.err;
+  test::CommandRun bad_method =
+      runCli({"shader", "missing.obj", "--distance", "3", "--search", "annealing", "--out", "x"});
+  EXPECT_NE(bad_method.exit_code, 0);
+  test::CommandRun missing = runCli({"shader", "missing.obj", "--distance", "3", "--out",
+                                     (test::scratchDir("cli_shader_bad") / "out").string()});
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_TRUE(test::contains(missing.err, "missing.obj")) << missing.err;
+}
+
+TEST(CliShaderTest, RefusesToWriteIntoTheAssetsFolderEvenWithForce) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  fs::path asset_dir = fs::path(spot).parent_path();
+  auto files_before = std::distance(fs::directory_iterator(asset_dir), fs::directory_iterator());
+  test::CommandRun run = runCli({"shader", spot, "--shader", "noise_phong", "--distance", "30",
+                                 "--force", "--out", asset_dir.string()});
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(test::contains(run.err, "folder of the input")) << run.err;
+  EXPECT_EQ(std::distance(fs::directory_iterator(asset_dir), fs::directory_iterator()), files_before);
+}
+
+}  // namespace
+}  // namespace duolod
