@@ -9,12 +9,62 @@
 
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 #include "duolod/io.hpp"
 #include "duolod/render.hpp"
 #include "shader/lod_search.hpp"
 
 using namespace duolod;
+
+namespace {
+
+// The distance at which the bounding sphere spans `footprint_px` of the display's height.
+float distanceForFootprint(const core::Sphere& sphere, int footprint_px, const render::Display& display) {
+  float screen_half = std::tan(display.fov_y_deg * 3.14159265f / 360.0f);
+  float half_angle = std::atan(float(footprint_px) / float(display.height_px) * screen_half);
+  return sphere.radius / std::sin(half_angle);
+}
+
+// What shader simplification can gain at each footprint: the measured draw time of the shader
+// against the `constant` shader (the floor every variant's time approaches: the vertex and
+// rasterisation work that no fragment rule removes), with the vertex and fragment invocations per
+// view (pipeline statistics).
+int sweepFootprints(const core::Asset& asset, const render::GlslSource& source,
+                    const std::vector<int>& footprints, int repeats) {
+  auto renderer = render::Renderer::create();
+  if (!renderer) return std::fprintf(stderr, "%s\n", renderer.error().message.c_str()), 1;
+  render::Renderer& gl = **renderer;
+  auto asset_id = gl.uploadAsset(asset);
+  auto constant = render::loadShaderPair("constant");
+  if (!asset_id || !constant) return std::fprintf(stderr, "cannot upload or load\n"), 1;
+  auto shader = gl.compileProgram(source);
+  auto floor_program = gl.compileProgram(*constant);
+  if (!shader || !floor_program) return std::fprintf(stderr, "cannot compile\n"), 1;
+  core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
+  std::printf("| footprint px | vertex inv./view | fragment inv./view | shader ms/view | constant ms/view | best ratio |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|\n");
+  for (int footprint : footprints) {
+    float distance = distanceForFootprint(sphere, footprint, render::Display{});
+    std::vector<render::Sample> samples = render::domainSamples(sphere, distance);
+    render::RenderStats stats;
+    render::RenderOptions options{.resolution = footprint, .count_work = true};
+    if (auto image = gl.render(*asset_id, *shader, samples, options, &stats); !image)
+      return std::fprintf(stderr, "%s\n", image.error().message.c_str()), 1;
+    std::vector<render::Renderer::ProgramId> programs = {*shader, *floor_program};
+    render::TimingOptions timing{.resolution = footprint, .repeats = repeats};
+    auto times = gl.measureDrawTimes(*asset_id, programs, samples, timing);
+    if (!times) return std::fprintf(stderr, "%s\n", times.error().message.c_str()), 1;
+    double views = static_cast<double>(samples.size());
+    std::printf("| %d | %.0f | %.0f | %.3f | %.3f | %.3f |\n", footprint,
+                double(stats.work.vertex_invocations) / views,
+                double(stats.work.fragment_invocations) / views, (*times)[0].seconds / views * 1e3,
+                (*times)[1].seconds / views * 1e3, (*times)[1].seconds / (*times)[0].seconds);
+  }
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"duolod shader search benchmark: GP Pareto front of noise_phong at a far distance"};
@@ -25,6 +75,8 @@ int main(int argc, char** argv) {
   int generations = 20, population = 24;
   uint64_t seed = 1;
   double e_max = 0.1;
+  std::vector<int> sweep;
+  int repeats = 7;
   app.add_option("--asset", asset_path)->capture_default_str();
   app.add_option("--shader", shader)->capture_default_str();
   app.add_option("--search", method, "gp or greedy")->capture_default_str();
@@ -35,6 +87,10 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed)->capture_default_str();
   app.add_option("--e-max", e_max, "per-pixel error bound at d_far (metric::BoundConfig)")
       ->capture_default_str();
+  app.add_option("--sweep", sweep,
+                 "instead of a search: time the shader against the constant shader at these "
+                 "footprints (what any variant can gain there)");
+  app.add_option("--repeats", repeats, "timing repeats (median)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   auto asset = io::loadAsset(asset_path);
@@ -42,12 +98,12 @@ int main(int argc, char** argv) {
   auto source = render::loadShaderPair(shader);
   if (!source) return std::fprintf(stderr, "%s\n", source.error().message.c_str()), 1;
 
+  if (!sweep.empty()) return sweepFootprints(*asset, *source, sweep, repeats);
+
   shader::ShaderLodOptions options;
-  core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
-  // The distance at which the bounding sphere spans `footprint_px` of the display's height.
-  float screen_half = std::tan(options.display.fov_y_deg * 3.14159265f / 360.0f);
-  float half_angle = std::atan(float(footprint_px) / float(options.display.height_px) * screen_half);
-  options.distance = sphere.radius / std::sin(half_angle);
+  options.distance =
+      distanceForFootprint(core::computeBoundingSphere(asset->mesh), footprint_px, options.display);
+  options.timing.repeats = repeats;
   options.method = method == "greedy" ? shader::SearchMethod::kGreedy : shader::SearchMethod::kGenetic;
   options.genetic.generations = generations;
   options.genetic.population_size = population;
