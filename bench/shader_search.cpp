@@ -7,9 +7,9 @@
 // generated, predicted, rendered and compiled.
 #include <CLI/CLI.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 
 #include "duolod/io.hpp"
 #include "duolod/render.hpp"
@@ -30,6 +30,18 @@ float distanceForFootprint(const core::Sphere& sphere, int footprint_px, const r
 // against the `constant` shader (the floor every variant's time approaches: the vertex and
 // rasterisation work that no fragment rule removes), with the vertex and fragment invocations per
 // view (pipeline statistics).
+// "op 3, loop 1, per-vertex 1": how many sites of each rule a variant applies.
+std::string ruleCounts(const std::vector<shader::RuleSite>& sites) {
+  std::array<int, shader::kRuleKindCount> counts{};
+  for (const shader::RuleSite& site : sites) ++counts[static_cast<size_t>(site.kind)];
+  std::string text;
+  for (int k = 0; k < shader::kRuleKindCount; ++k)
+    if (counts[k] > 0)
+      text += (text.empty() ? "" : ", ") + std::string(shader::ruleName(shader::RuleKind(k))) + " " +
+              std::to_string(counts[k]);
+  return text.empty() ? "original" : text;
+}
+
 int sweepFootprints(const core::Asset& asset, const render::GlslSource& source,
                     const std::vector<int>& footprints, int repeats) {
   auto renderer = render::Renderer::create();
@@ -91,6 +103,9 @@ int main(int argc, char** argv) {
                  "instead of a search: time the shader against the constant shader at these "
                  "footprints (what any variant can gain there)");
   app.add_option("--repeats", repeats, "timing repeats (median)")->capture_default_str();
+  bool uniform_sites = false;
+  app.add_flag("--uniform-sites", uniform_sites,
+               "GP mutations draw sites uniformly (default: a rule kind first, then a site)");
   CLI11_PARSE(app, argc, argv);
 
   auto asset = io::loadAsset(asset_path);
@@ -108,6 +123,7 @@ int main(int argc, char** argv) {
   options.genetic.generations = generations;
   options.genetic.population_size = population;
   options.genetic.seed = seed;
+  options.genetic.balance_rule_kinds = !uniform_sites;
   options.genetic.on_generation = [](int generation, const shader::SearchCounters& counters) {
     std::fprintf(stderr, "generation %d: %d predicted, %d genomes\n", generation,
                  counters.variants_predicted, counters.genomes_evaluated);
@@ -121,14 +137,14 @@ int main(int argc, char** argv) {
               population, generations, static_cast<unsigned long long>(seed));
   std::printf("distance %.3g (footprint %d px, %d samples), device %s\n\n", options.distance,
               report->footprint_px, report->domain_samples, report->device.c_str());
-  std::printf("| level | rules | predicted cost | predicted error/px | rendered error/px | time ratio |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("| level | rules | predicted ms/view | predicted error/px | rendered error/px | measured time ratio |\n");
+  std::printf("|---:|---|---:|---:|---:|---:|\n");
   int cheapest_within = -1;
   for (size_t k = 0; k < report->variants.size(); ++k) {
     const shader::ShaderLodVariant& v = report->variants[k];
-    std::printf("| %zu | %zu | %.4g | %.4g | %.4g | %.3f |\n", k, v.search.sites.size(),
-                v.search.predicted_cost, v.search.predicted_error, v.search.rendered_error.value_or(-1),
-                v.time_ratio);
+    std::printf("| %zu | %s | %.4g | %.4g | %.4g | %.3f |\n", k, ruleCounts(v.search.sites).c_str(),
+                v.search.predicted_cost * 1e3, v.search.predicted_error,
+                v.search.rendered_error.value_or(-1), v.time_ratio);
     // Levels run by decreasing predicted cost; the cheapest within the bound by measured time.
     if (v.search.rendered_error.value_or(1e30) <= e_max &&
         (cheapest_within < 0 || v.time_ratio < report->variants[cheapest_within].time_ratio))
@@ -150,6 +166,7 @@ int main(int argc, char** argv) {
                 e_max, cheapest_within, v.search.sites.size(), v.search.rendered_error.value_or(-1),
                 v.time_ratio, v.time_ratio > 0 ? 1 / v.time_ratio : 0.0,
                 v.time_ratio > 0 && v.time_ratio <= 0.5 ? "yes" : "NO");
+    std::printf("  its rules: %s\n", shader::describeSites(v.search.sites).c_str());
   }
   std::printf("variants: %d generated, %d predicted (%d cache hits, %d rejected), %d rendered, "
               "%d compiled, %d cost profiles, %d genomes\n",

@@ -11,12 +11,12 @@
 #include "shader/rules_internal.hpp"
 #include "shader/value_average.hpp"
 #include "shader/value_rewrite.hpp"
-#include "shader_value_rules_support.hpp"
+#include "shader_rules_support.hpp"
 
 namespace duolod::shader {
 namespace {
 
-using namespace test_values;
+using namespace test_rules;
 
 const char* kRampFragment = R"(#version 450 core
 layout(location = 1) in vec2 vUV;

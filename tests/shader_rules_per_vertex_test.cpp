@@ -9,12 +9,12 @@
 
 #include "shader/rules_internal.hpp"
 #include "shader/value_rewrite.hpp"
-#include "shader_value_rules_support.hpp"
+#include "shader_rules_support.hpp"
 
 namespace duolod::shader {
 namespace {
 
-using namespace test_values;
+using namespace test_rules;
 
 const char* kPerPixelFragment = R"(#version 450 core
 layout(location = 0) in vec3 vNormal;

@@ -6,13 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include "duolod/render.hpp"
 #include "duolod/shader.hpp"
 #include "shader/rules.hpp"
+#include "shader_rules_support.hpp"
 #include "test_support.hpp"
 
 namespace duolod::shader {
@@ -29,13 +28,6 @@ void main() {
   gl_Position = vec4(inPosition.xy, 0.0, 1.0);
 }
 )";
-
-std::string readShader(const std::string& file) {
-  std::ifstream in(test::sourcePath("shaders/" + file));
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 ShaderProgram programOrDie(const std::string& vertex_source, const std::string& fragment_source) {
   auto vertex = compileToSpirv(vertex_source, Stage::kVertex, "test.vert");
@@ -94,24 +86,8 @@ size_t countOpcode(const ir::Module& module, spv::Op opcode) {
 
 // ---- rendering: a full-screen quad with uv 0..1 and an optional texture at binding 0 ----
 
-class RuleRender : public ::testing::Test {
+class RuleRender : public test_rules::RendererFixture {
  protected:
-  static void SetUpTestSuite() {
-    auto created = render::Renderer::create();
-    if (!created) {
-      failure_ = created.error().message;
-      return;
-    }
-    renderer_ = std::move(created.value()).release();
-  }
-  static void TearDownTestSuite() {
-    delete renderer_;
-    renderer_ = nullptr;
-  }
-  void SetUp() override {
-    if (!renderer_) GTEST_SKIP() << "SKIPPED: no OpenGL 4.5 context: " << failure_;
-  }
-
   // A clip-space quad; base colour factor `factor`; a `texture` at binding 0 when given.
   static core::Asset quadAsset(core::Vec4 factor, const core::ImageRGBA8* texture) {
     core::Asset asset;
@@ -155,12 +131,7 @@ class RuleRender : public ::testing::Test {
     return image.pixels.data() + (static_cast<size_t>(y) * static_cast<size_t>(image.width) +
                                   static_cast<size_t>(x)) * 4;
   }
-
-  static render::Renderer* renderer_;
-  static std::string failure_;
 };
-render::Renderer* RuleRender::renderer_ = nullptr;
-std::string RuleRender::failure_;
 
 // ------------------------------------------------------------------------------------------------
 // Operation removal
@@ -524,7 +495,7 @@ TEST_F(RuleRender, LoopTruncationRendersFewerIterations) {
 
 TEST(ShaderRules, NoisePhongOctaveLoopIsTruncatable) {
   ShaderProgram program =
-      programOrDie(readShader("noise_phong.vert"), readShader("noise_phong.frag"));
+      programOrDie(test_rules::readShaderFile("noise_phong.vert"), test_rules::readShaderFile("noise_phong.frag"));
   std::vector<RuleSite> sites =
       sitesOfKind(enumerateSites(program, {}), RuleKind::kLoopTruncation);
   ASSERT_EQ(sites.size(), 3u);  // glslang keeps the loop (no unrolling without optimisation)
@@ -573,7 +544,7 @@ class ReferenceShaderRules : public ::testing::TestWithParam<const char*> {};
 // optimised). Prints the site counts per rule.
 TEST_P(ReferenceShaderRules, EverySiteAppliesAndValidates) {
   std::string name = GetParam();
-  ShaderProgram program = programOrDie(readShader(name + ".vert"), readShader(name + ".frag"));
+  ShaderProgram program = programOrDie(test_rules::readShaderFile(name + ".vert"), test_rules::readShaderFile(name + ".frag"));
   RuleContext context;
   for (uint32_t binding = 0; binding < 8; ++binding)
     context.texture_averages[binding] = {0.5f, 0.4f, 0.3f, 1.0f};

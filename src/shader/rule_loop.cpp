@@ -14,6 +14,7 @@
 #include <optional>
 
 #include "shader/rules_internal.hpp"
+#include "shader/value_rewrite.hpp"
 
 namespace duolod::shader {
 namespace {
@@ -143,7 +144,7 @@ std::optional<CountedLoop> recogniseLoop(const ir::Module& module, const ir::Def
   loop.counter = counter->result_id;
 
   // Exactly two stores, everything else loads (or names): no pointer escapes.
-  std::vector<bool> in_loop = loopBlocks(cfg, header);
+  std::vector<bool> in_loop = loopConstructBlocks(cfg, header);
   std::optional<int64_t> initial, step;
   int stores = 0;
   for (const ir::InstructionRef& user : uses.users(loop.counter)) {

@@ -7,7 +7,7 @@
 // Sites: fragment-entry float scalar/vector values that compute something (their backward slice
 // holds at least one arithmetic/call/sample instruction: replacing a plain load saves nothing), are
 // outside loops (one value per pixel), and whose slice has no side effects.
-#include <cctype>
+#include <set>
 
 #include "shader/rules_internal.hpp"
 #include "shader/value_rewrite.hpp"
@@ -18,30 +18,23 @@ namespace {
 
 using ir::Id;
 
-// Why `value` cannot be moved to a parameter, or "" when it can.
-std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses, Id value) {
-  const ir::InstructionRef* ref = uses.defRef(value);
+// The blocks of the fragment entry point inside loops (blocksInLoops), or none.
+std::set<Id> entryLoopBlocks(const ir::Module& fragment) {
   int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
-  if (!ref || ref->function != entry || ref->block < 0)
-    return "not a value of the fragment entry point";
-  const ir::Instruction& definition = *ref->instruction;
-  if (!definition.type_id || !ir::isFloatScalarOrVector(uses, definition.type_id) ||
-      ir::typeInfo(uses, definition.type_id).width != 32)
-    return "not a 32-bit float scalar or vector";
-  if (definition.opcode == spv::OpLoad) return "a plain load";
-  const ir::Function& function = fragment.functions[entry];
-  if (blocksInLoops(function).count(function.blocks[ref->block].id())) return "inside a loop";
+  return entry < 0 ? std::set<Id>{} : blocksInLoops(fragment.functions[static_cast<size_t>(entry)]);
+}
+
+// Why `value` cannot be moved to a parameter, or "" when it can. `in_loops`: entryLoopBlocks().
+std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses,
+                          const std::set<Id>& in_loops, Id value) {
+  if (std::string why = valueTargetUnsuitability(fragment, uses, value); !why.empty()) return why;
+  const ir::InstructionRef* ref = uses.defRef(value);
+  const ir::Function& function = fragment.functions[static_cast<size_t>(ref->function)];
+  if (in_loops.count(function.blocks[ref->block].id())) return "inside a loop";
   ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
   if (sources.has_side_effects) return "its computation has side effects";
   if (computingInstructionCount(uses, sources) == 0) return "computes nothing";
   return "";
-}
-
-// Identifier characters only, so the uniform's name survives cross-compilation readable.
-std::string identifierFrom(const std::string& text) {
-  std::string result;
-  for (char c : text) result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return result;
 }
 
 }  // namespace
@@ -52,14 +45,9 @@ std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
   if (!context.average_value) return sites;  // nothing could compute the averages
   const ir::Module& fragment = program.fragment;
   ir::DefUse uses(fragment);
-  int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
-  if (entry < 0) return sites;
-  std::set<Id> in_loops = blocksInLoops(fragment.functions[entry]);
+  const std::set<Id> in_loops = entryLoopBlocks(fragment);
   for (Id value : candidateValues(fragment, uses, spv::ExecutionModelFragment)) {
-    const ir::InstructionRef* ref = uses.defRef(value);
-    if (in_loops.count(fragment.functions[entry].blocks[ref->block].id())) continue;
-    ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
-    if (sources.has_side_effects || computingInstructionCount(uses, sources) == 0) continue;
+    if (!unsuitability(fragment, uses, in_loops, value).empty()) continue;
     RuleSite site;
     site.kind = RuleKind::kMoveToParameter;
     site.stage = Stage::kFragment;
@@ -80,7 +68,9 @@ core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, c
   std::string name;
   {
     ir::DefUse uses(program.fragment);
-    if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
+    if (std::string why = unsuitability(program.fragment, uses, entryLoopBlocks(program.fragment),
+                                        site.target);
+        !why.empty())
       return siteError(site, why);
     type_id = uses.def(site.target)->type_id;
     name = describeComputedValue(program.fragment, uses, site.target);

@@ -19,6 +19,7 @@
 #include <unordered_set>
 
 #include "shader/rules_internal.hpp"
+#include "shader/value_rewrite.hpp"
 
 namespace duolod::shader {
 namespace {
@@ -72,7 +73,7 @@ void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
   for (size_t header = 0; header < cfg.blocks.size(); ++header) {
     const ir::Instruction* merge = function.blocks[header].mergeInstruction();
     if (!merge || merge->opcode != spv::OpLoopMerge) continue;
-    std::vector<bool> blocks = loopBlocks(cfg, static_cast<int>(header));
+    std::vector<bool> blocks = loopConstructBlocks(cfg, static_cast<int>(header));
     for (size_t block = 0; block < blocks.size(); ++block)
       if (blocks[block]) in_loop[block] = true;
   }
@@ -258,7 +259,7 @@ core::Result<ShaderProgram> applyOperationRemoval(const ShaderProgram& program,
   }
   module.replaceAllUses(site.target, replacement);
   module.removeInstructions({site.target});
-  removeDeadPureInstructions(module);
+  removeDeadCode(module);
   return rewritten;
 }
 

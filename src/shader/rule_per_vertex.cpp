@@ -17,7 +17,6 @@
 // unavailable. The copy runs at the end of the vertex entry point and stores a new Output at
 // RuleContext::first_varying_location (or the next free location); the fragment stage reads the
 // matching Input instead of computing the value, and what becomes dead is removed.
-#include <cctype>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -488,28 +487,13 @@ int returnBlockIndex(const Module& vertex) {
 
 // Why fragment `value` is not a per-vertex candidate by its dependences, or "".
 std::string unsuitability(const Module& fragment, const ir::DefUse& uses, Id value) {
-  const ir::InstructionRef* ref = uses.defRef(value);
-  int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
-  if (!ref || ref->function != entry || ref->block < 0)
-    return "not a value of the fragment entry point";
-  const Instruction& definition = *ref->instruction;
-  if (!definition.type_id || !ir::isFloatScalarOrVector(uses, definition.type_id) ||
-      ir::typeInfo(uses, definition.type_id).width != 32)
-    return "not a 32-bit float scalar or vector";
-  if (definition.opcode == spv::OpLoad || definition.opcode == spv::OpPhi)
-    return "a plain load or a phi";
+  if (std::string why = valueTargetUnsuitability(fragment, uses, value); !why.empty()) return why;
   ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
   if (!sources.onlyInputsUniformsConstants())
     return "depends on textures, derivatives, side effects or other memory";
   if (!sources.reads_input) return "reads no interpolated input";
   if (computingInstructionCount(uses, sources) == 0) return "computes nothing";
   return "";
-}
-
-std::string identifierFrom(const std::string& text) {
-  std::string result;
-  for (char c : text) result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return result;
 }
 
 }  // namespace

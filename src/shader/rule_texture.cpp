@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "shader/rules_internal.hpp"
+#include "shader/value_rewrite.hpp"
 
 namespace duolod::shader {
 namespace {
@@ -154,7 +155,7 @@ core::Result<ShaderProgram> applyTextureAverage(const ShaderProgram& program,
   ir::Id constant = module.constantFloatVector(std::span(average->data(), components));
   module.replaceAllUses(site.target, constant);
   module.removeInstructions({site.target});
-  removeDeadPureInstructions(module);
+  removeDeadCode(module);
   return rewritten;
 }
 

@@ -4,10 +4,12 @@
 #include "shader/rules.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <optional>
 #include <unordered_map>
 
 #include "shader/rules_internal.hpp"
+#include "shader/value_rewrite.hpp"
 
 namespace duolod::shader {
 namespace {
@@ -113,90 +115,25 @@ std::string functionName(const ir::Module& module, size_t function_index) {
   return name.substr(0, name.find('('));
 }
 
-bool isPureOpcode(spv::Op opcode) {
-  switch (opcode) {
-    // Memory reads and address arithmetic: no side effects (an unused load can go).
-    case spv::OpLoad: case spv::OpAccessChain: case spv::OpInBoundsAccessChain:
-    // Composites and conversions.
-    case spv::OpVectorShuffle: case spv::OpCompositeConstruct: case spv::OpCompositeExtract:
-    case spv::OpCompositeInsert: case spv::OpCopyObject: case spv::OpTranspose:
-    case spv::OpConvertFToU: case spv::OpConvertFToS: case spv::OpConvertSToF:
-    case spv::OpConvertUToF: case spv::OpUConvert: case spv::OpSConvert: case spv::OpFConvert:
-    case spv::OpBitcast: case spv::OpVectorExtractDynamic: case spv::OpVectorInsertDynamic:
-    // Arithmetic.
-    case spv::OpSNegate: case spv::OpFNegate: case spv::OpIAdd: case spv::OpFAdd:
-    case spv::OpISub: case spv::OpFSub: case spv::OpIMul: case spv::OpFMul: case spv::OpUDiv:
-    case spv::OpSDiv: case spv::OpFDiv: case spv::OpUMod: case spv::OpSRem: case spv::OpSMod:
-    case spv::OpFRem: case spv::OpFMod: case spv::OpVectorTimesScalar:
-    case spv::OpMatrixTimesScalar: case spv::OpVectorTimesMatrix: case spv::OpMatrixTimesVector:
-    case spv::OpMatrixTimesMatrix: case spv::OpOuterProduct: case spv::OpDot:
-    // Bits, logic and comparisons.
-    case spv::OpShiftRightLogical: case spv::OpShiftRightArithmetic:
-    case spv::OpShiftLeftLogical: case spv::OpBitwiseOr: case spv::OpBitwiseXor:
-    case spv::OpBitwiseAnd: case spv::OpNot: case spv::OpAny: case spv::OpAll:
-    case spv::OpIsNan: case spv::OpIsInf: case spv::OpLogicalEqual: case spv::OpLogicalNotEqual:
-    case spv::OpLogicalOr: case spv::OpLogicalAnd: case spv::OpLogicalNot: case spv::OpSelect:
-    case spv::OpIEqual: case spv::OpINotEqual: case spv::OpUGreaterThan:
-    case spv::OpSGreaterThan: case spv::OpUGreaterThanEqual: case spv::OpSGreaterThanEqual:
-    case spv::OpULessThan: case spv::OpSLessThan: case spv::OpULessThanEqual:
-    case spv::OpSLessThanEqual: case spv::OpFOrdEqual: case spv::OpFUnordEqual:
-    case spv::OpFOrdNotEqual: case spv::OpFUnordNotEqual: case spv::OpFOrdLessThan:
-    case spv::OpFUnordLessThan: case spv::OpFOrdGreaterThan: case spv::OpFUnordGreaterThan:
-    case spv::OpFOrdLessThanEqual: case spv::OpFUnordLessThanEqual:
-    case spv::OpFOrdGreaterThanEqual: case spv::OpFUnordGreaterThanEqual:
-    // Derivatives and image sampling (reads only).
-    case spv::OpDPdx: case spv::OpDPdy: case spv::OpFwidth: case spv::OpDPdxFine:
-    case spv::OpDPdyFine: case spv::OpFwidthFine: case spv::OpDPdxCoarse: case spv::OpDPdyCoarse:
-    case spv::OpFwidthCoarse: case spv::OpSampledImage: case spv::OpImage:
-    case spv::OpImageSampleImplicitLod: case spv::OpImageSampleExplicitLod:
-    case spv::OpImageSampleDrefImplicitLod: case spv::OpImageSampleDrefExplicitLod:
-    case spv::OpImageSampleProjImplicitLod: case spv::OpImageSampleProjExplicitLod:
-    case spv::OpImageFetch: case spv::OpImageGather: case spv::OpImageQuerySizeLod:
-    case spv::OpImageQueryLod: case spv::OpImageQueryLevels:
-    // GLSL.std.450 is the only extended set glslang emits for GLSL; none of it writes memory.
-    case spv::OpExtInst:
-    case spv::OpPhi:
-      return true;
-    default:
-      return false;
-  }
+std::string identifierFrom(const std::string& text) {
+  std::string result;
+  for (char c : text) result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return result;
 }
 
-std::vector<bool> loopBlocks(const ir::Cfg& cfg, int header) {
-  std::vector<bool> in_loop(cfg.blocks.size(), false);
-  int merge_block = cfg.merge_block[static_cast<size_t>(header)];
-  std::vector<int> stack = {header};
-  while (!stack.empty()) {
-    int block = stack.back();
-    stack.pop_back();
-    if (block == merge_block || in_loop[static_cast<size_t>(block)]) continue;
-    in_loop[static_cast<size_t>(block)] = true;
-    for (int next : cfg.successors[static_cast<size_t>(block)]) stack.push_back(next);
-  }
-  return in_loop;
-}
-
-size_t removeDeadPureInstructions(ir::Module& module) {
-  size_t removed_total = 0;
-  for (;;) {
-    ir::DefUse uses(module);
-    std::set<ir::Id> dead;
-    for (const ir::Function& function : module.functions)
-      for (const ir::Block& block : function.blocks)
-        for (const ir::Instruction& instruction : block.instructions) {
-          if (!instruction.hasResult() || !isPureOpcode(instruction.opcode)) continue;
-          bool used = false;
-          for (const ir::InstructionRef& user : uses.users(instruction.result_id))
-            if (user.instruction->opcode != spv::OpName &&
-                user.instruction->opcode != spv::OpDecorate &&
-                user.instruction->opcode != spv::OpMemberDecorate)
-              used = true;
-          if (!used) dead.insert(instruction.result_id);
-        }
-    if (dead.empty()) return removed_total;
-    removed_total += dead.size();
-    module.removeInstructions(dead);
-  }
+std::string valueTargetUnsuitability(const ir::Module& fragment, const ir::DefUse& uses,
+                                     ir::Id value) {
+  const ir::InstructionRef* ref = uses.defRef(value);
+  int entry = entryFunctionIndex(fragment, spv::ExecutionModelFragment);
+  if (!ref || ref->function != entry || ref->block < 0)
+    return "not a value of the fragment entry point";
+  const ir::Instruction& definition = *ref->instruction;
+  if (!definition.type_id || !ir::isFloatScalarOrVector(uses, definition.type_id) ||
+      ir::typeInfo(uses, definition.type_id).width != 32)
+    return "not a 32-bit float scalar or vector";
+  if (definition.opcode == spv::OpLoad || definition.opcode == spv::OpPhi)
+    return "a plain load or a phi";
+  return "";
 }
 
 core::Result<ShaderProgram> parseProgram(std::span<const uint32_t> vertex_words,

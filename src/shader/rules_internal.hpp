@@ -67,18 +67,14 @@ std::string valueName(const ir::Module& module, ir::Id id);
 std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id);
 // The source-level name of function `function_index` ("fbm" for glslang's "fbm(vf3;").
 std::string functionName(const ir::Module& module, size_t function_index);
+// `text` with every character that is not a letter or digit replaced by '_': names of the
+// uniforms and varyings rules add, readable after cross-compilation.
+std::string identifierFrom(const std::string& text);
 
-// True for opcodes whose result depends only on their operands and that have no side effects
-// (arithmetic, conversions, composites, GLSL.std.450 calls, image *sampling*): safe to delete
-// once unused.
-bool isPureOpcode(spv::Op opcode);
-
-// The blocks of the loop whose header is block `header` of `cfg`: every block reachable from the
-// header without passing through its merge block (flags indexed like cfg.blocks).
-std::vector<bool> loopBlocks(const ir::Cfg& cfg, int header);
-
-// Removes, repeatedly, pure instructions (isPureOpcode) whose results nobody uses any more, so a
-// rule's now-dead operands disappear from the readable module too. Returns how many were removed.
-size_t removeDeadPureInstructions(ir::Module& module);
+// Why fragment `value` cannot be the target of a value rule (moving to parameter, per-vertex) by
+// its definition alone: not a result of the fragment entry point, not a 32-bit float scalar or
+// vector, or a plain load or phi. "" when it can; each rule then checks its own dependences.
+std::string valueTargetUnsuitability(const ir::Module& fragment, const ir::DefUse& uses,
+                                     ir::Id value);
 
 }  // namespace duolod::shader

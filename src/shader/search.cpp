@@ -2,6 +2,7 @@
 #include "shader/search.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <limits>
 #include <map>
@@ -181,6 +182,18 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
     return enumerateSites(**program, cache.context());
   };
 
+  // One site of `sites` (not empty), by options.balance_rule_kinds.
+  auto drawSite = [&](const std::vector<RuleSite>& sites, SearchRandom& random) -> const RuleSite& {
+    if (!options.balance_rule_kinds) return sites[random.index(sites.size())];
+    std::array<std::vector<size_t>, kRuleKindCount> by_kind;
+    for (size_t i = 0; i < sites.size(); ++i) by_kind[static_cast<size_t>(sites[i].kind)].push_back(i);
+    std::vector<const std::vector<size_t>*> present;
+    for (const std::vector<size_t>& kind : by_kind)
+      if (!kind.empty()) present.push_back(&kind);
+    const std::vector<size_t>& kind = *present[random.index(present.size())];
+    return sites[kind[random.index(kind.size())]];
+  };
+
   Nsga2Problem<Genome> problem;
   problem.mutate = [&](const Genome& parent, SearchRandom& random) {
     Genome child = parent;
@@ -193,14 +206,14 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
       for (int i = 0; i < count && static_cast<int>(child.size()) < options.max_genome_length; ++i) {
         std::vector<RuleSite> sites = sitesOf(child, child.size());
         if (sites.empty()) break;
-        child.push_back(sites[random.index(sites.size())]);
+        child.push_back(drawSite(sites, random));
       }
     } else if (draw < remove_below) {
       child.erase(child.begin() + static_cast<long>(random.index(child.size())));
     } else {
       size_t position = random.index(child.size());
       std::vector<RuleSite> sites = sitesOf(child, position);
-      if (!sites.empty()) child[position] = sites[random.index(sites.size())];
+      if (!sites.empty()) child[position] = drawSite(sites, random);
     }
     return child;
   };

@@ -81,6 +81,11 @@ struct GeneticSearchOptions {
   double append_probability = 0.6;
   double append_extra_mean = 1.0;
   int max_genome_length = 200;
+  // How a mutation draws a new site: false = uniformly over all sites; true = a rule kind
+  // uniformly among the kinds with sites, then a site of that kind. Operation removal offers ~80%
+  // of noise_phong's ~570 sites, so uniform draws almost never try the 3 loop truncations or the
+  // per-vertex moves that save the most (bench/RESULTS.md, issue 4 search).
+  bool balance_rule_kinds = true;
   // Errors above this (predicted) make a variant invalid: the search spends no time beyond the
   // useful range (the paper's e_max bounds the levels anyway). Infinity keeps everything.
   double max_error = 1e30;

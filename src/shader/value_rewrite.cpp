@@ -298,22 +298,29 @@ uint32_t freeUniformLocation(const std::vector<const Module*>& modules, uint32_t
   return location;
 }
 
+std::vector<bool> loopConstructBlocks(const ir::Cfg& cfg, int header) {
+  std::vector<bool> in_loop(cfg.blocks.size(), false);
+  int merge_block = cfg.merge_block[static_cast<size_t>(header)];
+  std::vector<int> stack = {header};
+  while (!stack.empty()) {
+    int block = stack.back();
+    stack.pop_back();
+    if (block == merge_block || in_loop[static_cast<size_t>(block)]) continue;
+    in_loop[static_cast<size_t>(block)] = true;
+    for (int next : cfg.successors[static_cast<size_t>(block)]) stack.push_back(next);
+  }
+  return in_loop;
+}
+
 std::set<Id> blocksInLoops(const ir::Function& function) {
   std::set<Id> inside;
   ir::Cfg cfg = ir::buildCfg(function);
   for (size_t header = 0; header < function.blocks.size(); ++header) {
     const Instruction* merge = function.blocks[header].mergeInstruction();
     if (!merge || merge->opcode != spv::OpLoopMerge) continue;
-    int merge_block = cfg.merge_block[header];
-    std::vector<int> work = {static_cast<int>(header)};
-    std::set<int> seen = {static_cast<int>(header)};
-    while (!work.empty()) {
-      int block = work.back();
-      work.pop_back();
-      inside.insert(cfg.blocks[block]);
-      for (int next : cfg.successors[block])
-        if (next != merge_block && seen.insert(next).second) work.push_back(next);
-    }
+    std::vector<bool> in_loop = loopConstructBlocks(cfg, static_cast<int>(header));
+    for (size_t block = 0; block < in_loop.size(); ++block)
+      if (in_loop[block]) inside.insert(cfg.blocks[block]);
   }
   return inside;
 }

@@ -1,6 +1,7 @@
-// Helpers shared by the rules that replace one fragment value by something computed elsewhere
-// ("moving to parameter", He et al. 2015; per-pixel → per-vertex, Wang et al. 2014) and by the
-// instrumented render that averages a value (value_average.cpp). Private to src/shader.
+// Helpers shared by the rules (operation removal, texture, loops: dead code and loop constructs;
+// "moving to parameter", He et al. 2015, and per-pixel → per-vertex, Wang et al. 2014: values
+// replaced by something computed elsewhere) and by the instrumented render that averages a value
+// (value_average.cpp). Private to src/shader.
 #pragma once
 
 #include <optional>
@@ -44,6 +45,10 @@ uint32_t freeInterfaceLocation(const std::vector<const ir::Module*>& modules, ui
 // `taken`.
 uint32_t freeUniformLocation(const std::vector<const ir::Module*>& modules, uint32_t first,
                              const std::vector<uint32_t>& taken);
+
+// The blocks of the loop whose header is block `header` of `cfg`: every block reachable from the
+// header without passing through its merge block (flags indexed like cfg.blocks).
+std::vector<bool> loopConstructBlocks(const ir::Cfg& cfg, int header);
 
 // Label ids of the blocks of `function` that lie inside a loop construct (from a loop header up to,
 // not including, its merge block): a value there has one instance per iteration, so "its value at

@@ -1,5 +1,6 @@
-// Shared by the value-rule tests (moving to parameter, per-vertex): a lit square, a frontal camera,
-// a small vertex stage on the duolod interface, and compile/render helpers for ShaderPrograms.
+// Shared by the shader rule tests (shader_rules_test, and the value rules: moving to parameter,
+// per-vertex): one renderer per test binary, a lit square, a frontal camera, a small vertex stage
+// on the duolod interface, and compile/render helpers for ShaderPrograms.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -16,7 +17,7 @@
 #include "shader/rules.hpp"
 #include "test_support.hpp"
 
-namespace duolod::shader::test_values {
+namespace duolod::shader::test_rules {
 
 // The Frame block of shaders/INTERFACE.md, for hand-written test stages.
 inline const char* kFrameBlock = R"(
@@ -161,4 +162,4 @@ class RendererFixture : public ::testing::Test {
   static inline std::string failure_;
 };
 
-}  // namespace duolod::shader::test_values
+}  // namespace duolod::shader::test_rules
