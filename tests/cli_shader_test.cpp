@@ -51,7 +51,9 @@ TEST(CliShaderTest, GeneticSearchWritesLevelsAutoLodAndSummary) {
   for (size_t k = 0; k < levels.size(); ++k) {
     expectLevelFiles(out, levels[k]["files"].get<std::string>());
     EXPECT_GE(levels[k]["rendered_error"].get<double>(), 0.0);
-    if (k > 0) {
+    // After the original, by decreasing predicted cost (a variant on the front can cost more than
+    // the original when its error is lower).
+    if (k > 1) {
       EXPECT_LE(levels[k]["predicted_cost"].get<double>(), levels[k - 1]["predicted_cost"].get<double>());
     }
   }

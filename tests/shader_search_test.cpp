@@ -135,24 +135,29 @@ TEST(ShaderSearchTest, GeneticSearchIsDeterministicAndTheCacheMakesARerunFree) {
 TEST(ShaderSearchTest, VariantsTheScorerRejectsNeverReachTheFront) {
   VariantScorer scorer = countingScorer();
   auto cost = scorer.predicted_cost;
-  scorer.predicted_cost = [cost](const ShaderProgram& program) -> core::Result<double> {
-    if (program.history.size() == 2) return core::Error{"pretend this variant failed to compile"};
+  // Rejected by a property of the program itself (scores are cached by program, and different
+  // site lists can give the same program once dead code is removed).
+  auto rejected = [](const ShaderProgram& program) {
+    return static_cast<int>(instructionCount(program.fragment)) % 3 == 0;
+  };
+  scorer.predicted_cost = [cost, rejected](const ShaderProgram& program) -> core::Result<double> {
+    if (rejected(program)) return core::Error{"pretend this variant failed to compile"};
     return cost(program);
   };
   SearchCache cache(smallProgram(), operationRemovalOnly(), scorer);
   auto result = searchGenetic(cache, smallGp(11));
   ASSERT_TRUE(result) << result.error().message;
   EXPECT_GT(result->counters.score_failures, 0);
-  for (const SearchVariant& variant : result->variants) EXPECT_NE(variant.sites.size(), 2u);
+  for (const SearchVariant& variant : result->variants) EXPECT_FALSE(rejected(*variant.program));
 }
 
 TEST(ShaderSearchTest, GreedyTakesTheBestErrorPerCostStepByStep) {
   SearchCache cache(smallProgram(), operationRemovalOnly(), countingScorer());
   GreedySearchOptions options;
-  options.max_steps = 3;
+  options.max_steps = 2;
   auto result = searchGreedy(cache, options);
   ASSERT_TRUE(result) << result.error().message;
-  ASSERT_EQ(result->variants.size(), 4u);  // the original + 3 steps
+  ASSERT_EQ(result->variants.size(), 3u);  // the original + 2 steps
   EXPECT_TRUE(result->variants[0].sites.empty());
   for (size_t step = 1; step < result->variants.size(); ++step) {
     const SearchVariant& variant = result->variants[step];
