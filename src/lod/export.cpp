@@ -8,54 +8,13 @@
 #include "duolod/shader.hpp"
 #include "shader/autolod.hpp"
 #include "shader/rules.hpp"
+#include "shader/shader_files.hpp"
 
 namespace duolod::lod {
 namespace {
 
 namespace fs = std::filesystem;
 
-core::Status writeWords(const fs::path& path, const std::vector<uint32_t>& words) {
-  const auto* bytes = reinterpret_cast<const uint8_t*>(words.data());
-  return io::writeFileAtomic(path.string(), std::span<const uint8_t>(bytes, words.size() * 4));
-}
-
-// name.{vert,frag}.spv and the three cross-compiled sources, each re-compiled as a check. Returns
-// the files written, by kind (the names lod.json lists).
-core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
-    const render::SpirvBinary& readable, const fs::path& directory, const std::string& name) {
-  std::vector<std::pair<std::string, std::string>> files;
-  struct StageWords {
-    const char* suffix;
-    shader::Stage stage;
-    const std::vector<uint32_t>* words;
-  };
-  for (const StageWords& stage : {StageWords{"vert", shader::Stage::kVertex, &readable.vertex},
-                                  StageWords{"frag", shader::Stage::kFragment, &readable.fragment}}) {
-    const std::string base = name + "." + stage.suffix;
-    if (auto ok = writeWords(directory / (base + ".spv"), *stage.words); !ok) return ok.error();
-    files.push_back({std::string("spirv_") + stage.suffix, base + ".spv"});
-    struct Output {
-      shader::Target target;
-      const char* extension;
-      const char* kind;
-    };
-    for (const Output& output : {Output{shader::Target::kGlsl450, ".glsl", "glsl450_"},
-                                 Output{shader::Target::kGlslEs300, ".es.glsl", "glsles300_"},
-                                 Output{shader::Target::kHlsl50, ".hlsl", "hlsl50_"}}) {
-      auto text = shader::crossCompile(*stage.words, output.target, base);
-      if (!text) return text.error();
-      if (auto check = shader::checkCrossCompiled(*text, output.target, stage.stage,
-                                                  base + output.extension);
-          !check)
-        return check.error();
-      if (auto ok = io::writeFileAtomic((directory / (base + output.extension)).string(), *text);
-          !ok)
-        return ok.error();
-      files.push_back({output.kind + std::string(stage.suffix), base + output.extension});
-    }
-  }
-  return files;
-}
 
 core::Status prepareDirectory(const std::string& directory, const core::Asset& asset, bool force) {
   std::error_code error;
@@ -121,7 +80,7 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   for (size_t k = 0; k < result.levels.size(); ++k) {
     const GeneratedLevel& level = result.levels[k];
     const std::string name = "level" + std::to_string(k);
-    auto files = writeShaderFiles(level.readable, out, name);
+    auto files = shader::writeShaderFiles(level.readable.vertex, level.readable.fragment, out, name);
     if (!files) return files.error();
     io::LodJsonLevel row;
     row.level = static_cast<int>(k);
@@ -168,8 +127,8 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   if (!autolod) return autolod.error();
   auto autolod_words = shader::emitProgram(autolod->program, /*optimize=*/false);
   if (!autolod_words) return autolod_words.error();
-  if (auto files = writeShaderFiles({autolod_words->vertex, autolod_words->fragment}, out,
-                                    "autolod");
+  if (auto files =
+          shader::writeShaderFiles(autolod_words->vertex, autolod_words->fragment, out, "autolod");
       !files)
     return files.error();
 

@@ -1,7 +1,7 @@
 // Writing a program's shader files: per stage the SPIR-V module and its GLSL 450, GLSL ES 300 and
 // HLSL 5.0 translations (SPIRV-Cross), each translation re-compiled by glslang before it is
-// written. Used by `duolod shader` (shader/lod_search.hpp); meant for every writer of shader
-// outputs (lod/export.cpp has its own copy still).
+// written. Used by `duolod shader` (shader/lod_search.hpp) and `duolod generate`
+// (lod/export.cpp).
 #pragma once
 
 #include <cstdint>
