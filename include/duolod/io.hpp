@@ -19,6 +19,9 @@ struct LoadOptions {
   bool generate_normals = true;   // when the file has none
   bool generate_tangents = true;  // when the file has none but has normals and uv0
   bool weld = true;               // merge vertices whose attributes are all equal
+  // glTF only: >= 0 reads that node (with its children) instead of the default scene, e.g. level
+  // k of a LOD chain written by writeGltfLodChain (node k), which only lists node 0 in its scene.
+  int gltf_node = -1;
 };
 
 // Reads any supported format, chosen by extension (case-insensitive): .gltf .glb .obj .ply .off.

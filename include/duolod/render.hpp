@@ -179,6 +179,35 @@ struct DrawTime {
   int repeats = 0;
 };
 
+// ---------------------------------------------------------------------------------------------
+// Scenes: many placed instances of uploaded assets seen by one camera (the walk-through benchmark,
+// Liang et al. §7.2.2). Ids are Renderer::AssetId / ProgramId.
+
+struct SceneCamera {
+  core::Mat4 view, projection;
+  core::Vec3 eye;    // world space
+  core::Vec3 light;  // world-space point light (INTERFACE.md: no falloff)
+  int width = 1280, height = 720;
+  core::Vec3 clear_color{0, 0, 0};  // cleared with alpha 0
+};
+// Instances of one asset drawn with one program, in order: a batch binds the program, vertex
+// arrays and materials once, then each instance only moves the Frame block's range (uModel).
+struct InstanceBatch {
+  int asset = -1;
+  int program = -1;
+  std::vector<core::Mat4> models;  // object -> world, one per instance
+};
+struct SceneOptions {
+  bool read_back = false;   // fill SceneFrame::image
+  bool count_work = false;  // fill SceneFrame::work (ARB_pipeline_statistics_query)
+};
+struct SceneFrame {
+  double seconds = 0;  // wall clock from the clear to glFinish (excludes the readback)
+  int draws = 0;
+  WorkCounts work;
+  core::ImageRGBA8 image;  // width x height when read back, top row first
+};
+
 class Renderer {
  public:
   static core::Result<std::unique_ptr<Renderer>> create(const ContextOptions& options = {});
@@ -233,6 +262,11 @@ class Renderer {
   core::Result<DrawTime> measureDrawTime(AssetId asset, ProgramId program,
                                          std::span<const Sample> samples,
                                          const TimingOptions& options = {});
+
+  // Draws the batches into a camera.width x camera.height target (depth-tested, back faces
+  // culled) and waits for the frame with glFinish.
+  core::Result<SceneFrame> renderScene(std::span<const InstanceBatch> batches,
+                                       const SceneCamera& camera, const SceneOptions& options = {});
 
   // ---- Local re-rendering, for image-driven simplification (§4.2, Lindstrom & Turk 2000) ----
   // A collapse changes only a few pixels of each view. Each tile is a small screen region of one

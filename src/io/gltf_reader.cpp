@@ -562,7 +562,12 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   int scene = model.defaultScene >= 0 ? model.defaultScene : (model.scenes.empty() ? -1 : 0);
   if (scene >= static_cast<int>(model.scenes.size()))
     return Error{path + ": default scene " + std::to_string(scene) + " does not exist"};
-  if (scene >= 0) {
+  if (options.gltf_node >= 0) {
+    if (options.gltf_node >= static_cast<int>(model.nodes.size()))
+      return Error{path + ": node " + std::to_string(options.gltf_node) + " does not exist (" +
+                   std::to_string(model.nodes.size()) + " nodes)"};
+    roots = {options.gltf_node};
+  } else if (scene >= 0) {
     roots = model.scenes[scene].nodes;
   } else {
     // No scene: take every mesh once, untransformed.

@@ -185,6 +185,42 @@ struct Renderer::State {
 
 namespace internal {
 
+// The Frame block (INTERFACE.md) of one draw: the renderer's light colour and ambient, the object's
+// bounding sphere in object space.
+inline FrameBlock makeFrameBlock(const Renderer::State& s, const core::Mat4& model,
+                                 const core::Mat4& normal_matrix, const core::Mat4& view,
+                                 const core::Mat4& projection, core::Vec3 eye, core::Vec3 light,
+                                 const core::Sphere& bounds) {
+  FrameBlock block{};
+  copyMatrix(block.model, model);
+  copyMatrix(block.view, view);
+  copyMatrix(block.projection, projection);
+  copyMatrix(block.normal_matrix, normal_matrix);
+  const float eye4[4] = {eye.x, eye.y, eye.z, 1};
+  const float light4[4] = {light.x, light.y, light.z, 1};
+  const float light_color[4] = {s.light_color.x, s.light_color.y, s.light_color.z, 0};
+  const float ambient[4] = {s.ambient.x, s.ambient.y, s.ambient.z, 0};
+  const float object[4] = {bounds.center.x, bounds.center.y, bounds.center.z, bounds.radius};
+  std::memcpy(block.camera_position, eye4, 16);
+  std::memcpy(block.light_position, light4, 16);
+  std::memcpy(block.light_color, light_color, 16);
+  std::memcpy(block.ambient_color, ambient, 16);
+  std::memcpy(block.object_info, object, 16);
+  return block;
+}
+
+// Copies `bytes` to the start of s.frame_ubo, growing it when needed.
+inline void uploadFrameBytes(Renderer::State& s, const std::vector<uint8_t>& bytes) {
+  GLsizeiptr needed = static_cast<GLsizeiptr>(bytes.size());
+  if (needed > s.frame_ubo_size) {
+    glDeleteBuffers(1, &s.frame_ubo);
+    glCreateBuffers(1, &s.frame_ubo);
+    glNamedBufferStorage(s.frame_ubo, needed, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    s.frame_ubo_size = needed;
+  }
+  glNamedBufferSubData(s.frame_ubo, 0, needed, bytes.data());
+}
+
 // The checks every whole-view render shares (ids, sample count, sizes, work counting available).
 core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
                           Renderer::ProgramId program, std::span<const Sample> samples,
@@ -203,32 +239,11 @@ struct ChunkDrawer {
     core::Mat4 normal_matrix = core::transpose(core::inverse(model));
     for (size_t i = 0; i < samples.size(); ++i) {
       const Sample& sample = samples[i];
-      FrameBlock block{};
-      copyMatrix(block.model, model);
-      copyMatrix(block.view, sample.view);
-      copyMatrix(block.projection, sample.projection);
-      copyMatrix(block.normal_matrix, normal_matrix);
-      float eye[4] = {sample.eye.x, sample.eye.y, sample.eye.z, 1};
-      float light[4] = {sample.light.x, sample.light.y, sample.light.z, 1};
-      float light_color[4] = {s.light_color.x, s.light_color.y, s.light_color.z, 0};
-      float ambient[4] = {s.ambient.x, s.ambient.y, s.ambient.z, 0};
-      float object[4] = {asset.bounds.center.x, asset.bounds.center.y, asset.bounds.center.z,
-                         asset.bounds.radius};
-      std::memcpy(block.camera_position, eye, 16);
-      std::memcpy(block.light_position, light, 16);
-      std::memcpy(block.light_color, light_color, 16);
-      std::memcpy(block.ambient_color, ambient, 16);
-      std::memcpy(block.object_info, object, 16);
+      FrameBlock block = makeFrameBlock(s, model, normal_matrix, sample.view, sample.projection,
+                                        sample.eye, sample.light, asset.bounds);
       std::memcpy(bytes.data() + i * stride, &block, sizeof block);
     }
-    GLsizeiptr needed = static_cast<GLsizeiptr>(bytes.size());
-    if (needed > s.frame_ubo_size) {
-      glDeleteBuffers(1, &s.frame_ubo);
-      glCreateBuffers(1, &s.frame_ubo);
-      glNamedBufferStorage(s.frame_ubo, needed, nullptr, GL_DYNAMIC_STORAGE_BIT);
-      s.frame_ubo_size = needed;
-    }
-    glNamedBufferSubData(s.frame_ubo, 0, needed, bytes.data());
+    uploadFrameBytes(s, bytes);
   }
 
   void bindInputs() {
