@@ -40,8 +40,12 @@ namespace {
 
 // The five configurations, in the order of the paper's Table 2, and the folder suffix of each.
 constexpr int kConfigurations = 5;
-constexpr const char* kConfigurationNames[kConfigurations] = {"no LOD", "mesh LOD", "shader LOD",
-                                                              "separate LOD", "interleaved LOD"};
+// A sixth, diagnostic entry is timed with them: the original meshes with duolod's `constant`
+// shader (no lighting), i.e. the frame's vertex, raster and fixed cost without the shading.
+constexpr int kTimed = kConfigurations + 1;
+constexpr const char* kConfigurationNames[kTimed] = {
+    "no LOD", "mesh LOD", "shader LOD", "separate LOD", "interleaved LOD",
+    "(no LOD meshes, constant shader)"};
 constexpr const char* kFolderSuffix[kConfigurations] = {"", "-mesh", "-shader", "-sep", "-int"};
 
 // The ground: a checkerboard lit by the point light, written with alpha 0 so that alpha marks the
@@ -244,8 +248,10 @@ int main(int argc, char** argv) {
   const bool can_count = renderer.canCountWork();
   const render::Display display{.fov_y_deg = fov_y_deg, .height_px = height};
 
-  std::vector<runtime::Configuration> configurations(kConfigurations);
-  for (int c = 0; c < kConfigurations; ++c) configurations[c].name = kConfigurationNames[c];
+  std::vector<runtime::Configuration> configurations(kTimed);
+  for (int c = 0; c < kTimed; ++c) configurations[c].name = kConfigurationNames[c];
+  auto constant_shader = render::loadShaderPair("constant");
+  if (!constant_shader) return fail(constant_shader.error().message);
   std::vector<core::Asset> originals;
   std::vector<std::array<double, kConfigurations>> generation_seconds;
   std::vector<std::string> warnings;
@@ -275,6 +281,10 @@ int main(int argc, char** argv) {
     auto original = runtime::uploadOriginal(renderer, *asset, *shader, folders[3], display);
     if (!original) return fail(original.error().message);
     configurations[0].kinds.push_back(std::move(*original));
+    auto geometry_only =
+        runtime::uploadOriginal(renderer, *asset, *constant_shader, folders[3], display);
+    if (!geometry_only) return fail(geometry_only.error().message);
+    configurations[kConfigurations].kinds.push_back(std::move(*geometry_only));
     for (int c = 1; c < kConfigurations; ++c) {
       auto levels = runtime::uploadLevels(renderer, *asset, folders[c], display);
       if (!levels) return fail(levels.error().message);
@@ -312,7 +322,7 @@ int main(int argc, char** argv) {
               scene_name.c_str(), scene.instances.size(), frames, width, height,
               renderer.deviceDescription().c_str(), std::thread::hardware_concurrency());
   std::fflush(stdout);
-  std::vector<std::vector<FrameRecord>> records(kConfigurations, std::vector<FrameRecord>(frames));
+  std::vector<std::vector<FrameRecord>> records(kTimed, std::vector<FrameRecord>(frames));
   std::vector<runtime::FrameSelector> selectors;
   for (const runtime::Configuration& configuration : configurations)
     selectors.emplace_back(configuration, scene);
@@ -330,11 +340,11 @@ int main(int argc, char** argv) {
     core::ImageRGBA8 reference;
     const bool strip_frame = std::find(strip_at.begin(), strip_at.end(), f) != strip_at.end();
     const bool error_frame = error_every > 0 && f % error_every == 0;
-    for (int c = 0; c < kConfigurations; ++c) {
+    for (int c = 0; c < kTimed; ++c) {
       FrameRecord& record = records[c][f];
       record.selection = selectors[c].select(scene.path[f], cameras[f]);
-      auto frame = drawFrame(c, f, {.read_back = strip_frame || error_frame,
-                                    .count_work = can_count});
+      const bool read_back = c < kConfigurations && (strip_frame || error_frame);
+      auto frame = drawFrame(c, f, {.read_back = read_back, .count_work = can_count});
       if (!frame) return fail(frame.error().message);
       record.work = frame->work;
       record.draws = frame->draws;
@@ -362,8 +372,8 @@ int main(int argc, char** argv) {
   std::vector<double> ground_only;
   for (int r = 0; r < repeats; ++r)
     for (int f = 0; f < frames; ++f) {
-      for (int j = 0; j < kConfigurations; ++j) {
-        const int c = (j + f + r) % kConfigurations;
+      for (int j = 0; j < kTimed; ++j) {
+        const int c = (j + f + r) % kTimed;
         auto frame = drawFrame(c, f, {});
         if (!frame) return fail(frame.error().message);
         records[c][f].seconds.push_back(frame->seconds);
@@ -380,8 +390,8 @@ int main(int argc, char** argv) {
     double error_ratio_max = 0, error_ratio_median = 0;
     std::vector<long> levels;  // instance-frames per level
   };
-  std::vector<Summary> summaries(kConfigurations);
-  for (int c = 0; c < kConfigurations; ++c) {
+  std::vector<Summary> summaries(kTimed);
+  for (int c = 0; c < kTimed; ++c) {
     Summary& summary = summaries[c];
     std::vector<double> frame_ms, ratios;
     for (const FrameRecord& record : records[c]) {
@@ -419,7 +429,7 @@ int main(int argc, char** argv) {
   md << "| configuration | frame ms | speedup | p10–p90 ms | vertex inv./frame | fragment "
         "inv./frame | triangles/frame | draws/frame | error/bound median (max) | instance-frames "
         "per level |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
-  for (int c = 0; c < kConfigurations; ++c) {
+  for (int c = 0; c < kTimed; ++c) {
     const Summary& s = summaries[c];
     std::string levels;
     for (size_t k = 0; k < s.levels.size(); ++k)
@@ -428,7 +438,7 @@ int main(int argc, char** argv) {
                   "| %s | %.2f | %.2fx | %.2f–%.2f | %.0f | %.0f | %.0f | %.0f | %s | %s |\n",
                   kConfigurationNames[c], s.ms.mean, summaries[0].ms.mean / s.ms.mean, s.ms.p10,
                   s.ms.p90, s.vertices, s.fragments, s.triangles, s.draws,
-                  c == 0 ? "—"
+                  c == 0 || c == kConfigurations ? "—"
                          : (std::to_string(s.error_ratio_median).substr(0, 5) + " (" +
                             std::to_string(s.error_ratio_max).substr(0, 5) + ")")
                                .c_str(),
@@ -455,7 +465,7 @@ int main(int argc, char** argv) {
   csv << "frame,configuration,ms_median,vertex_invocations,fragment_invocations,triangles,draws,"
          "visible,error,bound\n";
   for (int f = 0; f < frames; ++f)
-    for (int c = 0; c < kConfigurations; ++c) {
+    for (int c = 0; c < kTimed; ++c) {
       const FrameRecord& r = records[c][f];
       std::snprintf(line, sizeof line, "%d,%s,%.3f,%llu,%llu,%llu,%d,%d,%.4g,%.4g\n", f,
                     kConfigurationNames[c], core::median(r.seconds) * 1e3,
