@@ -33,6 +33,16 @@ TEST(ShaderSummary, GroupsSitesByWhatTheyDo) {
             "average): n; 3 operations removed (fbm, gradientNoise ×2)");
 }
 
+TEST(ShaderSummary, RepeatedTruncationsOfOneLoopReadAsOne) {
+  std::vector<RuleSite> sites = {
+      site(RuleKind::kLoopTruncation, "fragment: loop over octave in fbm: 4 → 2 iterations"),
+      site(RuleKind::kLoopTruncation, "fragment: loop over i in blend: 3 → 2 iterations"),
+      site(RuleKind::kLoopTruncation, "fragment: loop over octave in fbm: 2 → 1 iterations"),
+  };
+  EXPECT_EQ(summarizeSites(sites),
+            "loop over octave in fbm: 4 → 1 iterations; loop over i in blend: 3 → 2 iterations");
+}
+
 TEST(ShaderSummary, UnexpectedWordingIsKeptWhole) {
   std::vector<RuleSite> sites = {site(RuleKind::kPerVertex, "something else")};
   EXPECT_EQ(summarizeSites(sites), "per vertex: something else");

@@ -225,7 +225,8 @@ class Renderer {
 
   core::Result<AssetId> uploadAsset(const core::Asset& asset);
   // Another mesh with the materials and textures of an uploaded asset (textures are shared, not
-  // copied): for the many meshes of one asset an optimizer renders.
+  // copied): for the many meshes of one asset an optimizer renders. It keeps that asset's
+  // bounding sphere (the shaders' uObjectInfo): a simplification is the same object.
   core::Result<AssetId> uploadMesh(AssetId materials_from, const core::Mesh& mesh);
   void releaseAsset(AssetId asset);
   core::Result<ProgramId> compileProgram(const GlslSource& source);

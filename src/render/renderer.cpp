@@ -386,6 +386,10 @@ core::Result<Renderer::AssetId> Renderer::uploadMesh(AssetId materials_from,
     return Error{"uploadMesh: " + uploaded.error().message};
   }
   gpu.textures = source.textures;
+  // The same object, simplified: it keeps the original's bounding sphere (uObjectInfo), so
+  // object-space procedural shading (noise_phong scales its noise by the radius) does not shift
+  // from level to level.
+  gpu.bounds = source.bounds;
   state_->assets.push_back(std::move(gpu));
   return static_cast<AssetId>(state_->assets.size() - 1);
 }

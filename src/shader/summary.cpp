@@ -55,9 +55,25 @@ std::string summarizeSites(std::span<const RuleSite> sites) {
   int removed = 0;
   for (const RuleSite& site : sites) {
     switch (site.kind) {
-      case RuleKind::kLoopTruncation:
-        loops.push_back(withoutStage(site.description));
+      case RuleKind::kLoopTruncation: {
+        // "fbm loop: 4 → 2 iterations" then "fbm loop: 2 → 1 iterations" read as one truncation,
+        // 4 → 1: the later site replaces the earlier one's end.
+        std::string text = withoutStage(site.description);
+        const size_t arrow = text.find(" → ");
+        const size_t colon = text.rfind(": ", arrow);
+        bool merged = false;
+        if (arrow != std::string::npos && colon != std::string::npos) {
+          const std::string label = text.substr(0, colon);
+          for (std::string& loop : loops)
+            if (loop.rfind(label + ": ", 0) == 0 && loop.find(" → ") != std::string::npos) {
+              loop = loop.substr(0, loop.find(" → ")) + text.substr(arrow);
+              merged = true;
+              break;
+            }
+        }
+        if (!merged) loops.push_back(std::move(text));
         break;
+      }
       case RuleKind::kTextureAverage:
         textures.push_back(between(withoutStage(site.description), "", " sample") +
                            " → average colour");
