@@ -116,6 +116,10 @@ class Generator {
                                               std::string summary);
   core::Status profile(ShaderCandidate& candidate);
   core::Result<Renderer::AssetId> meshAsset(int set, int mesh);
+  // Scores shader variants on (mesh of `set`, level's distance): the GP configurations of §5.2
+  // and the interleaved generations of §4.3.
+  core::Result<std::unique_ptr<shader::ConfigurationScorer>> scorerFor(int level, int set,
+                                                                       int mesh);
   core::Result<render::ImageBatch8> renderPair(int distance_level, int set, int mesh, int shader,
                                                render::WorkCounts* work) {
     const LevelState& level = levels_[distance_level];
@@ -342,6 +346,19 @@ core::Result<Renderer::AssetId> Generator::meshAsset(int set, int mesh) {
   return *uploaded;
 }
 
+core::Result<std::unique_ptr<shader::ConfigurationScorer>> Generator::scorerFor(int level, int set,
+                                                                                int mesh) {
+  auto asset = meshAsset(set, mesh);
+  if (!asset) return asset.error();
+  shader::EvaluationConfig config;
+  config.distance = float(levels_[level].level.distance);
+  config.display = options_.levels.display;
+  config.supersample = options_.supersample;
+  return shader::ConfigurationScorer::create(*renderer_, cache_, *asset,
+                                             mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh],
+                                             original_, config);
+}
+
 // The cost model's per-invocation op counts of a shader candidate: one instrumented render of the
 // original mesh at a middle level, a few views (the counts per invocation hardly depend on the
 // mesh; the invocation counts, which do, come from each pair's own render).
@@ -504,14 +521,7 @@ core::Status Generator::makeShaderCandidates() {
       if (mesh == 0 || mesh_set.errors[mesh] <= room) meshes.push_back(mesh);
     for (int mesh : meshes) {
       progress("shader candidates", double(configuration++) / std::max(1, configurations));
-      auto asset = meshAsset(set, mesh);
-      if (!asset) return asset.error();
-      shader::EvaluationConfig config;
-      config.distance = float(levels_[level].level.distance);
-      config.display = options_.levels.display;
-      config.supersample = options_.supersample;
-      auto scoring = shader::ConfigurationScorer::create(*renderer_, cache_, *asset,
-                                                         mesh_set.meshes[mesh], original_, config);
+      auto scoring = scorerFor(level, set, mesh);
       if (!scoring) return scoring.error();
       shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
       shader::GeneticSearchOptions genetic;
@@ -928,15 +938,7 @@ core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& 
     if (*original_mesh >= 0)
       if (auto added = addPair(*original_mesh, 0); !added) return added.error();
     if (level > 0 && options_.scope != LodScope::kMeshOnly) {
-      const int set = set_of_level_[level];
-      auto asset = meshAsset(set, 0);
-      if (!asset) return asset.error();
-      shader::EvaluationConfig config;
-      config.distance = float(levels_[level].level.distance);
-      config.display = options_.levels.display;
-      config.supersample = options_.supersample;
-      auto scoring = shader::ConfigurationScorer::create(*renderer_, cache_, *asset,
-                                                         mesh_sets_[set].meshes[0], original_, config);
+      auto scoring = scorerFor(level, set_of_level_[level], 0);
       if (!scoring) return scoring.error();
       shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
       shader::SearchRandom rng(options_.seed * 7919 + static_cast<uint64_t>(level));
