@@ -140,9 +140,6 @@ std::vector<uint32_t> triangleGroups(const core::Mesh& mesh, bool& valid) {
 
 bool isFinite(Vec3d p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
-// A feature line turning by more than 60° at a vertex makes it a corner (locked).
-constexpr double kCornerTurnCos = 0.5;
-
 // Corner k's successor in its triangle (k + 1) mod 3, without the division.
 constexpr uint32_t kNextCorner[3] = {1, 2, 0};
 
@@ -311,7 +308,6 @@ class Engine {
  private:
   void buildState();
   void classifyPositions();
-  bool isLineCorner(uint32_t p, const uint32_t neighbors[2]) const;
   void gatherNeighbors(uint32_t p);
   uint8_t edgeFeatures(const Neighbor& nb) const;
   bool makeCandidate(uint32_t from, uint32_t to, const Neighbor& nb, bool self_is_from,
@@ -404,7 +400,10 @@ void Engine::buildState() {
   core::Bounds bounds;
   for (core::Vec3 p : m.positions)
     if (core::isFinite(p)) bounds.extend(p);
-  if (!bounds.empty()) {
+  if (options_.given_frame) {
+    s.origin = options_.frame_origin;
+    s.scale = options_.frame_scale;
+  } else if (!bounds.empty()) {
     s.origin = {bounds.min.x, bounds.min.y, bounds.min.z};
     core::Vec3 size = bounds.size();
     double diagonal = std::sqrt(double(size.x) * size.x + double(size.y) * size.y +
@@ -581,16 +580,6 @@ uint8_t Engine::edgeFeatures(const Neighbor& nb) const {
   return features;
 }
 
-// Whether the feature line through p (from neighbour n0 to n1) turns by more than
-// kCornerTurn there: the corner of a border, a UV chart or a material region is a feature point,
-// so it is locked rather than left to the balance of penalty and face planes.
-bool Engine::isLineCorner(uint32_t p, const uint32_t neighbors[2]) const {
-  const Vec3d in = state_.positions[p] - state_.positions[neighbors[0]];
-  const Vec3d out = state_.positions[neighbors[1]] - state_.positions[p];
-  const double lengths = std::sqrt(dot(in, in) * dot(out, out));
-  return !(lengths > 0) || dot(in, out) < kCornerTurnCos * lengths;
-}
-
 void Engine::classifyPositions() {
   EngineState& s = state_;
   const uint32_t position_count = uint32_t(s.positions.size());
@@ -608,6 +597,8 @@ void Engine::classifyPositions() {
       return i;
     };
     bool locked = !isFinite(s.positions[p]) || wedge_count > kMaxWedges || d == 0;
+    if (options_.locked_vertices && options_.locked_vertices->size() == base_.vertexCount())
+      s.forEachWedge(p, [&](uint32_t w) { locked |= (*options_.locked_vertices)[w] != 0; });
     int feature_count = 0;
     uint32_t line_neighbors[2] = {kAbsent, kAbsent};
     uint8_t line = 0;
@@ -636,7 +627,8 @@ void Engine::classifyPositions() {
       s.kinds[p] = VertexKind::kLocked;
     else if (feature_count == 0 && wedge_count == 1)
       s.kinds[p] = VertexKind::kFree;
-    else if (feature_count == 2 && line_consistent && !isLineCorner(p, line_neighbors))
+    else if (feature_count == 2 && line_consistent && !isLineCorner(s.positions[line_neighbors[0]], s.positions[p],
+                                                                s.positions[line_neighbors[1]]))
       s.kinds[p] = VertexKind::kConstrained, s.line_features[p] = line;
     else
       s.kinds[p] = VertexKind::kLocked;
@@ -885,16 +877,8 @@ bool Engine::flipsOrDegenerates(uint32_t moving, uint32_t other, Vec3d position,
     uint32_t b = s.cornerPosition(t * 3 + kNextCorner[k]);
     uint32_t d = s.cornerPosition(t * 3 + kNextCorner[kNextCorner[k]]);
     if (b == other || d == other) continue;
-    Vec3d pa = s.positions[moving], pb = s.positions[b], pd = s.positions[d];
-    Vec3d e1 = pb - pa, e2 = pd - pa;
-    Vec3d n_old = cross(e1, e2);
-    Vec3d n_new = cross(pb - position, pd - position);
-    double old_sq = dot(n_old, n_old), new_sq = dot(n_new, n_new);
-    if (old_sq <= 0) continue;  // already degenerate: it has no orientation to lose
-    // Zero area (relative to the triangle's own size) counts as degenerate.
-    double edge_scale = std::max(dot(pb - position, pb - position), dot(pd - position, pd - position));
-    if (new_sq <= 1e-24 * edge_scale * edge_scale || !(new_sq > 0)) return true;
-    if (dot(n_old, n_new) <= 0) return true;
+    if (turnsOverOrFlattens(s.positions[moving], s.positions[b], s.positions[d], position))
+      return true;
   }
   return false;
 }

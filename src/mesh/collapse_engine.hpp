@@ -26,7 +26,9 @@
 // heap entry remembers both endpoints' stamps and is skipped when either changed.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -229,7 +231,39 @@ struct EngineOptions {
   // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
   // distance), and the queue over a mesh that small is cheap.
   size_t greedy_tail_triangles = 2000;
+  // The normalized frame (EngineState::origin, scale) to use instead of the input's bounding box:
+  // a caller that continues an earlier simplification hands over quadrics in that frame.
+  bool given_frame = false;
+  Vec3d frame_origin{};
+  double frame_scale = 1;
+  // Per vertex of the input (optional, same size): nonzero = the caller classified its position
+  // as locked (e.g. a corner of the original mesh), so it stays locked here.
+  const std::vector<uint8_t>* locked_vertices = nullptr;
 };
+
+// A feature line turning by more than 60° at a vertex makes it a corner (locked): the corner of a
+// border, a UV chart or a material region is a feature point, so it is locked rather than left to
+// the balance of penalty and face planes. `before` and `after` are p's two neighbours on the line.
+inline bool isLineCorner(Vec3d before, Vec3d p, Vec3d after) {
+  constexpr double kCornerTurnCos = 0.5;
+  const Vec3d in = p - before, out = after - p;
+  const double lengths = std::sqrt(dot(in, in) * dot(out, out));
+  return !(lengths > 0) || dot(in, out) < kCornerTurnCos * lengths;
+}
+
+// Whether moving a triangle's corner from `corner` to `moved` (the other two corners `b`, `d`
+// fixed) turns the triangle by 90° or more or flattens it to zero area (relative to its size). A
+// triangle that is already degenerate has no orientation to lose and passes.
+inline bool turnsOverOrFlattens(Vec3d corner, Vec3d b, Vec3d d, Vec3d moved) {
+  const Vec3d n_old = cross(b - corner, d - corner);
+  const Vec3d to_b = b - moved, to_d = d - moved;
+  const Vec3d n_new = cross(to_b, to_d);
+  const double old_sq = dot(n_old, n_old), new_sq = dot(n_new, n_new);
+  if (old_sq <= 0) return false;
+  const double edge_scale = std::max(dot(to_b, to_b), dot(to_d, to_d));
+  if (new_sq <= 1e-24 * edge_scale * edge_scale || !(new_sq > 0)) return true;
+  return dot(n_old, n_new) <= 0;
+}
 
 // Welds wedges (equal position and attributes), drops unreferenced vertices, triangles with an
 // out-of-range index, repeated position or duplicate position triple (same orientation). Vertex

@@ -55,23 +55,9 @@ Vec3d normalized(Vec3d v) {
 // the quadric stays in registers instead of being reloaded behind a call.
 #define DUOLOD_HOT [[gnu::always_inline]] inline
 
-DUOLOD_HOT void addInto(Quadric& q, const Quadric& o) {
-  q.a00 += o.a00, q.a01 += o.a01, q.a02 += o.a02, q.a11 += o.a11, q.a12 += o.a12;
-  q.a22 += o.a22, q.b0 += o.b0, q.b1 += o.b1, q.b2 += o.b2, q.c += o.c, q.weight += o.weight;
-}
+DUOLOD_HOT void addInto(Quadric& q, const Quadric& o) { addQuadric(q, o); }
 
-DUOLOD_HOT double quadraticForm(const Quadric& q, Vec3d d) {  // dᵀAd
-  return q.a00 * d.x * d.x + q.a11 * d.y * d.y + q.a22 * d.z * d.z +
-         2 * (q.a01 * d.x * d.y + q.a02 * d.x * d.z + q.a12 * d.y * d.z);
-}
-
-DUOLOD_HOT double quadricValue(const Quadric& q, Vec3d p) {
-  double ax = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z;
-  double ay = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z;
-  double az = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z;
-  double value = p.x * ax + p.y * ay + p.z * az + 2 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) + q.c;
-  return std::max(value, 0.0);  // rounding can leave a tiny negative
-}
+DUOLOD_HOT double quadricValue(const Quadric& q, Vec3d p) { return evaluateQuadric(q, p); }
 
 }  // namespace
 
@@ -85,9 +71,27 @@ Quadric planeQuadric(Vec3d n, double d, double weight, double area) {
   return q;
 }
 
-void addQuadric(Quadric& q, const Quadric& o) { addInto(q, o); }
 
-double evaluateQuadric(const Quadric& q, Vec3d p) { return quadricValue(q, p); }
+Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2) { return normalized(cross(p1 - p0, p2 - p0)); }
+
+bool triangleQuadric(Vec3d p0, Vec3d p1, Vec3d p2, Quadric& q) {
+  const Vec3d cross_product = cross(p1 - p0, p2 - p0);
+  const double double_area = std::sqrt(dot(cross_product, cross_product));
+  if (!(double_area > 0) || !std::isfinite(double_area)) return false;
+  const double area = 0.5 * double_area;
+  const Vec3d n = cross_product * (1.0 / double_area);
+  q = planeQuadric(n, -dot(n, p0), area, area);  // eq. (2), area-weighted
+  return true;
+}
+
+bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q) {
+  const Vec3d e = b - a;
+  const Vec3d n = normalized(cross(e, face_normal));
+  if (dot(n, n) == 0 || !std::isfinite(n.x)) return false;
+  q = planeQuadric(n, -dot(n, a), kFeatureWeight * dot(e, e), 0.0);
+  return true;
+}
+
 
 namespace {
 
@@ -233,6 +237,13 @@ void QuadricModel::begin(const EngineState& state) {
   attribute_stride_ = dims_ > 0 ? 11 + 4 * dims_ : 0;
 
   geometric_.assign(state.positions.size(), Quadric{});
+  if (dims_ == 0 && options_.initial_quadrics &&
+      options_.initial_quadrics->size() == wedge_count) {
+    // Position-only: one wedge per position.
+    for (size_t w = 0; w < wedge_count; ++w)
+      geometric_[state.wedge_position[w]] = (*options_.initial_quadrics)[w];
+    return;
+  }
   attribute_.assign(wedge_count * attribute_stride_, 0.0);
   scratch_.assign(attribute_stride_, 0.0);
   std::vector<double> triangle_quadric(attribute_stride_);
@@ -252,12 +263,9 @@ void QuadricModel::begin(const EngineState& state) {
     }
     if (!finite) continue;
     const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0];
-    const Vec3d cross_product = cross(e1, e2);
-    const double double_area = std::sqrt(dot(cross_product, cross_product));
-    if (!(double_area > 0)) continue;
-    const double area = 0.5 * double_area;
-    const Vec3d n = cross_product * (1.0 / double_area);
-    const Quadric plane = planeQuadric(n, -dot(n, p[0]), area, area);  // eq. (2), area-weighted
+    Quadric plane;
+    if (!triangleQuadric(p[0], p[1], p[2], plane)) continue;
+    const double area = plane.weight;
     for (int k = 0; k < 3; ++k) addInto(geometric_[position[k]], plane);
 
     if (dims_ == 0) continue;
@@ -300,19 +308,16 @@ void QuadricModel::begin(const EngineState& state) {
   // Penalty planes through feature edges, perpendicular to the surface (Garland & Heckbert 1997
   // §6.1): sliding a border vertex inwards or outwards costs, sliding along the line does not.
   for (const FeatureEdge& edge : state.feature_edges) {
-    Vec3d pa = state.positions[edge.a], pb = state.positions[edge.b];
-    Vec3d e = pb - pa;
     Vec3d face_normal{0, 0, 0};
     for (uint32_t t : edge.triangles) {
       if (t == kAbsent) continue;
-      Vec3d p0 = state.positions[state.cornerPosition(t * 3)];
-      Vec3d p1 = state.positions[state.cornerPosition(t * 3 + 1)];
-      Vec3d p2 = state.positions[state.cornerPosition(t * 3 + 2)];
-      face_normal = face_normal + normalized(cross(p1 - p0, p2 - p0));
+      face_normal = face_normal + unitTriangleNormal(state.positions[state.cornerPosition(t * 3)],
+                                                     state.positions[state.cornerPosition(t * 3 + 1)],
+                                                     state.positions[state.cornerPosition(t * 3 + 2)]);
     }
-    Vec3d n = normalized(cross(e, face_normal));
-    if (dot(n, n) == 0 || !std::isfinite(n.x)) continue;
-    Quadric plane = planeQuadric(n, -dot(n, pa), kFeatureWeight * dot(e, e), 0.0);
+    Quadric plane;
+    if (!featureEdgeQuadric(state.positions[edge.a], state.positions[edge.b], face_normal, plane))
+      continue;
     addInto(geometric_[edge.a], plane);
     addInto(geometric_[edge.b], plane);
   }
@@ -391,21 +396,9 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
       cand.position = b;
       value = quadricValue(total, b);
     } else if (fixed_point_pricing_) {
-      // Ties go to the survivor, then the other endpoint (input positions are kept exactly).
-      // Q(mid) = (Q(a) + Q(b)) / 2 - (a - b)ᵀA(a - b) / 4, one more quadratic form.
-      // Around b, with g = A b + b_q and d = a - b: Q(b + t d) = Q(b) + 2t g·d + t² dᵀAd.
-      const Quadric& q = total;
-      const Vec3d g{q.a00 * b.x + q.a01 * b.y + q.a02 * b.z + q.b0,
-                    q.a01 * b.x + q.a11 * b.y + q.a12 * b.z + q.b1,
-                    q.a02 * b.x + q.a12 * b.y + q.a22 * b.z + q.b2};
-      const Vec3d d = a - b;
-      const double at_b = std::max(dot(b, g) + q.b0 * b.x + q.b1 * b.y + q.b2 * b.z + q.c, 0.0);
-      const double slope = dot(g, d), curvature = quadraticForm(q, d);
-      const double at_a = std::max(at_b + 2 * slope + curvature, 0.0);
-      const double at_mid = at_b + slope + 0.25 * curvature;
-      cand.position = b, value = at_b;
-      if (at_a < value) value = at_a, cand.position = a;
-      if (at_mid < value) value = std::max(at_mid, 0.0), cand.position = (a + b) * 0.5;
+      uint8_t at = kFixedAtB;
+      value = priceAtFixedPoints(total, a, b, at);
+      cand.position = fixedPoint(a, b, at);
     } else {
       cand.position = minimizeOnEdge(total, a, b, &value);
     }

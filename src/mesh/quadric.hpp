@@ -4,6 +4,7 @@
 // (simplify_quadric.cpp) plugs it into the collapse engine.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -22,8 +23,57 @@ struct Quadric {
 
 // weight * (n·p + d)², n of unit length; `area` is what it adds to Quadric::weight.
 Quadric planeQuadric(Vec3d n, double d, double weight, double area);
-void addQuadric(Quadric& q, const Quadric& other);
-double evaluateQuadric(const Quadric& q, Vec3d p);
+inline void addQuadric(Quadric& q, const Quadric& o) {
+  q.a00 += o.a00, q.a01 += o.a01, q.a02 += o.a02, q.a11 += o.a11, q.a12 += o.a12;
+  q.a22 += o.a22, q.b0 += o.b0, q.b1 += o.b1, q.b2 += o.b2, q.c += o.c, q.weight += o.weight;
+}
+// Q(p), clamped at 0 (rounding can leave a tiny negative).
+inline double evaluateQuadric(const Quadric& q, Vec3d p) {
+  const double ax = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z;
+  const double ay = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z;
+  const double az = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z;
+  const double value =
+      p.x * ax + p.y * ay + p.z * az + 2 * (q.b0 * p.x + q.b1 * p.y + q.b2 * p.z) + q.c;
+  return std::max(value, 0.0);
+}
+
+// The area-weighted plane quadric of a triangle (Garland & Heckbert 1997 eq. 2, weighted by its
+// area); false (q untouched) for a zero-area or non-finite triangle.
+bool triangleQuadric(Vec3d p0, Vec3d p1, Vec3d p2, Quadric& q);
+// The penalty plane through the feature edge [a, b], perpendicular to the surface
+// (`face_normal`: the sum of the unit normals of the edge's triangles; Garland & Heckbert 1997
+// §6.1): sliding a border vertex off its line costs, sliding along it does not. False (q
+// untouched) when the plane is undefined.
+bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q);
+// The unit normal of a triangle, or zero.
+Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2);
+
+// Prices the collapse of edge [a, b] (b the survivor) at the best of b, a and the midpoint for
+// the merged quadric q (three evaluations around b, no solve): returns Q at the chosen point and
+// sets `at` (kFixedAtB, kFixedAtA, kFixedAtMid). Ties go to b, then a (input positions are kept
+// exactly). Inline: this runs for every edge of every pass.
+// Around b, with g = A b + b_q and d = a - b: Q(b + t d) = Q(b) + 2t g·d + t² dᵀAd.
+enum : uint8_t { kFixedAtB, kFixedAtA, kFixedAtMid };
+inline Vec3d fixedPoint(Vec3d a, Vec3d b, uint8_t at) {
+  return at == kFixedAtB ? b : at == kFixedAtA ? a : (a + b) * 0.5;
+}
+inline double priceAtFixedPoints(const Quadric& q, Vec3d a, Vec3d b, uint8_t& at) {
+  const Vec3d g{q.a00 * b.x + q.a01 * b.y + q.a02 * b.z + q.b0,
+                q.a01 * b.x + q.a11 * b.y + q.a12 * b.z + q.b1,
+                q.a02 * b.x + q.a12 * b.y + q.a22 * b.z + q.b2};
+  const Vec3d d = a - b;
+  const double at_b = std::max(dot(b, g) + q.b0 * b.x + q.b1 * b.y + q.b2 * b.z + q.c, 0.0);
+  const double slope = dot(g, d);
+  const double curvature = q.a00 * d.x * d.x + q.a11 * d.y * d.y + q.a22 * d.z * d.z +
+                           2 * (q.a01 * d.x * d.y + q.a02 * d.x * d.z + q.a12 * d.y * d.z);
+  const double at_a = std::max(at_b + 2 * slope + curvature, 0.0);
+  const double at_mid = at_b + slope + 0.25 * curvature;
+  double value = at_b;
+  at = kFixedAtB;
+  if (at_a < value) value = at_a, at = kFixedAtA;
+  if (at_mid < value) value = std::max(at_mid, 0.0), at = kFixedAtMid;
+  return value;
+}
 
 // The minimizer of q near the segment [a, b]: the exact solution when A is well conditioned and
 // the point stays near the edge (snapped to an endpoint it equals up to rounding, so corners stay
@@ -43,6 +93,11 @@ struct QuadricModelOptions {
   // applies (CollapseOrdering::kPasses). The price is then an upper bound of the optimal cost.
   bool price_at_fixed_points = false;
   float attribute_weight = 1.0f;
+  // Position-only meshes: the geometric quadric of every vertex of the engine's input, already
+  // accumulated (plane and penalty quadrics of an earlier simplification of the same surface, in
+  // the engine's normalized frame, EngineOptions::frame_*): begin() takes these instead of
+  // building them from the triangles. Ignored when the mesh has attributes or the size differs.
+  const std::vector<Quadric>* initial_quadrics = nullptr;
 };
 
 class QuadricModel final : public CostModel {

@@ -2,18 +2,26 @@
 // the geometric baseline of the paper's mesh simplification (§4.2 uses the same engine with an
 // image-driven cost). Position-only meshes: pass ordering with fixed-point pricing (optimal
 // placement solved only for the collapses applied), then the greedy queue for the last collapses
-// (collapse_engine.hpp); meshes with attributes: the greedy queue throughout.
+// (collapse_engine.hpp), run by the position-only fast path (simplify_positions.hpp) when it
+// applies; meshes with attributes: the greedy queue throughout.
 #include <chrono>
 
 #include "duolod/mesh.hpp"
 #include "mesh/collapse_engine.hpp"
 #include "mesh/quadric.hpp"
+#include "mesh/simplify_positions.hpp"
 
 namespace duolod::mesh {
 
 SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& options) {
   auto start = std::chrono::steady_clock::now();
   PreparedMesh prepared = prepareMeshWithPositions(mesh);
+  if (positionFastPathApplies(prepared, options)) {
+    SimplifyResult result = simplifyPositions(prepared, options);
+    result.stats.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
   QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
                       .price_at_fixed_points = true,
                       .attribute_weight = options.attribute_weight});
