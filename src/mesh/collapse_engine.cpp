@@ -400,10 +400,7 @@ void Engine::buildState() {
   core::Bounds bounds;
   for (core::Vec3 p : m.positions)
     if (core::isFinite(p)) bounds.extend(p);
-  if (options_.given_frame) {
-    s.origin = options_.frame_origin;
-    s.scale = options_.frame_scale;
-  } else if (!bounds.empty()) {
+  if (!bounds.empty()) {
     s.origin = {bounds.min.x, bounds.min.y, bounds.min.z};
     core::Vec3 size = bounds.size();
     double diagonal = std::sqrt(double(size.x) * size.x + double(size.y) * size.y +
@@ -597,8 +594,6 @@ void Engine::classifyPositions() {
       return i;
     };
     bool locked = !isFinite(s.positions[p]) || wedge_count > kMaxWedges || d == 0;
-    if (options_.locked_vertices && options_.locked_vertices->size() == base_.vertexCount())
-      s.forEachWedge(p, [&](uint32_t w) { locked |= (*options_.locked_vertices)[w] != 0; });
     int feature_count = 0;
     uint32_t line_neighbors[2] = {kAbsent, kAbsent};
     uint8_t line = 0;

@@ -231,14 +231,6 @@ struct EngineOptions {
   // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
   // distance), and the queue over a mesh that small is cheap.
   size_t greedy_tail_triangles = 2000;
-  // The normalized frame (EngineState::origin, scale) to use instead of the input's bounding box:
-  // a caller that continues an earlier simplification hands over quadrics in that frame.
-  bool given_frame = false;
-  Vec3d frame_origin{};
-  double frame_scale = 1;
-  // Per vertex of the input (optional, same size): nonzero = the caller classified its position
-  // as locked (e.g. a corner of the original mesh), so it stays locked here.
-  const std::vector<uint8_t>* locked_vertices = nullptr;
 };
 
 // A feature line turning by more than 60° at a vertex makes it a corner (locked): the corner of a

@@ -237,13 +237,6 @@ void QuadricModel::begin(const EngineState& state) {
   attribute_stride_ = dims_ > 0 ? 11 + 4 * dims_ : 0;
 
   geometric_.assign(state.positions.size(), Quadric{});
-  if (dims_ == 0 && options_.initial_quadrics &&
-      options_.initial_quadrics->size() == wedge_count) {
-    // Position-only: one wedge per position.
-    for (size_t w = 0; w < wedge_count; ++w)
-      geometric_[state.wedge_position[w]] = (*options_.initial_quadrics)[w];
-    return;
-  }
   attribute_.assign(wedge_count * attribute_stride_, 0.0);
   scratch_.assign(attribute_stride_, 0.0);
   std::vector<double> triangle_quadric(attribute_stride_);

@@ -93,11 +93,6 @@ struct QuadricModelOptions {
   // applies (CollapseOrdering::kPasses). The price is then an upper bound of the optimal cost.
   bool price_at_fixed_points = false;
   float attribute_weight = 1.0f;
-  // Position-only meshes: the geometric quadric of every vertex of the engine's input, already
-  // accumulated (plane and penalty quadrics of an earlier simplification of the same surface, in
-  // the engine's normalized frame, EngineOptions::frame_*): begin() takes these instead of
-  // building them from the triangles. Ignored when the mesh has attributes or the size differs.
-  const std::vector<Quadric>* initial_quadrics = nullptr;
 };
 
 class QuadricModel final : public CostModel {

@@ -13,18 +13,26 @@
 //   - vertex kinds (free, on a border line, locked) are found once: collapses keep them, and a
 //     border vertex keeps its two border neighbours, updated when the border collapses;
 //   - candidates are read off the triangles (free endpoints) and the border neighbours, priced at
-//     the best of the endpoints and the midpoint, and the optimal placement is solved only for the
-//     collapses applied (as CostModel::refinePlacement does).
-// The last collapses (EngineOptions::greedy_tail_triangles, at most 1/16 of the input) go to the
-// general engine's greedy queue on the compacted mesh, with the accumulated quadrics, the same
-// normalized frame and the same locked vertices, so the result is the engine's algorithm.
+//     the best of the endpoints and the midpoint from each endpoint's quadric expanded around its
+//     own position (LocalExpansion), and the optimal placement is solved only for the collapses
+//     applied (as CostModel::refinePlacement does);
+//   - the last collapses (EngineOptions::greedy_tail_triangles, at most 1/16 of the input) use a
+//     greedy queue as the engine's kGreedy does (cheapest first, priced at the optimal placement,
+//     the survivor's edges priced again after each collapse); the corner table then grows by
+//     chaining: a vertex's triangles are its own corners and those of the vertices it absorbed,
+//     and the remap becomes a union-find.
+// Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
+// its meshes with attributes, materials or endpoint placement take the engine). Measured against
+// the engine's kPasses on the same meshes: the same quality table, 1.8-2.0x meshoptimizer's
+// instructions instead of 2.2-3.7x (bench/RESULTS.md, issue 3).
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <cstdlib>
 #include <limits>
+#include <memory>
+#include <utility>
 
 #include "mesh/attributes.hpp"
 #include "mesh/quadric.hpp"
@@ -39,8 +47,7 @@ constexpr uint32_t kPrevious[3] = {2, 0, 1};
 // (quadric.hpp) unless the optimal placement is better when it is applied.
 struct PassCandidate {
   uint32_t from, to;
-  double cost;
-  float error;
+  float cost;
   uint8_t at;
   bool endpoint_only;
 };
@@ -51,6 +58,27 @@ uint32_t costBits(double cost) {
   uint32_t bits;
   std::memcpy(&bits, &f, 4);
   return bits;
+}
+
+// A vertex's quadric at its own position: the value e = Q(p) and half its gradient g = A p + b.
+// Around p, Q(p + d) = e + 2 g·d + dᵀAd: the merged quadric of an edge is evaluated at its fixed
+// points from the two endpoints' expansions (no merged copy, and the expansion around each vertex
+// loses less to rounding than evaluating from the frame's origin).
+struct LocalExpansion {
+  double e = 0, gx = 0, gy = 0, gz = 0;
+};
+
+LocalExpansion expandAt(const Quadric& q, Vec3d p) {
+  const double gx = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z + q.b0;
+  const double gy = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z + q.b1;
+  const double gz = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z + q.b2;
+  return {evaluateQuadric(q, p), gx, gy, gz};
+}
+
+// dᵀAd from the products xx, yy, zz, xy, xz, yz of d's components.
+inline double quadraticForm(const Quadric& q, const double (&dd)[6]) {
+  return q.a00 * dd[0] + q.a11 * dd[1] + q.a22 * dd[2] +
+         2 * (q.a01 * dd[3] + q.a02 * dd[4] + q.a12 * dd[5]);
 }
 
 class PositionSimplifier {
@@ -65,11 +93,34 @@ class PositionSimplifier {
   void classify();
   void compact();
   void pushCandidate(uint32_t from, uint32_t to, bool endpoint_only);
+  void emitEdge(uint32_t a, uint32_t b);
   void collectCandidates();
+  void runPasses(size_t pass_target);
+  void runGreedy();
+  void emitAround(uint32_t v);
   bool tryCollapse(const PassCandidate& candidate, uint32_t pass);
-  bool fanFlips(const std::vector<uint32_t>& fan, Vec3d corner, Vec3d moved) const;
+  bool fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner, Vec3d moved) const;
+  template <class Emit>
+  void forEachCandidateEdge(Emit&& emit);
   void applyCollapse(uint32_t from, uint32_t to, Vec3d position, double cost, uint32_t pass);
   SimplifyResult finish();
+  // The surviving vertex of v: one level within a pass, a chain (with path halving) in the greedy
+  // tail.
+  uint32_t resolve(uint32_t v) {
+    if (!greedy_) return remap_[v];
+    while (remap_[v] != v) v = remap_[v] = remap_[remap_[v]];
+    return v;
+  }
+  // Calls f(triangle, corner k of v in it) for each live triangle of v: its own corners and those
+  // of the vertices it absorbed (greedy tail; within a pass nothing is absorbed).
+  template <class F>
+  void forEachTriangle(uint32_t v, F&& f) {
+    for (uint32_t u = v; u != kAbsent; u = absorbed_next_[u])
+      for (uint32_t i = corner_start_[u]; i < corner_start_[u + 1]; ++i) {
+        const uint32_t c = corners_[i], t = c / 3;
+        if (!dead_[t]) f(t, c - t * 3);
+      }
+  }
   uint32_t nextRound() {
     if (++round_ == 0) {
       std::fill(mark_.begin(), mark_.end(), 0);
@@ -91,6 +142,7 @@ class PositionSimplifier {
   std::vector<Vec3d> positions_;           // normalized (bounding-box diagonal 1)
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
+  std::vector<LocalExpansion> expansions_;  // quadrics_ around positions_
   std::vector<VertexKind> kinds_;
   std::vector<uint32_t> border_neighbors_;  // two per constrained vertex
   std::vector<uint32_t> constrained_;       // the constrained vertices
@@ -104,12 +156,32 @@ class PositionSimplifier {
   std::vector<uint32_t> corner_start_;      // per vertex, into corners_ (vertex_count_ + 1)
   std::vector<uint32_t> corners_;           // corners (3 * triangle + k) grouped by vertex
   std::vector<uint32_t> cursor_;
+  // Greedy tail: the vertices absorbed into a vertex, as a chain through absorbed_next_.
+  bool greedy_ = false;
+  std::vector<uint32_t> absorbed_next_, absorbed_last_;
+  std::vector<uint32_t> version_;           // bumped when a vertex's quadric or position changes
+  struct QueuedCandidate {
+    float cost;
+    uint32_t from, to, from_version, to_version;
+    bool endpoint_only;
+    bool operator>(const QueuedCandidate& o) const {
+      return cost != o.cost ? cost > o.cost : from != o.from ? from > o.from : to > o.to;
+    }
+  };
+  std::vector<QueuedCandidate> heap_;
+  bool filling_ = false;  // appending to heap_ before one make_heap
 
-  std::vector<PassCandidate> candidates_;
-  std::vector<uint64_t> order_;             // (cost bits << 32 | candidate index)
   std::vector<uint32_t> mark_;
   uint32_t round_ = 0;
-  std::vector<uint32_t> from_fan_, to_fan_;  // the other two corners of each moving triangle
+  // The other two corners of each moving triangle of a collapse's endpoints (room for every
+  // triangle, so they are filled without capacity checks).
+  std::unique_ptr<uint32_t[]> from_fan_, to_fan_;
+  uint32_t from_fan_size_ = 0, to_fan_size_ = 0;
+  // Pass candidates and their order keys (cost bits << 32 | index): room for every edge of the
+  // input (the mesh only shrinks).
+  std::unique_ptr<PassCandidate[]> pass_candidates_;
+  std::unique_ptr<uint64_t[]> pass_order_;
+  size_t pass_candidate_count_ = 0;
   uint32_t edge_triangles_[2] = {kAbsent, kAbsent};
   uint32_t edge_triangle_count_ = 0;
 
@@ -167,82 +239,70 @@ void PositionSimplifier::buildAdjacency() {
   const uint32_t corner_count = uint32_t(indices_.size());
   for (uint32_t c = 0; c < corner_count; ++c) corners_[cursor_[indices_[c]]++] = c;
   dead_.assign(indices_.size() / 3, 0);
+  absorbed_next_.assign(vertex_count_, kAbsent);
+  absorbed_last_.resize(vertex_count_);
+  for (uint32_t v = 0; v < vertex_count_; ++v) absorbed_last_[v] = v;
 }
 
 // Vertex kinds as the engine's classifyPositions finds them for a position-only mesh with one
 // submesh: free (no feature edge), constrained (exactly two border edges, not a corner), locked
 // (non-manifold edge or fan, corner, line end or junction, lock_border); plus the penalty planes
-// of the feature edges.
+// of the border edges. Per vertex, each neighbour is recorded as the next corner (edge v -> n) and
+// the previous corner (n -> v) of the triangles: a neighbour seen twice the same way is a
+// non-manifold edge, one seen only one way is a border edge, and walking the fan from triangle to
+// triangle across the edges seen both ways must reach every triangle (one fan).
 void PositionSimplifier::classify() {
   kinds_.assign(vertex_count_, VertexKind::kLocked);
   border_neighbors_.assign(size_t(vertex_count_) * 2, kAbsent);
-  struct Neighbor {
-    uint32_t vertex;
-    uint32_t outgoing, incoming;  // triangles where the edge runs v -> n, n -> v
-    uint32_t local[2];            // the first two of them, as indices into v's corners
-  };
-  std::vector<Neighbor> neighbors;
-  std::vector<uint32_t> slot(vertex_count_, kAbsent), union_find;
+  std::vector<uint32_t> as_next(vertex_count_, kAbsent), as_previous(vertex_count_, kAbsent);
+  std::vector<uint32_t> nexts, previouses;
   for (uint32_t v = 0; v < vertex_count_; ++v) {
     const uint32_t begin = corner_start_[v], degree = corner_start_[v + 1] - begin;
     if (degree == 0) continue;
-    neighbors.clear();
-    auto add = [&](uint32_t n, bool outgoing, uint32_t local) {
-      if (slot[n] == kAbsent) {
-        slot[n] = uint32_t(neighbors.size());
-        neighbors.push_back({n, 0, 0, {local, kAbsent}});
-      } else {
-        Neighbor& nb = neighbors[slot[n]];
-        if (nb.outgoing + nb.incoming == 1) nb.local[1] = local;
-      }
-      Neighbor& nb = neighbors[slot[n]];
-      (outgoing ? nb.outgoing : nb.incoming) += 1;
-    };
+    nexts.resize(degree);
+    previouses.resize(degree);
+    bool locked = false;
     for (uint32_t i = 0; i < degree; ++i) {
       const uint32_t c = corners_[begin + i], t = c / 3, k = c - t * 3;
-      add(indices_[t * 3 + kNext[k]], true, i);
-      add(indices_[t * 3 + kPrevious[k]], false, i);
+      const uint32_t n = indices_[t * 3 + kNext[k]], p = indices_[t * 3 + kPrevious[k]];
+      nexts[i] = n, previouses[i] = p;
+      if (as_next[n] != kAbsent) locked = true;  // two triangles run v -> n
+      else as_next[n] = i;
+      if (as_previous[p] != kAbsent) locked = true;
+      else as_previous[p] = i;
     }
-    for (const Neighbor& nb : neighbors) slot[nb.vertex] = kAbsent;
-
-    union_find.resize(degree);
-    for (uint32_t i = 0; i < degree; ++i) union_find[i] = i;
-    auto find = [&](uint32_t i) {
-      while (union_find[i] != i) i = union_find[i] = union_find[union_find[i]];
-      return i;
-    };
-    bool locked = false;
-    uint32_t feature_count = 0;
+    uint32_t border_count = 0, fan_start = 0;
     uint32_t line[2] = {kAbsent, kAbsent};
-    for (const Neighbor& nb : neighbors) {
-      const uint32_t count = nb.outgoing + nb.incoming;
-      if (count == 2) union_find[find(nb.local[0])] = find(nb.local[1]);
-      if (count == 2 && nb.outgoing == 1) continue;  // manifold, consistently oriented
-      const bool border = count == 1;
-      if (!border || options_.lock_border) locked = true;
-      if (feature_count < 2) line[feature_count] = nb.vertex;
-      ++feature_count;
-      if (nb.vertex < v) continue;
-      // Penalty plane of the feature edge (once, from its lower end).
-      Vec3d face_normal{0, 0, 0};
-      for (uint32_t i = 0; i < std::min(count, 2u); ++i) {
-        const uint32_t t = corners_[begin + nb.local[i]] / 3;
-        face_normal = face_normal + unitTriangleNormal(positions_[indices_[t * 3]],
-                                                       positions_[indices_[t * 3 + 1]],
-                                                       positions_[indices_[t * 3 + 2]]);
-      }
+    auto border_edge = [&](uint32_t n, uint32_t i) {
+      if (border_count < 2) line[border_count] = n;
+      ++border_count;
+      if (n < v) return;  // its penalty plane once, from the lower end
+      const uint32_t t = corners_[begin + i] / 3;
+      const Vec3d face_normal =
+          unitTriangleNormal(positions_[indices_[t * 3]], positions_[indices_[t * 3 + 1]],
+                             positions_[indices_[t * 3 + 2]]);
       Quadric plane;
-      if (featureEdgeQuadric(positions_[v], positions_[nb.vertex], face_normal, plane)) {
+      if (featureEdgeQuadric(positions_[v], positions_[n], face_normal, plane)) {
         addQuadric(quadrics_[v], plane);
-        addQuadric(quadrics_[nb.vertex], plane);
+        addQuadric(quadrics_[n], plane);
       }
+    };
+    for (uint32_t i = 0; i < degree; ++i) {
+      if (as_previous[nexts[i]] == kAbsent) border_edge(nexts[i], i);
+      if (as_next[previouses[i]] == kAbsent) border_edge(previouses[i], i), fan_start = i;
     }
-    uint32_t fans = 0;
-    for (uint32_t i = 0; i < degree; ++i) fans += find(i) == i;
-    if (locked || fans > 1) continue;
-    if (feature_count == 0) {
+    // One fan: from its first triangle (after the border edge, if any) across v -> n edges.
+    uint32_t reached = 0;
+    for (uint32_t i = fan_start; i != kAbsent && reached <= degree;) {
+      ++reached;
+      i = as_previous[nexts[i]];
+      if (i == fan_start) break;
+    }
+    for (uint32_t i = 0; i < degree; ++i) as_next[nexts[i]] = as_previous[previouses[i]] = kAbsent;
+    if (locked || reached != degree || (border_count > 0 && options_.lock_border)) continue;
+    if (border_count == 0) {
       kinds_[v] = VertexKind::kFree;
-    } else if (feature_count == 2 &&
+    } else if (border_count == 2 &&
                !isLineCorner(positions_[line[0]], positions_[v], positions_[line[1]])) {
       kinds_[v] = VertexKind::kConstrained;
       border_neighbors_[v * 2] = line[0];
@@ -258,21 +318,61 @@ void PositionSimplifier::compact() {
   const size_t triangles = indices_.size() / 3;
   for (size_t t = 0; t < triangles; ++t) {
     if (dead_[t]) continue;
-    for (int k = 0; k < 3; ++k) indices_[out + k] = remap_[indices_[t * 3 + k]];
+    for (int k = 0; k < 3; ++k) indices_[out + k] = resolve(indices_[t * 3 + k]);
     out += 3;
   }
   indices_.resize(out);
 }
 
+// Greedy tail: prices the candidate at its optimal placement (found again when it is applied) and
+// queues it.
 void PositionSimplifier::pushCandidate(uint32_t from, uint32_t to, bool endpoint_only) {
   Quadric q = quadrics_[from];
   addQuadric(q, quadrics_[to]);
-  PassCandidate c{from, to, 0, 0, kFixedAtB, endpoint_only};
-  c.cost = endpoint_only ? evaluateQuadric(q, positions_[to])
-                         : priceAtFixedPoints(q, positions_[from], positions_[to], c.at);
-  // The error is needed here only to hold an error target; applied collapses compute their own.
-  if (std::isfinite(options_.target_error)) c.error = float(errorOf(c.cost, q.weight));
-  candidates_.push_back(c);
+  double cost = 0;
+  if (endpoint_only)
+    cost = evaluateQuadric(q, positions_[to]);
+  else
+    minimizeQuadric(q, positions_[from], positions_[to], &cost);
+  if (!std::isfinite(cost) ||
+      (std::isfinite(options_.target_error) && !(errorOf(cost, q.weight) <= options_.target_error)))
+    return;
+  heap_.push_back({float(cost), from, to, version_[from], version_[to], endpoint_only});
+  if (!filling_) std::push_heap(heap_.begin(), heap_.end(), std::greater<>());
+}
+
+// The candidate of the edge {a, b} (both alive), by the rules of collectCandidates.
+void PositionSimplifier::emitEdge(uint32_t a, uint32_t b) {
+  const VertexKind ka = kinds_[a], kb = kinds_[b];
+  if (ka == VertexKind::kFree && kb == VertexKind::kFree)
+    pushCandidate(std::min(a, b), std::max(a, b), false);
+  else if (ka == VertexKind::kFree)
+    pushCandidate(a, b, true);
+  else if (kb == VertexKind::kFree)
+    pushCandidate(b, a, true);
+  else if (ka == VertexKind::kLocked && kb == VertexKind::kLocked)
+    return;
+  else if (ka == VertexKind::kConstrained &&
+           (border_neighbors_[a * 2] == b || border_neighbors_[a * 2 + 1] == b))
+    pushCandidate(kb == VertexKind::kLocked ? a : std::min(a, b),
+                  kb == VertexKind::kLocked ? b : std::max(a, b), kb == VertexKind::kLocked);
+  else if (kb == VertexKind::kConstrained && ka == VertexKind::kLocked &&
+           (border_neighbors_[b * 2] == a || border_neighbors_[b * 2 + 1] == a))
+    pushCandidate(b, a, true);
+}
+
+// Greedy tail: after a collapse into v, the candidates of v's edges are priced again.
+void PositionSimplifier::emitAround(uint32_t v) {
+  const uint32_t round = nextRound();
+  mark_[v] = round;
+  forEachTriangle(v, [&](uint32_t t, uint32_t k) {
+    for (uint32_t corner : {kNext[k], kPrevious[k]}) {
+      const uint32_t n = resolve(indices_[t * 3 + corner]);
+      if (mark_[n] == round) continue;
+      mark_[n] = round;
+      emitEdge(v, n);
+    }
+  });
 }
 
 // Every live edge once: an edge with a free endpoint is interior and manifold (a free vertex has
@@ -282,20 +382,21 @@ void PositionSimplifier::pushCandidate(uint32_t from, uint32_t to, bool endpoint
 // two constrained vertices either may go (free placement, priced once), into a locked one only
 // the constrained end, to the locked end exactly. Edges between two non-free vertices that are not
 // border edges never collapse (a constrained vertex only slides along its line).
-void PositionSimplifier::collectCandidates() {
-  candidates_.clear();
+template <class Emit>
+void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
   const size_t triangles = indices_.size() / 3;
   const VertexKind* kinds = kinds_.data();
+  const uint32_t* indices = indices_.data();
   for (size_t t = 0; t < triangles; ++t) {
-    const uint32_t* v = &indices_[t * 3];
+    const uint32_t* v = indices + t * 3;
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t a = v[k], b = v[kNext[k]];
       if (a > b) continue;
       const bool a_free = kinds[a] == VertexKind::kFree, b_free = kinds[b] == VertexKind::kFree;
       if (a_free)
-        pushCandidate(a, b, !b_free);
+        emit(a, b, !b_free);
       else if (b_free)
-        pushCandidate(b, a, true);
+        emit(b, a, true);
     }
   }
   for (uint32_t v : constrained_) {
@@ -303,16 +404,62 @@ void PositionSimplifier::collectCandidates() {
     for (int i = 0; i < 2; ++i) {
       const uint32_t n = border_neighbors_[v * 2 + i];
       if (kinds[n] == VertexKind::kLocked)
-        pushCandidate(v, n, true);
+        emit(v, n, true);
       else if (v < n)
-        pushCandidate(v, n, false);
+        emit(v, n, false);
     }
   }
 }
 
-bool PositionSimplifier::fanFlips(const std::vector<uint32_t>& fan, Vec3d corner,
+void PositionSimplifier::collectCandidates() {
+  if (greedy_) {
+    forEachCandidateEdge([&](uint32_t from, uint32_t to, bool endpoint_only) {
+      pushCandidate(from, to, endpoint_only);
+    });
+    return;
+  }
+  // Pass pricing, inline over raw pointers (this runs for every edge of every pass): the merged
+  // quadric Q = Qa + Qb at b, a and the midpoint, with d = a - b (as priceAtFixedPoints; ties to
+  // b, then a): Qa(b) = ea - 2 ga·d + dᵀAa d, Qb(a) = eb + 2 gb·d + dᵀAb d,
+  // Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4.
+  const Quadric* quadrics = quadrics_.data();
+  const LocalExpansion* expansions = expansions_.data();
+  const Vec3d* positions = positions_.data();
+  PassCandidate* out = pass_candidates_.get();
+  uint64_t* keys = pass_order_.get();
+  size_t count = 0;
+  const bool has_error_target = std::isfinite(options_.target_error);
+  forEachCandidateEdge([&](uint32_t from, uint32_t to, bool endpoint_only) {
+    const Vec3d a = positions[from], b = positions[to];
+    const LocalExpansion &ea = expansions[from], &eb = expansions[to];
+    const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+    const double dd[6] = {dx * dx, dy * dy, dz * dz, dx * dy, dx * dz, dy * dz};
+    const double a_form = quadraticForm(quadrics[from], dd);
+    const double both = ea.e + eb.e;
+    const double at_b = std::max(both - 2 * (ea.gx * dx + ea.gy * dy + ea.gz * dz) + a_form, 0.0);
+    double cost = at_b;
+    uint8_t at = kFixedAtB;
+    if (!endpoint_only) {
+      const double b_form = quadraticForm(quadrics[to], dd);
+      const double at_a = std::max(both + 2 * (eb.gx * dx + eb.gy * dy + eb.gz * dz) + b_form, 0.0);
+      const double at_mid = 0.5 * (at_a + at_b) - 0.25 * (a_form + b_form);
+      if (at_a < cost) cost = at_a, at = kFixedAtA;
+      if (at_mid < cost) cost = std::max(at_mid, 0.0), at = kFixedAtMid;
+    }
+    if (!std::isfinite(cost)) return;
+    if (has_error_target &&
+        !(errorOf(cost, quadrics[from].weight + quadrics[to].weight) <= options_.target_error))
+      return;
+    keys[count] = uint64_t(costBits(cost)) << 32 | count;
+    out[count] = {from, to, float(cost), at, endpoint_only};
+    ++count;
+  });
+  pass_candidate_count_ = count;
+}
+
+bool PositionSimplifier::fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner,
                                   Vec3d moved) const {
-  for (size_t i = 0; i < fan.size(); i += 2)
+  for (uint32_t i = 0; i < size; i += 2)
     if (turnsOverOrFlattens(corner, positions_[fan[i]], positions_[fan[i + 1]], moved))
       return true;
   return false;
@@ -324,33 +471,48 @@ bool PositionSimplifier::fanFlips(const std::vector<uint32_t>& fan, Vec3d corner
 // priced point, then the flip test.
 bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass) {
   const uint32_t from = candidate.from, to = candidate.to;
-  const uint32_t* indices = indices_.data();
-  const uint32_t* remap = remap_.data();
+  // Raw pointers: the stores below (marks, fans) cannot alias them, so they stay in registers.
   uint32_t* mark = mark_.data();
+  const uint32_t* indices = indices_.data();
+  const uint32_t* corners = corners_.data();
+  const uint32_t* corner_start = corner_start_.data();
+  const uint32_t* absorbed_next = absorbed_next_.data();
+  const uint8_t* dead = dead_.data();
+  const uint32_t* remap = remap_.data();
+  const bool greedy = greedy_;
+  auto survivor = [&](uint32_t v) { return greedy ? resolve(v) : remap[v]; };
+  auto for_each_triangle = [&](uint32_t v, auto&& f) {
+    for (uint32_t u = v; u != kAbsent; u = absorbed_next[u])
+      for (uint32_t i = corner_start[u], end = corner_start[u + 1]; i < end; ++i) {
+        const uint32_t c = corners[i], t = c / 3;
+        if (!dead[t]) f(t, c - t * 3);
+      }
+  };
 
   // from's triangles: the ones on the edge (they die), the others (they move); mark from's
   // neighbours.
   const uint32_t near_round = nextRound();
-  from_fan_.clear();
-  edge_triangle_count_ = 0;
+  uint32_t* from_fan = from_fan_.get();
+  uint32_t from_fan_size = 0, edge_count = 0;
   uint32_t opposite[2] = {kAbsent, kAbsent};
-  for (uint32_t i = corner_start_[from]; i < corner_start_[from + 1]; ++i) {
-    const uint32_t c = corners_[i], t = c / 3, k = c - t * 3;
-    if (dead_[t]) continue;
-    const uint32_t b = remap[indices[t * 3 + kNext[k]]], d = remap[indices[t * 3 + kPrevious[k]]];
+  for_each_triangle(from, [&](uint32_t t, uint32_t k) {
+    const uint32_t b = survivor(indices[t * 3 + kNext[k]]);
+    const uint32_t d = survivor(indices[t * 3 + kPrevious[k]]);
     mark[b] = mark[d] = near_round;
     if (b == to || d == to) {
-      if (edge_triangle_count_ < 2) {
-        opposite[edge_triangle_count_] = b == to ? d : b;
-        edge_triangles_[edge_triangle_count_] = t;
+      if (edge_count < 2) {
+        opposite[edge_count] = b == to ? d : b;
+        edge_triangles_[edge_count] = t;
       }
-      ++edge_triangle_count_;
-      continue;
+      ++edge_count;
+      return;
     }
-    from_fan_.push_back(b);
-    from_fan_.push_back(d);
-  }
-  const uint32_t edge_count = edge_triangle_count_;
+    from_fan[from_fan_size] = b;
+    from_fan[from_fan_size + 1] = d;
+    from_fan_size += 2;
+  });
+  edge_triangle_count_ = edge_count;
+  from_fan_size_ = from_fan_size;
   if (edge_count == 0 || edge_count > 2 || (edge_count == 2 && opposite[0] == opposite[1])) {
     ++stats_.rejected_topology;
     return false;
@@ -360,33 +522,29 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   // where (from, o1, o2) and (to, o1, o2) both exist).
   bool from_has_opposite_pair = false;
   if (edge_count == 2)
-    for (size_t i = 0; i < from_fan_.size(); i += 2) {
-      const uint32_t b = from_fan_[i], d = from_fan_[i + 1];
+    for (uint32_t i = 0; i < from_fan_size; i += 2) {
+      const uint32_t b = from_fan[i], d = from_fan[i + 1];
       from_has_opposite_pair |= (b == opposite[0] && d == opposite[1]) ||
                                 (b == opposite[1] && d == opposite[0]);
     }
   const uint32_t counted_round = nextRound();
-  uint32_t common = 0;
+  uint32_t common = 0, to_fan_size = 0;
+  uint32_t* to_fan = to_fan_.get();
   bool duplicate = false;
-  to_fan_.clear();
-  for (uint32_t i = corner_start_[to]; i < corner_start_[to + 1]; ++i) {
-    const uint32_t c = corners_[i], t = c / 3, k = c - t * 3;
-    if (dead_[t]) continue;
-    const uint32_t x = remap[indices[t * 3 + kNext[k]]], y = remap[indices[t * 3 + kPrevious[k]]];
-    const bool on_edge = x == from || y == from;
-    for (uint32_t n : {x, y}) {
-      if (n != from && mark[n] == near_round) {
-        mark[n] = counted_round;
-        ++common;
-      }
-    }
-    if (on_edge) continue;
+  for_each_triangle(to, [&](uint32_t t, uint32_t k) {
+    const uint32_t x = survivor(indices[t * 3 + kNext[k]]);
+    const uint32_t y = survivor(indices[t * 3 + kPrevious[k]]);
+    if (x != from && mark[x] == near_round) mark[x] = counted_round, ++common;
+    if (y != from && mark[y] == near_round) mark[y] = counted_round, ++common;
+    if (x == from || y == from) return;
     if (from_has_opposite_pair && ((x == opposite[0] && y == opposite[1]) ||
                                    (x == opposite[1] && y == opposite[0])))
       duplicate = true;
-    to_fan_.push_back(x);
-    to_fan_.push_back(y);
-  }
+    to_fan[to_fan_size] = x;
+    to_fan[to_fan_size + 1] = y;
+    to_fan_size += 2;
+  });
+  to_fan_size_ = to_fan_size;
   if (common != edge_count || duplicate) {
     ++stats_.rejected_topology;
     return false;
@@ -395,11 +553,15 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   const Vec3d at_from = positions_[from], at_to = positions_[to];
   auto flips = [&](Vec3d p) {
     const bool moves_to = p.x != at_to.x || p.y != at_to.y || p.z != at_to.z;
-    return fanFlips(from_fan_, at_from, p) || (moves_to && fanFlips(to_fan_, at_to, p));
+    return fanFlips(from_fan_.get(), from_fan_size_, at_from, p) ||
+           (moves_to && fanFlips(to_fan_.get(), to_fan_size_, at_to, p));
   };
-  const Vec3d priced = candidate.endpoint_only ? at_to
-                                               : fixedPoint(at_from, at_to, candidate.at);
-  if (!candidate.endpoint_only) {
+  Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
+  if (greedy_ && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
+    Quadric q = quadrics_[from];
+    addQuadric(q, quadrics_[to]);
+    priced = minimizeQuadric(q, at_from, at_to);
+  } else if (!candidate.endpoint_only) {
     Quadric q = quadrics_[from];
     addQuadric(q, quadrics_[to]);
     double value = 0;
@@ -426,6 +588,11 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   remap_[from] = to;
   alive_[from] = 0;
   pass_lock_[from] = pass_lock_[to] = pass;
+  if (greedy_) {  // `to` takes over from's triangles
+    absorbed_next_[absorbed_last_[to]] = from;
+    absorbed_last_[to] = absorbed_last_[from];
+    ++version_[to];
+  }
   addQuadric(quadrics_[to], quadrics_[from]);
   const Vec3d at_to = positions_[to], at_from = positions_[from];
   if (position.x != at_to.x || position.y != at_to.y || position.z != at_to.z) {
@@ -437,6 +604,7 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
       asset_positions_[to] = {float(a.x), float(a.y), float(a.z)};
     }
   }
+  expansions_[to] = expandAt(quadrics_[to], positions_[to]);
   // A border collapse: from's other border neighbour now borders on `to`.
   if (kinds_[from] == VertexKind::kConstrained) {
     const uint32_t* line = &border_neighbors_[from * 2];
@@ -466,20 +634,15 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   }
 }
 
-// The mesh as it is (no tail needed), or the greedy tail by the general engine.
+// The compacted result: referenced vertices in id order, triangles in order.
 SimplifyResult PositionSimplifier::finish() {
   SimplifyResult result;
-  const bool reached = options_.target_triangles > 0 && live_triangles_ <= options_.target_triangles;
-  // The compacted mesh: referenced vertices in id order, triangles in order.
   std::vector<uint32_t> compact_id(vertex_count_, kAbsent);
   for (uint32_t v : indices_) compact_id[v] = 0;
-  std::vector<uint32_t> original_id;
-  PreparedMesh current;
-  core::Mesh& mesh = current.mesh;
+  core::Mesh& mesh = result.mesh;
   for (uint32_t v = 0; v < vertex_count_; ++v) {
     if (compact_id[v] == kAbsent) continue;
-    compact_id[v] = uint32_t(original_id.size());
-    original_id.push_back(v);
+    compact_id[v] = uint32_t(mesh.positions.size());
     mesh.positions.push_back(asset_positions_[v]);
   }
   mesh.indices.resize(indices_.size());
@@ -488,120 +651,109 @@ SimplifyResult PositionSimplifier::finish() {
   mesh.submeshes = {{0, uint32_t(mesh.indices.size()), material}};
   result.stats = stats_;
   result.error = max_error_;
-  if (reached || mesh.indices.empty()) {
-    result.mesh = std::move(mesh);
-    if (options_.record) result.record = std::move(record_);
-    return result;
-  }
-
-  current.position_count = uint32_t(original_id.size());
-  current.position_ids.resize(original_id.size());
-  std::vector<Quadric> quadrics(original_id.size());
-  std::vector<uint8_t> locked(original_id.size());
-  for (uint32_t i = 0; i < original_id.size(); ++i) {
-    current.position_ids[i] = i;
-    quadrics[i] = quadrics_[original_id[i]];
-    locked[i] = kinds_[original_id[i]] == VertexKind::kLocked;
-  }
-  QuadricModel model({.endpoint_only = false,
-                      .price_at_fixed_points = false,
-                      .attribute_weight = options_.attribute_weight,
-                      .initial_quadrics = &quadrics});
-  EngineOptions engine_options{
-      .target_triangles = options_.target_triangles,
-      .target_error = options_.target_error,
-      .lock_border = options_.lock_border,
-      .record = options_.record,
-      .ordering = CollapseOrdering::kGreedy,
-      .given_frame = true,
-      .frame_origin = origin_,
-      .frame_scale = scale_,
-      .locked_vertices = &locked,
-  };
-  SimplifyResult tail = runCollapseEngine(current, model, engine_options);
-  result.mesh = std::move(tail.mesh);
-  result.error = std::max(result.error, tail.error);
-  result.stats.collapses += tail.stats.collapses;
-  result.stats.rejected_topology += tail.stats.rejected_topology;
-  result.stats.rejected_flip += tail.stats.rejected_flip;
-  result.stats.rejected_border += tail.stats.rejected_border;
-  if (options_.record) {
-    // The tail's record is over the compacted mesh: back to the base's vertex ids and values.
-    const uint32_t tail_base = uint32_t(current.mesh.vertexCount());
-    const uint32_t offset = uint32_t(record_.values.positions.size());
-    for (CollapseStep step : tail.record.steps) {
-      step.removed = original_id[step.removed];
-      step.kept = original_id[step.kept];
-      step.kept_value = offset + (step.kept_value - tail_base);
-      step.cumulative_error = std::max(step.cumulative_error, float(max_error_));
-      record_.steps.push_back(step);
-    }
-    const auto& values = tail.record.values.positions;
-    record_.values.positions.insert(record_.values.positions.end(), values.begin() + tail_base,
-                                    values.end());
-    result.record = std::move(record_);
-  }
+  if (options_.record) result.record = std::move(record_);
   return result;
 }
 
-SimplifyResult PositionSimplifier::run() {
-  setUp();
-  buildAdjacency();
-  classify();
-  if (options_.record) {
-    record_.base = base_;
-    record_.values.positions = base_.positions;
-  }
-  EngineOptions defaults;
-  size_t tail = std::min(defaults.greedy_tail_triangles, live_triangles_ / 16);
-  if (const char* e = std::getenv("DUOLOD_TAIL")) tail = std::min<size_t>(std::atoi(e), tail);  // EXPERIMENT
-  const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
+void PositionSimplifier::runPasses(size_t pass_target) {
   auto reached = [&] { return live_triangles_ <= pass_target; };
+  EngineOptions defaults;
   for (uint32_t pass = 1; !reached(); ++pass) {
     if (pass > 1) {
       compact();
       buildAdjacency();
     }
     collectCandidates();
-    order_.clear();
-    for (uint32_t i = 0; i < candidates_.size(); ++i) {
-      const PassCandidate& c = candidates_[i];
-      if (!(c.error <= options_.target_error) || !std::isfinite(c.cost)) continue;
-      order_.push_back(uint64_t(costBits(c.cost)) << 32 | i);
-    }
-    if (order_.empty()) break;
+    if (pass_candidate_count_ == 0) break;
+    uint64_t* const order_begin = pass_order_.get();
+    uint64_t* const order_end = order_begin + pass_candidate_count_;
     // As the engine's runPasses: the collapses still needed (about two triangles each) set the
     // goal rank; edges up to pass_cost_slack times its cost are applied in order, the rest wait
     // for the next pass unless none of the cheap ones could be applied.
     const size_t goal = pass_target > 0 ? (live_triangles_ - pass_target + 1) / 2 : 0;
-    auto first_rest = order_.end();
-    if (goal > 0 && goal < order_.size()) {
-      std::nth_element(order_.begin(), order_.begin() + goal, order_.end());
+    uint64_t* first_rest = order_end;
+    if (goal > 0 && goal < pass_candidate_count_) {
+      std::nth_element(order_begin, order_begin + goal, order_end);
       float goal_cost;
-      const uint32_t goal_bits = uint32_t(order_[goal] >> 32);
+      const uint32_t goal_bits = uint32_t(order_begin[goal] >> 32);
       std::memcpy(&goal_cost, &goal_bits, 4);
       const uint64_t limit =
           uint64_t(costBits(double(goal_cost) * defaults.pass_cost_slack)) << 32 | 0xffffffffu;
-      first_rest = std::partition(order_.begin(), order_.end(),
-                                  [&](uint64_t key) { return key <= limit; });
+      first_rest =
+          std::partition(order_begin, order_end, [&](uint64_t key) { return key <= limit; });
     }
-    std::sort(order_.begin(), first_rest);
+    std::sort(order_begin, first_rest);
     size_t applied = 0;
     auto apply_range = [&](auto begin, auto end) {
       for (auto it = begin; it != end && !reached(); ++it) {
-        const PassCandidate& c = candidates_[uint32_t(*it)];
+        const PassCandidate& c = pass_candidates_[uint32_t(*it)];
         if (pass_lock_[c.from] == pass || pass_lock_[c.to] == pass) continue;
         if (tryCollapse(c, pass)) ++applied;
       }
     };
-    apply_range(order_.begin(), first_rest);
-    if (applied == 0 && first_rest != order_.end()) {
-      std::sort(first_rest, order_.end());
-      apply_range(first_rest, order_.end());
+    apply_range(order_begin, first_rest);
+    if (applied == 0 && first_rest != order_end) {
+      std::sort(first_rest, order_end);
+      apply_range(first_rest, order_end);
     }
     if (applied == 0) break;
   }
   compact();
+}
+
+// The greedy queue of Garland & Heckbert 1997 for the last collapses (as the engine's runGreedy
+// with invalidation ring 1): always the cheapest edge next, priced at its optimal placement; a
+// collapse prices the survivor's edges again. Candidates refused by the link or flip test are not
+// retried until their neighbourhood changes; when the queue runs dry short of the target it is
+// filled again from all edges, at most EngineOptions::max_passes times.
+void PositionSimplifier::runGreedy() {
+  greedy_ = true;
+  version_.assign(vertex_count_, 0);
+  auto reached = [&] {
+    return options_.target_triangles > 0 && live_triangles_ <= options_.target_triangles;
+  };
+  for (int fill = 0; fill < EngineOptions{}.max_passes && !reached(); ++fill) {
+    buildAdjacency();
+    heap_.clear();
+    filling_ = true;
+    collectCandidates();
+    filling_ = false;
+    std::make_heap(heap_.begin(), heap_.end(), std::greater<>());
+    const size_t rejected_before = stats_.rejected_topology + stats_.rejected_flip;
+    while (!heap_.empty() && !reached()) {
+      std::pop_heap(heap_.begin(), heap_.end(), std::greater<>());
+      const QueuedCandidate e = heap_.back();
+      heap_.pop_back();
+      if (!alive_[e.from] || !alive_[e.to] || version_[e.from] != e.from_version ||
+          version_[e.to] != e.to_version)
+        continue;
+      const PassCandidate c{e.from, e.to, e.cost, kFixedAtB, e.endpoint_only};
+      if (tryCollapse(c, 0)) emitAround(e.to);
+    }
+    compact();
+    if (stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
+  }
+}
+
+SimplifyResult PositionSimplifier::run() {
+  setUp();
+  buildAdjacency();
+  classify();
+  const size_t edge_room = indices_.size() + 2 * constrained_.size();
+  pass_candidates_.reset(new PassCandidate[edge_room]);
+  pass_order_.reset(new uint64_t[edge_room]);
+  from_fan_.reset(new uint32_t[indices_.size() * 2]);
+  to_fan_.reset(new uint32_t[indices_.size() * 2]);
+  expansions_.resize(vertex_count_);
+  for (uint32_t v = 0; v < vertex_count_; ++v) expansions_[v] = expandAt(quadrics_[v], positions_[v]);
+  if (options_.record) {
+    record_.base = base_;
+    record_.values.positions = base_.positions;
+  }
+  const size_t tail = std::min(EngineOptions{}.greedy_tail_triangles, live_triangles_ / 16);
+  const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
+  runPasses(pass_target);
+  runGreedy();
   return finish();
 }
 
