@@ -185,6 +185,29 @@ TEST(SimplifyQuadric, Deterministic) {
   }
 }
 
+// Position-only meshes take the fast path (src/mesh/simplify_positions.cpp: passes, then its own
+// greedy tail): deep down (20480 -> 205 triangles, both phases run) it keeps the engine's
+// guarantees: closed stays closed (every edge on two triangles, V - E + F = 2), no triangle turns
+// inwards, and the record replays to the result.
+TEST(SimplifyQuadric, PositionFastPathKeepsTheGuaranteesDeepDown) {
+  Mesh sphere = test::icosphere(5, 1.0f, test::lumps);
+  ASSERT_TRUE(sphere.normals.empty() && sphere.uv0.empty());
+  auto result = mesh::simplifyQuadric(sphere, {.target_triangles = 205});
+  const Mesh& out = result.mesh;
+  ASSERT_EQ(out.triangleCount(), 205u - 205u % 2);  // a closed mesh loses two per collapse
+  ASSERT_TRUE(core::validateMesh(out).ok());
+  auto edges = test::edgeTriangleCounts(out);
+  for (const auto& [edge, count] : edges) EXPECT_EQ(count, 2);
+  EXPECT_EQ(int64_t(out.vertexCount()) - int64_t(edges.size()) + int64_t(out.triangleCount()), 2);
+  for (size_t t = 0; t < out.triangleCount(); ++t)
+    EXPECT_GT(core::dot(test::triangleNormal(out, t), out.positions[out.indices[t * 3]]), 0)
+        << "triangle " << t;
+  EXPECT_EQ(result.record.steps.size(), result.stats.collapses);
+  Mesh replayed = mesh::extractMesh(result.record, result.record.steps.size());
+  EXPECT_EQ(replayed.indices, out.indices);
+  EXPECT_EQ(replayed.positions, out.positions);
+}
+
 TEST(SimplifyQuadric, EndpointPlacementOnlyUsesInputPositions) {
   Mesh sphere = test::icosphere(3, 1.0f, test::lumps);
   auto result = mesh::simplifyQuadric(
