@@ -22,20 +22,25 @@
 // at the best of the endpoints and the midpoint and solves the optimal placement only for the
 // collapse being applied (CostModel::refinePlacement).
 //
+// Position-only meshes with optimal placement and one submesh no longer come here:
+// simplifyQuadric runs them through the dedicated fast path (simplify_positions.cpp), which is
+// this engine's kPasses + greedy tail on a different data layout. kPasses here still serves
+// position-only meshes with endpoint placement, several submeshes or non-finite positions.
+//
 // Cost, measured (callgrind, `LP_NUM_THREADS=0 valgrind --tool=callgrind build/bench/bench_simplify
 // bunny00.off --gltfpack "" --samples 0 --repeats 1 --ratios 0.1 --no-progressive`, bunny 75k
-// triangles -> 10%): 430M instructions for simplifyQuadric (was 706M with the greedy queue
-// alone), 2.8x meshoptimizer 0.18's meshopt_simplify (153M). Where it goes: applying the ~34k
+// triangles -> 10%). This engine's kPasses: 430M instructions for simplifyQuadric (706M with the
+// greedy queue alone), 2.8x meshoptimizer 0.18's meshopt_simplify (153M): applying the ~34k
 // collapses 128M (3.8k each: the flip test of both fans 36M, gathering `from` 24M, the link
 // condition 24M, optimal placement 19M, the splice and bookkeeping 15M); pricing ~305k pass
 // candidates ~65M; classification 57M (a neighbour gather per position); preparation (welding,
 // triangle dedup) 31M; quadrics 26M; engine state and Morton order 19M; the greedy tail ~30M;
-// candidate collection, partition and sort ~40M. meshopt does the same kinds of work with float
-// quadrics, endpoint placement, no link condition and no seam/material classification. The
-// remaining factor needs a different data layout (per-pass compact adjacency instead of
-// per-position corner lists walked by gatherNeighbors, float quadrics around a local origin),
-// not a change of ordering. Lazy re-pricing in the greedy queue was tried earlier: 29% fewer
-// pricings but 15% more instructions (each stale entry needs a gather to be re-priced).
+// candidate collection, partition and sort ~40M. The layout was the limit (per-position corner
+// lists walked by gatherNeighbors, a neighbour gather per candidate), hence the fast path with
+// per-pass flat corner tables: same algorithm and quality table, 1.8-2.0x meshopt (bunny 10%:
+// see simplify_positions.cpp and bench/RESULTS.md, issue 3, for where its instructions go).
+// Lazy re-pricing in the greedy queue was tried earlier: 29% fewer pricings but 15% more
+// instructions (each stale entry needs a gather to be re-priced).
 #include "mesh/collapse_engine.hpp"
 
 #include <algorithm>
