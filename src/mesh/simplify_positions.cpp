@@ -254,17 +254,26 @@ void PositionSimplifier::buildAdjacency() {
 void PositionSimplifier::classify() {
   kinds_.assign(vertex_count_, VertexKind::kLocked);
   border_neighbors_.assign(size_t(vertex_count_) * 2, kAbsent);
-  std::vector<uint32_t> as_next(vertex_count_, kAbsent), as_previous(vertex_count_, kAbsent);
-  std::vector<uint32_t> nexts, previouses;
+  std::vector<uint32_t> as_next_buffer(vertex_count_, kAbsent);
+  std::vector<uint32_t> as_previous_buffer(vertex_count_, kAbsent);
+  uint32_t max_degree = 0;
+  for (uint32_t v = 0; v < vertex_count_; ++v)
+    max_degree = std::max(max_degree, corner_start_[v + 1] - corner_start_[v]);
+  std::vector<uint32_t> nexts_buffer(max_degree), previouses_buffer(max_degree);
+  // Raw pointers: the stores below cannot alias them.
+  uint32_t* as_next = as_next_buffer.data();
+  uint32_t* as_previous = as_previous_buffer.data();
+  uint32_t* nexts = nexts_buffer.data();
+  uint32_t* previouses = previouses_buffer.data();
+  const uint32_t* indices = indices_.data();
+  const uint32_t* corners = corners_.data();
   for (uint32_t v = 0; v < vertex_count_; ++v) {
     const uint32_t begin = corner_start_[v], degree = corner_start_[v + 1] - begin;
     if (degree == 0) continue;
-    nexts.resize(degree);
-    previouses.resize(degree);
     bool locked = false;
     for (uint32_t i = 0; i < degree; ++i) {
-      const uint32_t c = corners_[begin + i], t = c / 3, k = c - t * 3;
-      const uint32_t n = indices_[t * 3 + kNext[k]], p = indices_[t * 3 + kPrevious[k]];
+      const uint32_t c = corners[begin + i], t = c / 3, k = c - t * 3;
+      const uint32_t n = indices[t * 3 + kNext[k]], p = indices[t * 3 + kPrevious[k]];
       nexts[i] = n, previouses[i] = p;
       if (as_next[n] != kAbsent) locked = true;  // two triangles run v -> n
       else as_next[n] = i;
