@@ -109,7 +109,10 @@ uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint3
   std::vector<uint32_t> first_to_id(n, kAbsent);
   uint32_t count = 0;
   for (uint32_t v = 0; v < n; ++v) {
-    uint32_t first = table.findOrInsert(v, hashWords(&bits[v * 3], 3), [&](uint32_t other) {
+    // One mixing round over the 96 bits (hashWords would mix three times; this runs per vertex).
+    const uint32_t* b = &bits[v * 3];
+    const uint64_t hash = mixHash((uint64_t(b[0]) << 32 | b[1]) ^ (uint64_t(b[2]) * 0x9e3779b97f4a7c15ull));
+    uint32_t first = table.findOrInsert(v, hash, [&](uint32_t other) {
       return std::memcmp(&bits[v * 3], &bits[other * 3], 12) == 0;
     });
     if (first == v) first_to_id[v] = count++;

@@ -61,28 +61,7 @@ DUOLOD_HOT double quadricValue(const Quadric& q, Vec3d p) { return evaluateQuadr
 
 }  // namespace
 
-Quadric planeQuadric(Vec3d n, double d, double weight, double area) {
-  Quadric q;
-  q.a00 = weight * n.x * n.x, q.a01 = weight * n.x * n.y, q.a02 = weight * n.x * n.z;
-  q.a11 = weight * n.y * n.y, q.a12 = weight * n.y * n.z, q.a22 = weight * n.z * n.z;
-  q.b0 = weight * d * n.x, q.b1 = weight * d * n.y, q.b2 = weight * d * n.z;
-  q.c = weight * d * d;
-  q.weight = area;
-  return q;
-}
-
-
 Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2) { return normalized(cross(p1 - p0, p2 - p0)); }
-
-bool triangleQuadric(Vec3d p0, Vec3d p1, Vec3d p2, Quadric& q) {
-  const Vec3d cross_product = cross(p1 - p0, p2 - p0);
-  const double double_area = std::sqrt(dot(cross_product, cross_product));
-  if (!(double_area > 0) || !std::isfinite(double_area)) return false;
-  const double area = 0.5 * double_area;
-  const Vec3d n = cross_product * (1.0 / double_area);
-  q = planeQuadric(n, -dot(n, p0), area, area);  // eq. (2), area-weighted
-  return true;
-}
 
 bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q) {
   const Vec3d e = b - a;

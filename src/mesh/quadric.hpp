@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -22,7 +23,15 @@ struct Quadric {
 };
 
 // weight * (n·p + d)², n of unit length; `area` is what it adds to Quadric::weight.
-Quadric planeQuadric(Vec3d n, double d, double weight, double area);
+inline Quadric planeQuadric(Vec3d n, double d, double weight, double area) {
+  Quadric q;
+  q.a00 = weight * n.x * n.x, q.a01 = weight * n.x * n.y, q.a02 = weight * n.x * n.z;
+  q.a11 = weight * n.y * n.y, q.a12 = weight * n.y * n.z, q.a22 = weight * n.z * n.z;
+  q.b0 = weight * d * n.x, q.b1 = weight * d * n.y, q.b2 = weight * d * n.z;
+  q.c = weight * d * d;
+  q.weight = area;
+  return q;
+}
 inline void addQuadric(Quadric& q, const Quadric& o) {
   q.a00 += o.a00, q.a01 += o.a01, q.a02 += o.a02, q.a11 += o.a11, q.a12 += o.a12;
   q.a22 += o.a22, q.b0 += o.b0, q.b1 += o.b1, q.b2 += o.b2, q.c += o.c, q.weight += o.weight;
@@ -38,8 +47,16 @@ inline double evaluateQuadric(const Quadric& q, Vec3d p) {
 }
 
 // The area-weighted plane quadric of a triangle (Garland & Heckbert 1997 eq. 2, weighted by its
-// area); false (q untouched) for a zero-area or non-finite triangle.
-bool triangleQuadric(Vec3d p0, Vec3d p1, Vec3d p2, Quadric& q);
+// area); false (q untouched) for a zero-area or non-finite triangle. Inline: once per triangle.
+inline bool triangleQuadric(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, Quadric& q) {
+  const Vec3d cross_product = cross(p1 - p0, p2 - p0);
+  const double double_area = std::sqrt(dot(cross_product, cross_product));
+  if (!(double_area > 0) || !std::isfinite(double_area)) return false;
+  const double area = 0.5 * double_area;
+  const Vec3d n = cross_product * (1.0 / double_area);
+  q = planeQuadric(n, -dot(n, p0), area, area);
+  return true;
+}
 // The penalty plane through the feature edge [a, b], perpendicular to the surface
 // (`face_normal`: the sum of the unit normals of the edge's triangles; Garland & Heckbert 1997
 // §6.1): sliding a border vertex off its line costs, sliding along it does not. False (q

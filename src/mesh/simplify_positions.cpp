@@ -562,7 +562,9 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   const Vec3d at_from = positions_[from], at_to = positions_[to];
   auto flips = [&](Vec3d p) {
     const bool moves_to = p.x != at_to.x || p.y != at_to.y || p.z != at_to.z;
-    return fanFlips(from_fan_.get(), from_fan_size_, at_from, p) ||
+    // from's triangles keep their shape when the survivor sits where `from` was.
+    const bool moves_from = p.x != at_from.x || p.y != at_from.y || p.z != at_from.z;
+    return (moves_from && fanFlips(from_fan_.get(), from_fan_size_, at_from, p)) ||
            (moves_to && fanFlips(to_fan_.get(), to_fan_size_, at_to, p));
   };
   Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
