@@ -37,8 +37,8 @@
 // triangle dedup) 31M; quadrics 26M; engine state and Morton order 19M; the greedy tail ~30M;
 // candidate collection, partition and sort ~40M. The layout was the limit (per-position corner
 // lists walked by gatherNeighbors, a neighbour gather per candidate), hence the fast path with
-// per-pass flat corner tables: same algorithm and quality table, 1.8-2.0x meshopt (bunny 10%:
-// see simplify_positions.cpp and bench/RESULTS.md, issue 3, for where its instructions go).
+// per-pass flat corner tables: same algorithm, nearly the same quality table, 1.6-2.0x meshopt
+// (see simplify_positions.cpp and bench/RESULTS.md, issue 3, for where its instructions go).
 // Lazy re-pricing in the greedy queue was tried earlier: 29% fewer pricings but 15% more
 // instructions (each stale entry needs a gather to be re-priced).
 #include "mesh/collapse_engine.hpp"
@@ -111,7 +111,8 @@ uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint3
   for (uint32_t v = 0; v < n; ++v) {
     // One mixing round over the 96 bits (hashWords would mix three times; this runs per vertex).
     const uint32_t* b = &bits[v * 3];
-    const uint64_t hash = mixHash((uint64_t(b[0]) << 32 | b[1]) ^ (uint64_t(b[2]) * 0x9e3779b97f4a7c15ull));
+    const uint64_t hash =
+        mixHash((uint64_t(b[0]) << 32 | b[1]) ^ (uint64_t(b[2]) * 0x9e3779b97f4a7c15ull));
     uint32_t first = table.findOrInsert(v, hash, [&](uint32_t other) {
       return std::memcmp(&bits[v * 3], &bits[other * 3], 12) == 0;
     });
@@ -630,8 +631,9 @@ void Engine::classifyPositions() {
       s.kinds[p] = VertexKind::kLocked;
     else if (feature_count == 0 && wedge_count == 1)
       s.kinds[p] = VertexKind::kFree;
-    else if (feature_count == 2 && line_consistent && !isLineCorner(s.positions[line_neighbors[0]], s.positions[p],
-                                                                s.positions[line_neighbors[1]]))
+    else if (feature_count == 2 && line_consistent &&
+             !isLineCorner(s.positions[line_neighbors[0]], s.positions[p],
+                           s.positions[line_neighbors[1]]))
       s.kinds[p] = VertexKind::kConstrained, s.line_features[p] = line;
     else
       s.kinds[p] = VertexKind::kLocked;

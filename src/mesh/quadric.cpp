@@ -61,7 +61,9 @@ DUOLOD_HOT double quadricValue(const Quadric& q, Vec3d p) { return evaluateQuadr
 
 }  // namespace
 
-Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2) { return normalized(cross(p1 - p0, p2 - p0)); }
+Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2) {
+  return normalized(cross(p1 - p0, p2 - p0));
+}
 
 bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q) {
   const Vec3d e = b - a;
@@ -283,9 +285,9 @@ void QuadricModel::begin(const EngineState& state) {
     Vec3d face_normal{0, 0, 0};
     for (uint32_t t : edge.triangles) {
       if (t == kAbsent) continue;
-      face_normal = face_normal + unitTriangleNormal(state.positions[state.cornerPosition(t * 3)],
-                                                     state.positions[state.cornerPosition(t * 3 + 1)],
-                                                     state.positions[state.cornerPosition(t * 3 + 2)]);
+      const auto corner = [&](uint32_t c) { return state.positions[state.cornerPosition(c)]; };
+      face_normal = face_normal + unitTriangleNormal(corner(t * 3), corner(t * 3 + 1),
+                                                     corner(t * 3 + 2));
     }
     Quadric plane;
     if (!featureEdgeQuadric(state.positions[edge.a], state.positions[edge.b], face_normal, plane))

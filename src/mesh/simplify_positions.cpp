@@ -23,8 +23,15 @@
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine). Measured against
-// the engine's kPasses on the same meshes: the same quality table, 1.8-2.0x meshoptimizer's
-// instructions instead of 2.2-3.7x (bench/RESULTS.md, issue 3).
+// the engine's kPasses on the same meshes (bench/RESULTS.md, issue 3): nearly the same quality
+// table (13 of 21 cells identical, the rest moved with tie orders), 1.6-2.0x meshoptimizer 0.18's
+// instructions instead of 2.2-3.7x. Bunny 10% (273M): preparation ~30M, quadrics and state ~19M,
+// classification ~17M, corner tables and compaction ~24M, pass pricing of ~316k candidates ~53M
+// (~170 instructions each) plus the edge walk ~11M, partition and sort ~16M, ~33k pass collapses
+// ~75M (fans and link condition ~30M, flip tests ~25M, optimal placement 12M), greedy tail ~18M.
+// The rest of the gap is arithmetic meshopt 0.18 does not do (it prices by one float quadric at
+// the other endpoint, has no link condition, tests one fan, has no greedy tail): closing it needs
+// cheaper arithmetic (float quadrics around a local origin, SIMD), not another layout.
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
@@ -139,7 +146,7 @@ class PositionSimplifier {
   Vec3d origin_;
   double scale_ = 1;
 
-  std::vector<Vec3d> positions_;           // normalized (bounding-box diagonal 1)
+  std::vector<Vec3d> positions_;             // normalized (bounding-box diagonal 1)
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
   std::vector<LocalExpansion> expansions_;  // quadrics_ around positions_
@@ -148,18 +155,18 @@ class PositionSimplifier {
   std::vector<uint32_t> constrained_;       // the constrained vertices
   std::vector<uint32_t> remap_;             // survivor of a vertex collapsed in this pass
   std::vector<uint8_t> alive_;
-  std::vector<uint32_t> pass_lock_;         // the pass that last touched a vertex
+  std::vector<uint32_t> pass_lock_;  // the pass that last touched a vertex
 
-  std::vector<uint32_t> indices_;           // live triangles, compacted at the start of a pass
-  std::vector<uint8_t> dead_;               // per triangle of indices_: collapsed in this pass
+  std::vector<uint32_t> indices_;  // live triangles, compacted at the start of a pass
+  std::vector<uint8_t> dead_;      // per triangle of indices_: collapsed in this pass
   size_t live_triangles_ = 0;
-  std::vector<uint32_t> corner_start_;      // per vertex, into corners_ (vertex_count_ + 1)
-  std::vector<uint32_t> corners_;           // corners (3 * triangle + k) grouped by vertex
+  std::vector<uint32_t> corner_start_;  // per vertex, into corners_ (vertex_count_ + 1)
+  std::vector<uint32_t> corners_;       // corners (3 * triangle + k) grouped by vertex
   std::vector<uint32_t> cursor_;
   // Greedy tail: the vertices absorbed into a vertex, as a chain through absorbed_next_.
   bool greedy_ = false;
   std::vector<uint32_t> absorbed_next_, absorbed_last_;
-  std::vector<uint32_t> version_;           // bumped when a vertex's quadric or position changes
+  std::vector<uint32_t> version_;  // bumped when a vertex's quadric or position changes
   struct QueuedCandidate {
     float cost;
     uint32_t from, to, from_version, to_version;
@@ -198,8 +205,8 @@ void PositionSimplifier::setUp() {
   if (!bounds.empty()) {  // the engine's frame: origin at the box minimum, diagonal 1
     origin_ = {bounds.min.x, bounds.min.y, bounds.min.z};
     const core::Vec3 size = bounds.size();
-    const double diagonal = std::sqrt(double(size.x) * size.x + double(size.y) * size.y +
-                                      double(size.z) * size.z);
+    const double diagonal =
+        std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
     scale_ = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
   }
   const double inverse_scale = 1.0 / scale_;
@@ -275,10 +282,14 @@ void PositionSimplifier::classify() {
       const uint32_t c = corners[begin + i], t = c / 3, k = c - t * 3;
       const uint32_t n = indices[t * 3 + kNext[k]], p = indices[t * 3 + kPrevious[k]];
       nexts[i] = n, previouses[i] = p;
-      if (as_next[n] != kAbsent) locked = true;  // two triangles run v -> n
-      else as_next[n] = i;
-      if (as_previous[p] != kAbsent) locked = true;
-      else as_previous[p] = i;
+      if (as_next[n] != kAbsent)
+        locked = true;  // two triangles run v -> n
+      else
+        as_next[n] = i;
+      if (as_previous[p] != kAbsent)
+        locked = true;
+      else
+        as_previous[p] = i;
     }
     uint32_t border_count = 0, fan_start = 0;
     uint32_t line[2] = {kAbsent, kAbsent};
@@ -469,8 +480,7 @@ void PositionSimplifier::collectCandidates() {
 bool PositionSimplifier::fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner,
                                   Vec3d moved) const {
   for (uint32_t i = 0; i < size; i += 2)
-    if (turnsOverOrFlattens(corner, positions_[fan[i]], positions_[fan[i + 1]], moved))
-      return true;
+    if (turnsOverOrFlattens(corner, positions_[fan[i]], positions_[fan[i + 1]], moved)) return true;
   return false;
 }
 
@@ -533,8 +543,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   if (edge_count == 2)
     for (uint32_t i = 0; i < from_fan_size; i += 2) {
       const uint32_t b = from_fan[i], d = from_fan[i + 1];
-      from_has_opposite_pair |= (b == opposite[0] && d == opposite[1]) ||
-                                (b == opposite[1] && d == opposite[0]);
+      from_has_opposite_pair |=
+          (b == opposite[0] && d == opposite[1]) || (b == opposite[1] && d == opposite[0]);
     }
   const uint32_t counted_round = nextRound();
   uint32_t common = 0, to_fan_size = 0;
@@ -546,8 +556,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     if (x != from && mark[x] == near_round) mark[x] = counted_round, ++common;
     if (y != from && mark[y] == near_round) mark[y] = counted_round, ++common;
     if (x == from || y == from) return;
-    if (from_has_opposite_pair && ((x == opposite[0] && y == opposite[1]) ||
-                                   (x == opposite[1] && y == opposite[0])))
+    if (from_has_opposite_pair &&
+        ((x == opposite[0] && y == opposite[1]) || (x == opposite[1] && y == opposite[0])))
       duplicate = true;
     to_fan[to_fan_size] = x;
     to_fan[to_fan_size + 1] = y;
@@ -623,7 +633,8 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
     auto replace = [&](uint32_t v, uint32_t old_neighbor, uint32_t new_neighbor) {
       if (kinds_[v] != VertexKind::kConstrained) return;
       for (int i = 0; i < 2; ++i)
-        if (border_neighbors_[v * 2 + i] == old_neighbor) border_neighbors_[v * 2 + i] = new_neighbor;
+        if (border_neighbors_[v * 2 + i] == old_neighbor)
+          border_neighbors_[v * 2 + i] = new_neighbor;
     };
     replace(other, from, to);
     replace(to, from, other);
@@ -756,7 +767,8 @@ SimplifyResult PositionSimplifier::run() {
   from_fan_.reset(new uint32_t[indices_.size() * 2]);
   to_fan_.reset(new uint32_t[indices_.size() * 2]);
   expansions_.resize(vertex_count_);
-  for (uint32_t v = 0; v < vertex_count_; ++v) expansions_[v] = expandAt(quadrics_[v], positions_[v]);
+  for (uint32_t v = 0; v < vertex_count_; ++v)
+    expansions_[v] = expandAt(quadrics_[v], positions_[v]);
   if (options_.record) {
     record_.base = base_;
     record_.values.positions = base_.positions;
