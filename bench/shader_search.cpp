@@ -106,6 +106,14 @@ int main(int argc, char** argv) {
   bool uniform_sites = false;
   app.add_flag("--uniform-sites", uniform_sites,
                "GP mutations draw sites uniformly (default: a rule kind first, then a site)");
+  bool no_seeds = false, no_parameters = false;
+  app.add_flag("--no-seeds", no_seeds,
+               "GP starts from the original's one-site mutants only (no aggressive seed genomes)");
+  app.add_flag("--no-move-to-parameter", no_parameters,
+               "do not offer moving to parameter (no instrumented averaging renders)");
+  double burst = 0.1;
+  app.add_option("--burst", burst, "probability that an append mutation adds a burst of sites")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   auto asset = io::loadAsset(asset_path);
@@ -124,6 +132,9 @@ int main(int argc, char** argv) {
   options.genetic.population_size = population;
   options.genetic.seed = seed;
   options.genetic.balance_rule_kinds = !uniform_sites;
+  options.genetic.seed_aggressive_genomes = !no_seeds;
+  options.genetic.append_burst_probability = burst;
+  options.move_to_parameter = !no_parameters;
   options.genetic.on_generation = [](int generation, const shader::SearchCounters& counters) {
     std::fprintf(stderr, "generation %d: %d predicted, %d genomes\n", generation,
                  counters.variants_predicted, counters.genomes_evaluated);
@@ -169,11 +180,17 @@ int main(int argc, char** argv) {
     std::printf("  its rules: %s\n", shader::describeSites(v.search.sites).c_str());
   }
   std::printf("variants: %d generated, %d predicted (%d cache hits, %d rejected), %d rendered, "
-              "%d compiled, %d cost profiles, %d genomes\n",
+              "%d compiled, %d cost profiles, %d averaging renders, %d genomes\n",
               c.variants_generated, c.variants_predicted, c.score_cache_hits, c.score_failures,
               c.variants_rendered, report->compile.programs_compiled, report->cost_profiles,
+              report->average_renders,
               c.genomes_evaluated);
   std::printf("seconds: search %.1f, re-render %.1f, timing %.1f, total %.1f\n", report->search_seconds,
               report->rerender_seconds, report->timing_seconds, report->total_seconds);
-  return 0;
+  std::printf("throughput: %.2f variants predicted/s, %.2f rendered/s\n",
+              report->search_seconds > 0 ? c.variants_predicted / report->search_seconds : 0.0,
+              report->rerender_seconds > 0 ? c.variants_rendered / report->rerender_seconds : 0.0);
+  // The floor "nearly constant" is measured against: the constant shader at this footprint.
+  std::printf("\nthe constant shader at this footprint (a separate timing):\n");
+  return sweepFootprints(*asset, *source, {footprint_px}, repeats);
 }

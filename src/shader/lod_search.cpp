@@ -11,6 +11,7 @@
 #include "duolod/shader.hpp"
 #include "shader/scoring.hpp"
 #include "shader/shader_files.hpp"
+#include "shader/value_average.hpp"
 
 namespace duolod::shader {
 namespace {
@@ -58,6 +59,9 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
 
   RuleContext context;
   context.texture_averages = textureAverages(asset);
+  ValueAverager averager(gl, *asset_id, scorer.evaluator().predictedSamples(),
+                         {.resolution = options.average_resolution});
+  if (options.move_to_parameter) context.average_value = averager.function();
   SearchCache search_cache(*original, context, scorer.scorer());
   auto search_start = std::chrono::steady_clock::now();
   auto searched = options.method == SearchMethod::kGenetic
@@ -127,6 +131,7 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   report.compile = cache->counters();
   report.evaluation = scorer.evaluator().counters();
   report.cost_profiles = scorer.costProfiles();
+  report.average_renders = averager.counters().renders;
   report.total_seconds = secondsSince(start);
   return report;
 }
@@ -216,7 +221,8 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
         {"genomes_evaluated", s.genomes_evaluated},
         {"programs_compiled", report.compile.programs_compiled},
         {"compile_failures", report.compile.compile_failures},
-        {"cost_profiles", report.cost_profiles}}},
+        {"cost_profiles", report.cost_profiles},
+        {"average_renders", report.average_renders}}},
       {"seconds",
        {{"search", report.search_seconds},
         {"rerender", report.rerender_seconds},

@@ -32,6 +32,11 @@ struct ShaderLodOptions {
   bool measure_time = true;
   render::TimingOptions timing;
   int device = -1;  // EGL device; -1 = Mesa surfaceless
+  // Offer "moving to parameter" (He et al. 2015) to the search: each application averages the
+  // value by an instrumented render of the predicted-error samples (shader/value_average.hpp) at
+  // this resolution. Moving the colour output to a parameter is the front's nearly-constant end.
+  bool move_to_parameter = true;
+  int average_resolution = 64;
 };
 
 struct ShaderLodVariant {
@@ -51,6 +56,7 @@ struct ShaderLodReport {
   EvaluationCache::Counters compile;
   VariantEvaluator::Counters evaluation;
   int cost_profiles = 0;  // instrumented renders of the cost model
+  int average_renders = 0;  // instrumented renders averaging values (moving to parameter)
   int footprint_px = 0;
   int domain_samples = 0;
   std::string device;

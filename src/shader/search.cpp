@@ -161,6 +161,62 @@ std::string describeSites(const Genome& sites) {
 // ---------------------------------------------------------------------------------------------
 // Genetic programming.
 
+namespace {
+
+// Whether fragment value `value` is stored straight into an Output variable (the colour).
+bool storedToOutput(const ir::DefUse& uses, ir::Id value) {
+  for (const ir::InstructionRef& user : uses.users(value)) {
+    const ir::Instruction& instruction = *user.instruction;
+    if (instruction.opcode != spv::OpStore || instruction.operands.size() < 2 ||
+        instruction.operands[1] != value)
+      continue;
+    const ir::Instruction* pointer = uses.def(instruction.operands[0]);
+    if (pointer && pointer->opcode == spv::OpVariable &&
+        ir::pointerStorageClass(uses, pointer->type_id) == spv::StorageClassOutput)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<Genome> aggressiveSeedGenomes(const ShaderProgram& program,
+                                          const std::vector<RuleSite>& sites, size_t max_count) {
+  ir::DefUse uses(program.fragment);
+  Genome output, loops, textures;
+  std::vector<std::pair<size_t, const RuleSite*>> results;  // (backward-slice size, site)
+  std::map<ir::Id, const RuleSite*> shortest_loop;
+  for (const RuleSite& site : sites) {
+    if (site.kind == RuleKind::kMoveToParameter && site.stage == Stage::kFragment) {
+      const ir::Instruction* definition = uses.def(site.target);
+      if (output.empty() && storedToOutput(uses, site.target))
+        output.push_back(site);
+      else if (definition && definition->opcode == spv::OpFunctionCall)
+        results.push_back(
+            {ir::backwardSlice(program.fragment, uses, site.target).instructions.size(), &site});
+    } else if (site.kind == RuleKind::kLoopTruncation) {
+      const RuleSite*& kept = shortest_loop[site.target];
+      if (!kept || site.choice < kept->choice) kept = &site;
+    } else if (site.kind == RuleKind::kTextureAverage &&
+               std::none_of(textures.begin(), textures.end(),
+                            [&](const RuleSite& t) { return t.target == site.target; })) {
+      textures.push_back(site);
+    }
+  }
+  for (const RuleSite& site : sites)  // enumerateSites order: the genome is deterministic
+    if (site.kind == RuleKind::kLoopTruncation && shortest_loop[site.target] == &site)
+      loops.push_back(site);
+  std::stable_sort(results.begin(), results.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  // The structurally different seeds first, so a small population still gets each kind.
+  std::vector<Genome> seeds;
+  for (Genome* genome : {&output, &loops, &textures})
+    if (!genome->empty()) seeds.push_back(std::move(*genome));
+  for (const auto& [size, site] : results) seeds.push_back({*site});
+  if (seeds.size() > max_count) seeds.resize(max_count);
+  return seeds;
+}
+
 core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearchOptions& options) {
   auto start = std::chrono::steady_clock::now();
   if (options.population_size < 2) return core::Error{"GP search: the population needs at least 2"};
@@ -201,8 +257,12 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
     double remove_below = options.append_probability + (1 - options.append_probability) / 2;
     if (child.empty() || draw < options.append_probability) {
       int count = 1;
-      double extra = options.append_extra_mean / (1 + options.append_extra_mean);
-      while (count < 8 && random.chance(extra)) ++count;
+      if (options.append_burst_max > 1 && random.chance(options.append_burst_probability)) {
+        count = 2 + static_cast<int>(random.index(static_cast<size_t>(options.append_burst_max - 1)));
+      } else {
+        double extra = options.append_extra_mean / (1 + options.append_extra_mean);
+        while (count < 8 && random.chance(extra)) ++count;
+      }
       for (int i = 0; i < count && static_cast<int>(child.size()) < options.max_genome_length; ++i) {
         std::vector<RuleSite> sites = sitesOf(child, child.size());
         if (sites.empty()) break;
@@ -246,7 +306,14 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
   nsga.generations = options.generations;
   nsga.crossover_probability = options.crossover_probability;
   nsga.seed = options.seed;
-  runNsga2<Genome>({Genome{}}, problem, nsga);
+  std::vector<Genome> initial{Genome{}};
+  if (options.seed_aggressive_genomes) {
+    std::vector<Genome> seeds =
+        aggressiveSeedGenomes(cache.original(), enumerateSites(cache.original(), cache.context()),
+                              static_cast<size_t>(options.population_size / 2));
+    initial.insert(initial.end(), seeds.begin(), seeds.end());
+  }
+  runNsga2<Genome>(std::move(initial), problem, nsga);
   (void)generation_seen;
   if (archive.empty()) return core::Error{"GP search: no valid variant (not even the original)"};
 

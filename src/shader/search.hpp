@@ -88,7 +88,21 @@ struct GeneticSearchOptions {
   bool balance_rule_kinds = true;
   // Errors above this (predicted) make a variant invalid: the search spends no time beyond the
   // useful range (the paper's e_max bounds the levels anyway). Infinity keeps everything.
+  // A finite cap cuts the cheap end of the front (nearly constant variants err most): keep it
+  // infinite when the front must span from the original to nearly constant, and cap the levels
+  // by e_max afterwards.
   double max_error = 1e30;
+  // Seed the initial population with a few aggressive genomes (aggressiveSeedGenomes: the colour
+  // output and each function result moved to a parameter, every loop cut to its fewest
+  // iterations, every texture replaced by its average) instead of random one-site mutants of the
+  // original: mutations one site at a time would need many generations to walk from the original
+  // to the cheap end (bench/RESULTS.md, issue 4 search). At most half the population; the
+  // population size, hence the number of evaluations, is unchanged.
+  bool seed_aggressive_genomes = true;
+  // Mutation: with this probability an append adds a burst of sites instead (up to
+  // append_burst_max, uniform), so one child can jump far down in cost.
+  double append_burst_probability = 0.1;
+  int append_burst_max = 16;
   // Called after each generation with the generation (1-based) and the counters so far.
   std::function<void(int, const SearchCounters&)> on_generation;
 };
@@ -125,6 +139,17 @@ class SearchCache {
   struct State;
   std::unique_ptr<State> state_;
 };
+
+// The aggressive seed genomes of GeneticSearchOptions::seed_aggressive_genomes for `program`
+// (usually the original), from its sites: (1) the value stored to the fragment colour output
+// moved to a parameter ("nearly constant"), (2) each fragment function result moved to a
+// parameter (a programmer's big subexpressions: fbm(), a tone curve), by decreasing backward-slice
+// size, (3) every loop with a constant trip count cut to its fewest iterations, (4) every texture
+// sample replaced by the texture's average (Olano). Only genomes whose sites exist; at most
+// `max_count`, in that order.
+std::vector<std::vector<RuleSite>> aggressiveSeedGenomes(const ShaderProgram& program,
+                                                         const std::vector<RuleSite>& sites,
+                                                         size_t max_count);
 
 core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearchOptions& options);
 core::Result<SearchResult> searchGreedy(SearchCache& cache, const GreedySearchOptions& options);
