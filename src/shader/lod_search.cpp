@@ -11,7 +11,6 @@
 #include "duolod/shader.hpp"
 #include "shader/scoring.hpp"
 #include "shader/shader_files.hpp"
-#include "shader/value_average.hpp"
 
 namespace duolod::shader {
 namespace {
@@ -59,9 +58,7 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
 
   RuleContext context;
   context.texture_averages = textureAverages(asset);
-  ValueAverager averager(gl, *asset_id, scorer.evaluator().predictedSamples(),
-                         {.resolution = options.average_resolution});
-  if (options.move_to_parameter) context.average_value = averager.function();
+  if (options.move_to_parameter) context.average_value = scorer.averageValue(options.average_resolution);
   SearchCache search_cache(*original, context, scorer.scorer());
   auto search_start = std::chrono::steady_clock::now();
   auto searched = options.method == SearchMethod::kGenetic
@@ -131,7 +128,7 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   report.compile = cache->counters();
   report.evaluation = scorer.evaluator().counters();
   report.cost_profiles = scorer.costProfiles();
-  report.average_renders = averager.counters().renders;
+  report.average_renders = scorer.averageRenders();
   report.total_seconds = secondsSince(start);
   return report;
 }

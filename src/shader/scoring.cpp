@@ -105,6 +105,16 @@ const core::Result<Variant>& ConfigurationScorer::optimised(const ShaderProgram&
   return memo_;
 }
 
+std::function<core::Result<std::vector<float>>(const ShaderProgram&, Stage, ir::Id)>
+ConfigurationScorer::averageValue(int resolution) {
+  if (!averager_)
+    averager_ = std::make_unique<ValueAverager>(*renderer_, asset_, evaluator_->predictedSamples(),
+                                                AverageOptions{.resolution = resolution});
+  return averager_->function();
+}
+
+int ConfigurationScorer::averageRenders() const { return averager_ ? averager_->counters().renders : 0; }
+
 VariantScorer ConfigurationScorer::scorer() {
   VariantScorer scorer;
   scorer.predicted_cost = [this](const ShaderProgram& program) -> core::Result<double> {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <map>
 #include <memory>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "shader/evaluate.hpp"
 #include "shader/rules.hpp"
 #include "shader/search.hpp"
+#include "shader/value_average.hpp"
 
 namespace duolod::shader {
 
@@ -36,6 +38,13 @@ class ConfigurationScorer {
   // Scores for the searches; valid while this object lives. Errors are per-pixel (ε / s_d).
   VariantScorer scorer();
   VariantEvaluator& evaluator() { return *evaluator_; }
+  // A RuleContext::average_value for this configuration, which enables "moving to parameter"
+  // (He et al. 2015): a value's mean over the predicted-error samples, by an instrumented render
+  // per component at `resolution` px (shader/value_average.hpp; cached by instrumented program).
+  // Valid while this object lives; the first call fixes the resolution.
+  std::function<core::Result<std::vector<float>>(const ShaderProgram&, Stage, ir::Id)> averageValue(
+      int resolution = 64);
+  int averageRenders() const;
   int costProfiles() const { return cost_profiles_; }
   int footprint() const { return evaluator_->footprint(); }
 
@@ -48,6 +57,7 @@ class ConfigurationScorer {
   render::Renderer* renderer_ = nullptr;
   render::Renderer::AssetId asset_ = -1;
   std::unique_ptr<VariantEvaluator> evaluator_;
+  std::unique_ptr<ValueAverager> averager_;
   std::vector<render::Sample> cost_samples_;
   int cost_profiles_ = 0;
   uint64_t memo_hash_ = 0;
