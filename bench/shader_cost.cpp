@@ -25,6 +25,7 @@
 #include "duolod/shader.hpp"
 #include "shader/cost_model.hpp"
 #include "shader/instrument.hpp"
+#include "shader/rules.hpp"
 
 using namespace duolod;
 namespace ir = duolod::shader::ir;
@@ -196,6 +197,36 @@ core::Result<ir::Module> compileStage(const std::string& source, shader::Stage s
   return std::move(*module);
 }
 
+// Both stages of `shader` with fragment value `value` (a source name) computed per vertex by the
+// rule, in the evaluated form (SPIRV-Tools' performance passes, like the search's variants).
+core::Result<std::pair<ir::Module, ir::Module>> perVertexVariant(const std::string& vertex_source,
+                                                                 const std::string& fragment_source,
+                                                                 const std::string& shader,
+                                                                 const std::string& value) {
+  auto vertex = shader::compileToSpirv(vertex_source, shader::Stage::kVertex, shader + ".vert");
+  if (!vertex.ok()) return vertex.error();
+  auto fragment = shader::compileToSpirv(fragment_source, shader::Stage::kFragment, shader + ".frag");
+  if (!fragment.ok()) return fragment.error();
+  auto program = shader::parseProgram(*vertex, *fragment);
+  if (!program.ok()) return program.error();
+  shader::RuleContext context;
+  context.enabled = {false, false, true, false, false, false};
+  const std::string wanted = "per-vertex: " + value + " computed";
+  for (const shader::RuleSite& site : shader::enumerateSites(*program, context)) {
+    if (site.description.rfind(wanted, 0) != 0) continue;
+    auto applied = shader::applyRule(*program, site, context);
+    if (!applied.ok()) return applied.error();
+    auto words = shader::emitProgram(*applied, /*optimize=*/true);
+    if (!words.ok()) return words.error();
+    auto vertex_module = ir::parseModule(words->vertex);
+    if (!vertex_module.ok()) return vertex_module.error();
+    auto fragment_module = ir::parseModule(words->fragment);
+    if (!fragment_module.ok()) return fragment_module.error();
+    return std::make_pair(std::move(*vertex_module), std::move(*fragment_module));
+  }
+  return core::Error{"no per-vertex site for " + value};
+}
+
 // ---- one measured point ----
 
 struct Point {
@@ -303,6 +334,10 @@ int main(int argc, char** argv) {
   app.add_option("--views", views, "views of the dodecahedron domain (centre light each)")
       ->capture_default_str();
   app.add_option("--only", only, "run one shader (pbr, noise_phong, blend)");
+  std::vector<std::string> per_vertex_values;
+  app.add_option("--per-vertex", per_vertex_values,
+                 "also time variants with these fragment values (by source name) moved per vertex "
+                 "by the per-vertex rule, one each, in every shader that has them");
   CLI11_PARSE(app, argc, argv);
 
   const std::string assets = DUOLOD_ASSET_DIR;
@@ -340,7 +375,8 @@ int main(int argc, char** argv) {
     if (!vertex.ok()) return fail(vertex.error().message);
 
     struct Compiled {
-      const VariantSpec* spec;
+      std::string name;
+      ir::Module vertex;
       ir::Module fragment;
       render::Renderer::ProgramId program;
     };
@@ -354,7 +390,23 @@ int main(int argc, char** argv) {
       auto program = r.compileProgram(
           render::SpirvBinary{ir::emitModule(*vertex), ir::emitModule(*fragment)});
       if (!program.ok()) return fail(spec.name + ": " + program.error().message);
-      compiled.push_back({&spec, std::move(*fragment), *program});
+      compiled.push_back({spec.name, *vertex, std::move(*fragment), *program});
+    }
+    // With --per-vertex: the per-vertex rule (Wang et al. 2014) applied to one named value each,
+    // on the SPIR-V: variants whose vertex stage does the work, which the textual edits never
+    // have (llvmpipe shades vertices on one thread, fragments on all cores).
+    for (const std::string& value : per_vertex_values) {
+      auto variant = perVertexVariant(*vertex_source, *fragment_source, shader_case.shader, value);
+      if (!variant.ok()) {
+        std::fprintf(stderr, "%s: per-vertex %s: %s (skipped)\n", shader_case.shader.c_str(),
+                     value.c_str(), variant.error().message.c_str());
+        continue;
+      }
+      auto program = r.compileProgram(
+          render::SpirvBinary{ir::emitModule(variant->first), ir::emitModule(variant->second)});
+      if (!program.ok()) return fail("per-vertex " + value + ": " + program.error().message);
+      compiled.push_back(
+          {"per-vertex " + value, std::move(variant->first), std::move(variant->second), *program});
     }
     std::vector<render::Renderer::ProgramId> programs;
     for (const Compiled& c : compiled) programs.push_back(c.program);
@@ -372,18 +424,18 @@ int main(int argc, char** argv) {
         double draws = static_cast<double>(samples.size());
         double v = stats.work.vertex_invocations / draws;
         double f = stats.work.fragment_invocations / draws;
-        auto profile = shader::profileBlockCounts(r, *asset_id, *vertex, c.fragment, samples,
+        auto profile = shader::profileBlockCounts(r, *asset_id, c.vertex, c.fragment, samples,
                                                   resolution);
-        if (!profile.ok()) return fail(c.spec->name + ": " + profile.error().message);
+        if (!profile.ok()) return fail(c.name + ": " + profile.error().message);
         Point point;
         point.shader = shader_case.shader;
-        point.variant = c.spec->name;
+        point.variant = c.name;
         point.resolution = resolution;
-        point.features = shader::profiledCostFeatures(*vertex, c.fragment, *profile, v, f);
-        point.static_features = shader::staticCostFeatures(*vertex, c.fragment, v, f);
-        point.he = shader::heStaticCost(*vertex, c.fragment);
+        point.features = shader::profiledCostFeatures(c.vertex, c.fragment, *profile, v, f);
+        point.static_features = shader::staticCostFeatures(c.vertex, c.fragment, v, f);
+        point.he = shader::heStaticCost(c.vertex, c.fragment);
         point.static_instructions =
-            sum(shader::staticOpCounts(*vertex)) + sum(shader::staticOpCounts(c.fragment));
+            sum(shader::staticOpCounts(c.vertex)) + sum(shader::staticOpCounts(c.fragment));
         shader_points.push_back(point);
       }
       std::fprintf(stderr, "%s at %d px: timing...\n", shader_case.shader.c_str(), resolution);
