@@ -141,6 +141,33 @@ TEST(Nsga2, SameSeedSameSearch) {
   EXPECT_TRUE(differs);
 }
 
+// prepare() sees each batch whole before its first evaluation: the initial population, then one
+// batch of offspring per generation, in exactly the order evaluate() is then called; and having
+// it changes no result.
+TEST(Nsga2, PrepareAnnouncesEveryBatchInEvaluationOrder) {
+  Nsga2Options options{.population_size = 8, .generations = 3, .seed = 7};
+  Nsga2Problem<Genes> problem = zdt1Problem();
+  std::vector<Genes> announced, evaluated;
+  std::vector<size_t> batch_sizes;
+  problem.prepare = [&](std::span<const Genes> batch) {
+    EXPECT_EQ(announced.size(), evaluated.size());  // the previous batch is fully evaluated
+    announced.insert(announced.end(), batch.begin(), batch.end());
+    batch_sizes.push_back(batch.size());
+  };
+  auto evaluate = problem.evaluate;
+  problem.evaluate = [&](const Genes& x) {
+    evaluated.push_back(x);
+    return evaluate(x);
+  };
+  auto with = runNsga2(randomGenes(3, 4, 11), problem, options);
+  EXPECT_EQ(batch_sizes, (std::vector<size_t>{8, 8, 8, 8}));  // 3 initial + 5 mutants, then 3 × 8
+  EXPECT_EQ(announced, evaluated);
+  auto without = runNsga2(randomGenes(3, 4, 11), zdt1Problem(), options);
+  ASSERT_EQ(with.population.size(), without.population.size());
+  for (size_t i = 0; i < with.population.size(); ++i)
+    EXPECT_EQ(with.population[i].genome, without.population[i].genome);
+}
+
 TEST(Nsga2, ConvergesOnZdt1) {
   const int genes = 5;
   std::vector<Genes> initial = randomGenes(40, genes, 11);

@@ -560,7 +560,7 @@ struct GenerateFlags {
   bool force = false;
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
   lod::GenerateOptions options;
-  bool quiet = false, verbose = false;
+  bool quiet = false, verbose = false, no_compile_ahead = false;
   int jobs = 0;
 
   void add(CLI::App* command) {
@@ -620,6 +620,9 @@ struct GenerateFlags {
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
     command->add_flag("--quiet", quiet, "no progress display");
+    command->add_flag("--no-compile-ahead", no_compile_ahead,
+                      "compile shader variants only when scored (default: a worker thread with "
+                      "its own GL context compiles the GP's coming ones; same results)");
     command->add_option("--jobs", jobs,
                         "threads the renderer may use (Mesa llvmpipe's LP_NUM_THREADS; 0 = one "
                         "per core, its default)")
@@ -689,6 +692,7 @@ int runGenerate(GenerateFlags& flags) {
   lod::GenerateOptions options = flags.options;
   options.levels.display = flags.shading.display();
   options.device = flags.shading.device;
+  options.compile_ahead = !flags.no_compile_ahead;
   options.optimizer =
       flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;
   options.scope = flags.only == "mesh"     ? lod::LodScope::kMeshOnly
@@ -764,7 +768,7 @@ struct ShaderFlags {
   int population = 24;
   int greedy_steps = 32;
   int greedy_candidates = 64;
-  bool no_timing = false;
+  bool no_timing = false, no_compile_ahead = false;
   bool force = false;
   ShadingFlags shading;
 
@@ -787,6 +791,9 @@ struct ShaderFlags {
                         "site; noise_phong offers ~650, each one a compile and two renders)")
         ->capture_default_str();
     command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
+    command->add_flag("--no-compile-ahead", no_compile_ahead,
+                      "compile the GP's variants only when scored (default: a worker thread with "
+                      "its own GL context compiles the coming ones on the other core; same results)");
     command->add_option("--out", out, "folder for the variants, the autoLOD shader and summary.json")
         ->required();
     command->add_flag("--force", force, "write into --out even if it holds files");
@@ -841,6 +848,7 @@ int runShader(ShaderFlags& flags) {
   options.greedy.max_steps = flags.greedy_steps;
   options.greedy.max_candidates_per_step = flags.greedy_candidates;
   options.measure_time = !flags.no_timing;
+  options.compile_ahead = !flags.no_compile_ahead;
   auto report = shader::runShaderLod(*asset, *source, options);
   if (!report) return fail(report.error().message);
   if (auto written = shader::writeShaderLod(*report, flags.out, flags.force); !written)
@@ -859,9 +867,11 @@ int runShader(ShaderFlags& flags) {
                 ratio.c_str(), variant.search.rendered_error.value_or(-1));
   }
   const shader::SearchCounters& counters = report->search;
-  std::printf("variants: %d generated, %d predicted, %d rendered, %d compiled; search %.1f s, total %.1f s\n",
-              counters.variants_generated, counters.variants_predicted, counters.variants_rendered,
-              report->compile.programs_compiled, report->search_seconds, report->total_seconds);
+  std::printf("variants: %d generated, %d predicted (%d compiled ahead), %d rendered, %d compiled; "
+              "search %.1f s, total %.1f s\n",
+              counters.variants_generated, counters.variants_predicted, report->compiled_ahead,
+              counters.variants_rendered, report->compile.programs_compiled,
+              report->search_seconds, report->total_seconds);
   std::printf("wrote %zu levels, the autoLOD shader (uniform float autoLOD at location %u) and "
               "summary.json to %s\n",
               report->variants.size(), report->autolod.autolod_location, flags.out.c_str());

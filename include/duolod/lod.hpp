@@ -364,6 +364,10 @@ struct GenerateOptions {
   double interleaved_top_fraction = 0.2;
   int interleaved_generations = 3;
   int device = -1;  // EGL device; -1 = Mesa surfaceless
+  // Compile the shader searches' coming variants on a second GL context in a worker thread (the
+  // search's CPU work and llvmpipe's compiles otherwise keep one core busy and the other idle).
+  // The results are the same either way.
+  bool compile_ahead = true;
   std::function<void(const GenerateProgress&)> progress;
 };
 

@@ -523,6 +523,11 @@ core::Status Generator::makeShaderCandidates() {
       progress("shader candidates", double(configuration++) / std::max(1, configurations));
       auto scoring = scorerFor(level, set, mesh);
       if (!scoring) return scoring.error();
+      if (options_.compile_ahead) {
+        core::Asset drawn = asset_;  // what the scorer draws: this mesh, the asset's materials
+        drawn.mesh = mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh];
+        (*scoring)->enableCompileAhead(std::move(drawn), {.device = options_.device});
+      }
       shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
       shader::GeneticSearchOptions genetic;
       genetic.population_size = options_.population;
@@ -538,10 +543,10 @@ core::Status Generator::makeShaderCandidates() {
         char line[240];
         std::snprintf(line, sizeof line,
                       "shader search level %d (mesh %d): %zu variants on the front; so far %d "
-                      "programs compiled in %.1f s, %d cost profiles; %.1f s",
+                      "programs compiled in %.1f s, %d cost profiles (%d compiled ahead); %.1f s",
                       level, mesh, searched->variants.size(), compiled.programs_compiled,
                       compiled.compile_seconds, (*scoring)->costProfiles(),
-                      secondsSince(config_start));
+                      (*scoring)->compileAheadCounts().first, secondsSince(config_start));
         options_.progress({"shader candidates", double(configuration) / std::max(1, configurations),
                            line});
       }

@@ -51,6 +51,7 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   auto scoring = ConfigurationScorer::create(gl, cache, *asset_id, asset.mesh, *original, config);
   if (!scoring) return scoring.error();
   ConfigurationScorer& scorer = **scoring;
+  if (options.compile_ahead) scorer.enableCompileAhead(asset, {.device = options.device});
   report.footprint_px = scorer.footprint();
   report.domain_samples = scorer.evaluator().sampleCount();
   std::vector<render::Sample> domain = render::domainSamples(
@@ -66,6 +67,7 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
                       : searchGreedy(search_cache, options.greedy);
   if (!searched) return searched.error();
   report.search_seconds = secondsSince(search_start);
+  report.compiled_ahead = scorer.compileAheadCounts().first;
 
   // Levels: by decreasing predicted cost, as the LOD shader orders them, and always from the
   // original: it can be off the front (a variant that removes aliasing detail may be closer to the
@@ -219,7 +221,8 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
         {"programs_compiled", report.compile.programs_compiled},
         {"compile_failures", report.compile.compile_failures},
         {"cost_profiles", report.cost_profiles},
-        {"average_renders", report.average_renders}}},
+        {"average_renders", report.average_renders},
+        {"compiled_ahead", report.compiled_ahead}}},
       {"seconds",
        {{"search", report.search_seconds},
         {"rerender", report.rerender_seconds},

@@ -73,6 +73,9 @@ struct Nsga2Problem {
   // std::nullopt marks an invalid genome (e.g. a shader that fails to compile): it ranks behind
   // every valid one and never appears in the returned front.
   std::function<std::optional<Objectives>(const Genome&)> evaluate;
+  // Optional: told each batch of genomes before they are evaluated one by one, in that order
+  // (the initial population, then each generation's offspring). Must not change any result.
+  std::function<void(std::span<const Genome>)> prepare;
   // Optional: called after each generation's survival with the generation (1-based) and the
   // population, for progress and logging.
   std::function<void(int, std::span<const Objectives>)> on_generation;
@@ -140,11 +143,17 @@ Nsga2Result<Genome> runNsga2(std::vector<Genome> initial, const Nsga2Problem<Gen
     return next;
   };
 
+  // Each batch is made whole before any of it is evaluated (evaluation draws no random numbers,
+  // so the order of draws is as if made one by one), then announced, then evaluated in order.
+  auto evaluateBatch = [&](std::vector<Genome> batch, std::vector<Individual<Genome>>& into) {
+    if (problem.prepare) problem.prepare(batch);
+    for (Genome& genome : batch) into.push_back(evaluated(std::move(genome)));
+  };
   const size_t initial_count = initial.size();
-  for (Genome& genome : initial) population.push_back(evaluated(std::move(genome)));
-  for (size_t i = 0; population.size() < size_t(size) && initial_count > 0; ++i)
-    population.push_back(
-        evaluated(problem.mutate(population[i % initial_count].genome, random)));
+  std::vector<Genome> first_batch = initial;
+  for (size_t i = 0; first_batch.size() < size_t(size) && initial_count > 0; ++i)
+    first_batch.push_back(problem.mutate(initial[i % initial_count], random));
+  evaluateBatch(std::move(first_batch), population);
   population = survive(std::move(population));
 
   for (int generation = 1; generation <= options.generations && !population.empty();
@@ -156,14 +165,16 @@ Nsga2Result<Genome> runNsga2(std::vector<Genome> initial, const Nsga2Problem<Gen
       crowding.push_back(individual.crowding);
     }
     std::vector<Individual<Genome>> pool = population;
+    std::vector<Genome> offspring_batch;
     for (int child = 0; child < size; ++child) {
       const Genome& first = population[nsga2_detail::tournament(rank, crowding, random)].genome;
       const Genome& second = population[nsga2_detail::tournament(rank, crowding, random)].genome;
       Genome offspring = problem.crossover && random.chance(options.crossover_probability)
                              ? problem.crossover(first, second, random)
                              : first;
-      pool.push_back(evaluated(problem.mutate(offspring, random)));
+      offspring_batch.push_back(problem.mutate(offspring, random));
     }
+    evaluateBatch(std::move(offspring_batch), pool);
     population = survive(std::move(pool));
     if (problem.on_generation) problem.on_generation(generation, objectivesOf(population));
   }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "shader/compile_ahead.hpp"
 #include "shader/cost_model.hpp"
 #include "shader/instrument.hpp"
 
@@ -96,11 +97,27 @@ core::Result<std::unique_ptr<ConfigurationScorer>> ConfigurationScorer::create(
   return scorer;
 }
 
+ConfigurationScorer::~ConfigurationScorer() = default;
+
+void ConfigurationScorer::enableCompileAhead(core::Asset asset, render::ContextOptions context) {
+  if (cost_samples_.empty()) return;
+  compile_ahead_ = std::make_unique<CompileAhead>(std::move(asset), cost_samples_.front(),
+                                                  evaluator_->footprint(), context);
+}
+
+std::pair<int, int> ConfigurationScorer::compileAheadCounts() const {
+  if (!compile_ahead_) return {0, 0};
+  CompileAhead::Counters counters = compile_ahead_->counters();
+  return {counters.compiled, counters.taken};
+}
+
 const core::Result<Variant>& ConfigurationScorer::optimised(const ShaderProgram& program) {
   uint64_t hash = programHash(program);
   if (hash != memo_hash_ || !memo_) {
     memo_hash_ = hash;
-    memo_ = evaluationVariant(program);
+    std::optional<core::Result<Variant>> ahead;
+    if (compile_ahead_) ahead = compile_ahead_->take(hash);
+    memo_ = ahead ? std::move(*ahead) : evaluationVariant(program);
   }
   return memo_;
 }
@@ -155,6 +172,9 @@ VariantScorer ConfigurationScorer::scorer() {
     auto error = rendered ? evaluator_->renderedError(value) : evaluator_->predictedError(value);
     if (!error) return error.error();
     return error->per_pixel;
+  };
+  scorer.prepare = [this](std::span<const std::shared_ptr<const ShaderProgram>> programs) {
+    if (compile_ahead_) compile_ahead_->enqueue(programs);
   };
   scorer.predicted_error = [errorOf](const ShaderProgram& program) { return errorOf(program, false); };
   scorer.rendered_error = [errorOf](const ShaderProgram& program) { return errorOf(program, true); };

@@ -27,8 +27,11 @@ core::Result<Variant> evaluationVariant(const ShaderProgram& program);
 // shaders/INTERFACE.md: what texture removal substitutes (Olano et al. 2003).
 std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset);
 
+class CompileAhead;
+
 class ConfigurationScorer {
  public:
+  ~ConfigurationScorer();
   // `asset` is `mesh` uploaded to `renderer`; renders the original's references for `config`.
   static core::Result<std::unique_ptr<ConfigurationScorer>> create(
       render::Renderer& renderer, std::shared_ptr<EvaluationCache> cache,
@@ -46,6 +49,13 @@ class ConfigurationScorer {
       int resolution = 64);
   int averageRenders() const;
   int costProfiles() const { return cost_profiles_; }
+  // Compiles the programs the search announces (VariantScorer::prepare) ahead on a second GL
+  // context in a worker thread (compile_ahead.hpp): `asset` is what the scorer draws (this
+  // configuration's mesh with the asset's materials and textures), `context` the device. Scores
+  // are the same with or without it.
+  void enableCompileAhead(core::Asset asset, render::ContextOptions context);
+  // Programs the worker compiled, and evaluation forms it handed over (0, 0 without a worker).
+  std::pair<int, int> compileAheadCounts() const;
   int footprint() const { return evaluator_->footprint(); }
 
  private:
@@ -60,6 +70,7 @@ class ConfigurationScorer {
   std::unique_ptr<ValueAverager> averager_;
   std::vector<render::Sample> cost_samples_;
   int cost_profiles_ = 0;
+  std::unique_ptr<CompileAhead> compile_ahead_;
   uint64_t memo_hash_ = 0;
   core::Result<Variant> memo_ = core::Error{"nothing scored yet"};
 };

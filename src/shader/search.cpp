@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "shader/nsga2.hpp"
 
@@ -65,6 +66,7 @@ struct SearchCache::State {
   std::unordered_map<uint64_t, core::Result<Score>> scores;
   std::unordered_map<uint64_t, core::Result<double>> rendered;
   std::unordered_map<uint64_t, bool> generated;  // program hashes materialised so far
+  std::unordered_map<uint64_t, std::vector<RuleSite>> sites;  // enumerateSites by program hash
   SearchCounters counters;
 };
 
@@ -80,6 +82,29 @@ const ShaderProgram& SearchCache::original() const { return *state_->original; }
 std::shared_ptr<const ShaderProgram> SearchCache::sharedOriginal() const { return state_->original; }
 const RuleContext& SearchCache::context() const { return state_->context; }
 SearchCounters& SearchCache::counters() { return state_->counters; }
+
+const std::vector<RuleSite>& SearchCache::sitesOf(const ShaderProgram& program) {
+  State& s = *state_;
+  if (s.sites.size() > kMaxCachedPrograms) s.sites.clear();  // bounded like the programs
+  uint64_t hash = programHash(program);
+  auto found = s.sites.find(hash);
+  if (found == s.sites.end()) found = s.sites.emplace(hash, enumerateSites(program, s.context)).first;
+  return found->second;
+}
+
+void SearchCache::prepare(std::span<const Genome> genomes) {
+  State& s = *state_;
+  if (!s.scorer.prepare) return;
+  std::vector<std::shared_ptr<const ShaderProgram>> programs;
+  std::unordered_set<uint64_t> announced;
+  for (const Genome& genome : genomes) {
+    auto program = materialise(genome);
+    if (!program) continue;
+    uint64_t hash = programHash(**program);
+    if (!s.scores.contains(hash) && announced.insert(hash).second) programs.push_back(*program);
+  }
+  if (!programs.empty()) s.scorer.prepare(programs);
+}
 
 core::Result<std::shared_ptr<const ShaderProgram>> SearchCache::materialise(const Genome& sites) {
   State& s = *state_;
@@ -235,7 +260,7 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
   auto sitesOf = [&](const Genome& genome, size_t length) -> std::vector<RuleSite> {
     auto program = cache.materialise(Genome(genome.begin(), genome.begin() + length));
     if (!program) return {};
-    return enumerateSites(**program, cache.context());
+    return cache.sitesOf(**program);
   };
 
   // One site of `sites` (not empty), by options.balance_rule_kinds.
@@ -295,6 +320,7 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
       archive[hash] = {genome, *program, *score};
     return Objectives{score->cost, score->error};
   };
+  problem.prepare = [&](std::span<const Genome> genomes) { cache.prepare(genomes); };
   int generation_seen = 0;
   problem.on_generation = [&](int generation, std::span<const Objectives>) {
     generation_seen = generation;
@@ -364,7 +390,7 @@ core::Result<SearchResult> searchGreedy(SearchCache& cache, const GreedySearchOp
   for (int step = 1; step <= options.max_steps; ++step) {
     auto program = cache.materialise(current);
     if (!program) return program.error();
-    std::vector<RuleSite> sites = enumerateSites(**program, cache.context());
+    std::vector<RuleSite> sites = cache.sitesOf(**program);
     if (options.max_candidates_per_step > 0 &&
         sites.size() > static_cast<size_t>(options.max_candidates_per_step)) {
       std::vector<RuleSite> sampled;

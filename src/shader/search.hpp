@@ -25,6 +25,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,9 @@ struct VariantScorer {
   std::function<core::Result<double>(const ShaderProgram&)> predicted_error;
   // For the final front only: eq. (6) over the whole domain (optional).
   std::function<core::Result<double>(const ShaderProgram&)> rendered_error;
+  // Optional: the programs about to be scored, in order (the GP announces each generation's
+  // new offspring), e.g. to compile them ahead on another thread. Must not change any score.
+  std::function<void(std::span<const std::shared_ptr<const ShaderProgram>>)> prepare;
 };
 
 // A hash of the program's emitted words and CPU-set parameters: identifies a variant.
@@ -128,6 +132,12 @@ class SearchCache {
   const RuleContext& context() const;
   // The program of `sites` applied to the original, or an error when a site does not apply.
   core::Result<std::shared_ptr<const ShaderProgram>> materialise(const std::vector<RuleSite>& sites);
+  // enumerateSites(program, context()), kept by program: the GP draws sites on the same parents
+  // and prefixes again and again.
+  const std::vector<RuleSite>& sitesOf(const ShaderProgram& program);
+  // Materialises the genomes and tells the scorer (VariantScorer::prepare) which of their
+  // programs it will be asked to score, in order.
+  void prepare(std::span<const std::vector<RuleSite>> genomes);
   struct Score {
     double cost = 0, error = 0;
   };

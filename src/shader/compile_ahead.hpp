@@ -1,0 +1,69 @@
+// Compiling the programs a search is about to score on a second GL context, in a worker thread.
+//
+// Why: llvmpipe compiles a program (SPIR-V → NIR → LLVM → machine code) on the thread that draws
+// with it, and the GP's scoring is mostly that compile: perf of a Dragon generation run had the
+// shader stage on one core (LLVM 39%, SPIRV-Tools and our IR 50%) while the other core idled.
+// The worker makes each coming program's evaluation form (SPIRV-Tools clean-up, the pure CPU part)
+// and draws its instrumented profile copy once with the same GL state on its own context, so
+// Mesa's on-disk shader cache already holds the compiled code when the scorer's own context
+// compiles the same program. Results never depend on the worker: it only warms caches and hands
+// over evaluation forms it made exactly as the scorer would (evaluationVariant).
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <thread>
+#include <unordered_map>
+
+#include "duolod/core.hpp"
+#include "duolod/render.hpp"
+#include "shader/evaluate.hpp"
+#include "shader/rules.hpp"
+
+namespace duolod::shader {
+
+class CompileAhead {
+ public:
+  // `asset` supplies the mesh, materials and textures drawn with (the same vertex layout and
+  // sampler state as the scorer's draws, so the same compiled variants); `sample` and
+  // `resolution` are one of the scorer's profile draws.
+  CompileAhead(core::Asset asset, render::Sample sample, int resolution,
+               render::ContextOptions context);
+  ~CompileAhead();
+  CompileAhead(const CompileAhead&) = delete;
+  CompileAhead& operator=(const CompileAhead&) = delete;
+
+  // Queues programs (in the order they will be scored) after any still queued.
+  void enqueue(std::span<const std::shared_ptr<const ShaderProgram>> programs);
+  // The evaluation form of the program with this hash if the worker made it (waiting if it is
+  // making it now); nothing if it has not started on it (it is then dropped from the queue).
+  std::optional<core::Result<Variant>> take(uint64_t program_hash);
+
+  struct Counters {
+    int compiled = 0;  // programs the worker drew
+    int taken = 0;     // evaluation forms handed to the scorer
+  };
+  Counters counters() const;
+
+ private:
+  void run(core::Asset asset, render::ContextOptions context);
+
+  render::Sample sample_;
+  int resolution_ = 0;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<std::pair<uint64_t, std::shared_ptr<const ShaderProgram>>> queue_;
+  std::unordered_map<uint64_t, core::Result<Variant>> done_;
+  uint64_t in_progress_ = 0;
+  bool working_ = false;
+  bool stop_ = false;
+  Counters counters_;
+  std::thread worker_;
+};
+
+}  // namespace duolod::shader
