@@ -158,6 +158,15 @@ void computeTangents(Mesh& mesh);
 size_t weldVertices(Mesh& mesh);
 // Removes triangles with repeated indices or zero area; returns the number removed.
 size_t removeDegenerateTriangles(Mesh& mesh);
+// Reorders each submesh's triangles so that a vertex, once shaded, is reused by the triangles
+// that follow (Tipsify: Sander, Nehab & Barczak, "Fast triangle reordering for vertex locality
+// and reduced overdraw", 2007, with a cache of `cache_size` vertices), then renumbers the
+// vertices in order of first use (nearby triangles use nearby vertex ids). The same surface:
+// only the order changes. Returns the number of vertex shader runs the order costs in a FIFO
+// cache of `cache_size` (before: `before_runs` when given), so callers can see the gain.
+size_t optimizeVertexReuse(Mesh& mesh, int cache_size = 16, size_t* before_runs = nullptr);
+// Vertex shader runs of the index order in a FIFO post-transform cache of `cache_size` vertices.
+size_t countVertexRuns(std::span<const uint32_t> indices, size_t vertex_count, int cache_size);
 
 // ---------------------------------------------------------------------------------------------
 // Images.

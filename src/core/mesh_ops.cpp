@@ -3,6 +3,7 @@
 // MikkTSpace convention (Mikkelsen, "Simulation of wrinkled surfaces revisited", 2008), welding.
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <unordered_map>
 
@@ -277,6 +278,121 @@ size_t removeDegenerateTriangles(Mesh& mesh) {
   mesh.indices = std::move(kept);
   if (!mesh.submeshes.empty()) mesh.submeshes = std::move(submeshes);
   return removed;
+}
+
+namespace {
+
+// Tipsify (Sander, Nehab & Barczak 2007, Algorithm 1) on one range of triangles: fan around a
+// vertex, emitting all its remaining triangles, then continue from a vertex those triangles
+// brought into the cache that will still be there after its own fan (the oldest such), else
+// from the dead-end stack of recently used vertices, else from the next vertex in id order.
+void tipsifyRange(std::span<uint32_t> indices, size_t vertex_count, int cache_size) {
+  const size_t triangle_count = indices.size() / 3;
+  if (triangle_count < 2) return;
+  std::vector<uint32_t> offsets(vertex_count + 1, 0);  // vertex -> its triangles, compressed rows
+  for (uint32_t v : indices) ++offsets[v + 1];
+  for (size_t v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  std::vector<uint32_t> triangles_of(indices.size());
+  std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (size_t t = 0; t < triangle_count; ++t)
+    for (int c = 0; c < 3; ++c) triangles_of[fill[indices[3 * t + c]]++] = static_cast<uint32_t>(t);
+  std::vector<int> live(vertex_count);  // triangles not yet emitted, per vertex
+  for (size_t v = 0; v < vertex_count; ++v) live[v] = static_cast<int>(offsets[v + 1] - offsets[v]);
+
+  // stamp[v]: the time v entered the cache; v is cached while time - stamp[v] <= cache_size.
+  std::vector<int64_t> stamp(vertex_count, -int64_t(cache_size) - 1);
+  int64_t time = cache_size + 1;
+  std::vector<char> emitted(triangle_count, 0);
+  std::vector<uint32_t> order, dead_end, candidates;
+  order.reserve(indices.size());
+  size_t cursor = 0;
+  int64_t fanning = indices[0];
+  while (fanning >= 0) {
+    candidates.clear();
+    for (uint32_t a = offsets[fanning]; a < offsets[fanning + 1]; ++a) {
+      uint32_t t = triangles_of[a];
+      if (emitted[t]) continue;
+      emitted[t] = 1;
+      for (int c = 0; c < 3; ++c) {
+        uint32_t v = indices[3 * t + c];
+        order.push_back(v);
+        dead_end.push_back(v);
+        candidates.push_back(v);
+        --live[v];
+        if (time - stamp[v] > cache_size) stamp[v] = time++;
+      }
+    }
+    int64_t next = -1, best_priority = -1;
+    for (uint32_t v : candidates) {
+      if (live[v] <= 0) continue;
+      int64_t priority = 0;  // a vertex that will have left the cache by the end of its fan
+      if (time - stamp[v] + 2 * live[v] <= cache_size) priority = time - stamp[v];
+      if (priority > best_priority) best_priority = priority, next = v;
+    }
+    while (next < 0 && !dead_end.empty()) {
+      uint32_t v = dead_end.back();
+      dead_end.pop_back();
+      if (live[v] > 0) next = v;
+    }
+    while (next < 0 && cursor < vertex_count) {
+      if (live[cursor] > 0) next = static_cast<int64_t>(cursor);
+      ++cursor;
+    }
+    fanning = next;
+  }
+  std::copy(order.begin(), order.end(), indices.begin());
+}
+
+template <class T>
+void permuteStream(std::vector<T>& stream, const std::vector<uint32_t>& old_of_new) {
+  if (stream.empty()) return;
+  std::vector<T> permuted(stream.size());
+  for (size_t n = 0; n < old_of_new.size(); ++n) permuted[n] = stream[old_of_new[n]];
+  stream = std::move(permuted);
+}
+
+}  // namespace
+
+size_t countVertexRuns(std::span<const uint32_t> indices, size_t vertex_count, int cache_size) {
+  // FIFO: v is cached while fewer than cache_size misses happened since it entered.
+  std::vector<int64_t> entered(vertex_count, std::numeric_limits<int64_t>::min() / 2);
+  int64_t misses = 0;
+  for (uint32_t v : indices)
+    if (misses - entered[v] > cache_size) entered[v] = misses++;
+  return static_cast<size_t>(misses);
+}
+
+size_t optimizeVertexReuse(Mesh& mesh, int cache_size, size_t* before_runs) {
+  const size_t vertex_count = mesh.vertexCount();
+  if (before_runs) *before_runs = countVertexRuns(mesh.indices, vertex_count, cache_size);
+  std::vector<Submesh> ranges = mesh.submeshes;
+  if (ranges.empty()) ranges.push_back({0, static_cast<uint32_t>(mesh.indices.size()), 0});
+  for (const Submesh& range : ranges)
+    tipsifyRange(std::span<uint32_t>(mesh.indices).subspan(range.first_index, range.index_count),
+                 vertex_count, cache_size);
+
+  // Vertices by first use; any vertex no triangle uses keeps its relative order at the end.
+  constexpr uint32_t kUnset = std::numeric_limits<uint32_t>::max();
+  std::vector<uint32_t> new_of_old(vertex_count, kUnset), old_of_new;
+  old_of_new.reserve(vertex_count);
+  for (uint32_t v : mesh.indices)
+    if (new_of_old[v] == kUnset) {
+      new_of_old[v] = static_cast<uint32_t>(old_of_new.size());
+      old_of_new.push_back(v);
+    }
+  for (uint32_t v = 0; v < vertex_count; ++v)
+    if (new_of_old[v] == kUnset) {
+      new_of_old[v] = static_cast<uint32_t>(old_of_new.size());
+      old_of_new.push_back(v);
+    }
+  for (uint32_t& v : mesh.indices) v = new_of_old[v];
+  permuteStream(mesh.positions, old_of_new);
+  permuteStream(mesh.normals, old_of_new);
+  permuteStream(mesh.tangents, old_of_new);
+  permuteStream(mesh.uv0, old_of_new);
+  permuteStream(mesh.uv1, old_of_new);
+  permuteStream(mesh.colors, old_of_new);
+  return countVertexRuns(mesh.indices, vertex_count, cache_size);
 }
 
 }  // namespace duolod::core

@@ -48,6 +48,8 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   std::vector<double> coverage;
   for (size_t k = 0; k < result.levels.size(); ++k) {
     meshes.push_back(result.levels[k].mesh);
+    // In the order a GPU's post-transform vertex cache reuses best (as the renderer draws it).
+    core::optimizeVertexReuse(meshes.back());
     coverage.push_back(k + 1 < result.levels.size() ? result.levels[k + 1].level.screen_coverage
                                                     : 0.0);
   }
