@@ -97,6 +97,21 @@ TEST_F(ImageSimplifyTest, FarAwayHalvesWithLittleImageChangeAndTracksItsError) {
               stats.predicted_change, quadric_error, stats.rendered_evaluations);
 }
 
+// A start whose own error is already over the target affords no collapse: it comes back as it is,
+// without a single rendered evaluation (the LOD cascade's far levels).
+TEST_F(ImageSimplifyTest, AStartOverTheErrorTargetIsReturnedWithoutPricing) {
+  mesh::ImageSimplifyOptions options;
+  options.distance = distanceForPixels(1.0f, 20);
+  options.target_error = 1e-9;  // below the original's own aliasing against f̄
+  mesh::ImageSimplifyStats stats;
+  auto result = mesh::simplifyImage(*renderer_, asset_, shader_, options, &stats);
+  ASSERT_TRUE(result) << result.error().message;
+  EXPECT_GT(stats.initial_error, options.target_error);
+  EXPECT_EQ(result->mesh.triangleCount(), asset_.mesh.triangleCount());
+  EXPECT_EQ(result->stats.collapses, 0u);
+  EXPECT_EQ(stats.rendered_evaluations, 0u);
+}
+
 TEST_F(ImageSimplifyTest, RefusesWithoutADistance) {
   mesh::ImageSimplifyOptions options;
   options.target_triangles = 10;  // and no distance

@@ -118,7 +118,8 @@ std::vector<size_t> chooseCandidates(const ProgressiveRecord& record, size_t k);
 
 struct ImageSimplifyOptions {
   size_t target_triangles = 0;  // 0 = none
-  // Stop before a collapse that would take ε (eq. 6) above this; infinity = no error target.
+  // Stop before a collapse that would take ε (eq. 6) above this; infinity = no error target. A
+  // start whose ε is already at or above it is returned unchanged, without pricing any edge.
   double target_error = std::numeric_limits<double>::infinity();
   float distance = 0;  // camera distance from the bounding-sphere centre, asset units
   render::Display display;
