@@ -338,12 +338,19 @@ int main(int argc, char** argv) {
   app.add_option("--per-vertex", per_vertex_values,
                  "also time variants with these fragment values (by source name) moved per vertex "
                  "by the per-vertex rule, one each, in every shader that has them");
+  std::vector<double> try_scales = {1.0};
+  app.add_option("--vertex-op-scales", try_scales, "also rank with the stored weights at these "
+                 "vertex-op scales")->capture_default_str();
+  std::string noise_asset;
+  app.add_option("--noise-phong-asset", noise_asset,
+                 "mesh for the noise_phong variants (default: Spot), e.g. the Dragon of the GP bench");
   CLI11_PARSE(app, argc, argv);
 
   const std::string assets = DUOLOD_ASSET_DIR;
   std::vector<ShaderCase> cases{
       {"pbr", assets + "/gltf/WaterBottle/WaterBottle.gltf", pbrVariants()},
-      {"noise_phong", assets + "/obj/spot/spot.obj", noisePhongVariants()},
+      {"noise_phong", noise_asset.empty() ? assets + "/obj/spot/spot.obj" : noise_asset,
+       noisePhongVariants()},
       {"blend", assets + "/gltf/Avocado/Avocado.gltf", blendVariants()},
   };
 
@@ -500,6 +507,24 @@ int main(int argc, char** argv) {
                 p.shader.c_str(), p.variant.c_str(), p.resolution, p.features.vertex_invocations,
                 p.features.fragment_invocations, p.he, p.static_instructions,
                 ours_stored[i] * 1e6, p.measured * 1e6, p.spread);
+  }
+  {
+    // The vertex stage's per-op multiplier on top of the stored weights (cost_model.hpp).
+    std::vector<shader::CostFeatures> features;
+    std::vector<double> seconds;
+    for (const Point& p : points) features.push_back(p.features), seconds.push_back(p.measured);
+    shader::CostWeights scaled = stored;
+    scaled.vertex_op_scale = shader::fitVertexOpScale(features, seconds, stored);
+    char name[160];
+    std::snprintf(name, sizeof name, "ours, stored weights with the vertex-op scale fitted here (%.2f)",
+                  scaled.vertex_op_scale);
+    rows.push_back({name, predictAll(points, scaled, true)});
+    for (double given : try_scales) {
+      shader::CostWeights other = stored;
+      other.vertex_op_scale = given;
+      std::snprintf(name, sizeof name, "ours, stored weights, vertex-op scale %.2f", given);
+      rows.push_back({name, predictAll(points, other, true)});
+    }
   }
   printCorrelations(points, rows, shader_names);
   printWeights(*fitted);

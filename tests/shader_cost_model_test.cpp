@@ -166,6 +166,36 @@ TEST(ShaderCostModel, NonNegativeLeastSquaresByHand) {
   EXPECT_FALSE(solveNonNegativeLeastSquares({{1, 2}, {3}}, std::vector<double>{1, 2}).ok());
 }
 
+TEST(ShaderCostModel, VertexOpScaleMultipliesTheVertexStageOpsAndIsRecovered) {
+  CostWeights weights;
+  weights.per_op[static_cast<int>(OpClass::kFloatArithmetic)] = 1;
+  weights.per_vertex_invocation = 3;
+  CostFeatures features;
+  features.vertex_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 10;
+  features.fragment_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 20;
+  features.vertex_invocations = 100;
+  features.fragment_invocations = 1000;
+  weights.vertex_op_scale = 2;
+  EXPECT_EQ(predictCost(features, weights), 100 * (3 + 2 * 10) + 1000 * 20);  // V (w_v + 2·10) + F·20
+  // Measurements made with scale 3 and 4× the weights' absolute level (another machine load):
+  // the fit finds 3 (to its 5% grid) whatever the common factor.
+  std::vector<CostFeatures> set;
+  std::vector<double> seconds;
+  CostWeights truth = weights;
+  truth.vertex_op_scale = 3;
+  for (int i = 0; i < 10; ++i) {
+    CostFeatures f = features;
+    f.vertex_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 10.0 + 40 * (i % 4);
+    f.fragment_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 5.0 + 7 * i;
+    set.push_back(f);
+    seconds.push_back(4 * predictCost(f, truth));
+  }
+  weights.vertex_op_scale = 1;
+  EXPECT_NEAR(fitVertexOpScale(set, seconds, weights), 3.0, 0.15);
+  // The stored calibration carries one (llvmpipe shades vertices on one thread).
+  EXPECT_GT(calibratedCostWeights().vertex_op_scale, 1.0);
+}
+
 TEST(ShaderCostModel, PredictionIsTheWeightedSum) {
   CostFeatures features;
   features.vertex_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 10;

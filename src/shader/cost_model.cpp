@@ -266,7 +266,9 @@ std::vector<std::string> costModelParameterNames() {
 }
 
 double predictCost(const CostFeatures& features, const CostWeights& weights) {
-  auto row = costDesignRow(features);
+  CostFeatures scaled = features;
+  for (double& ops : scaled.vertex_ops) ops *= weights.vertex_op_scale;
+  auto row = costDesignRow(scaled);
   auto w = weightVector(weights);
   double cost = 0;
   for (int i = 0; i < kCostModelParameterCount; ++i) cost += row[i] * w[i];
@@ -372,7 +374,29 @@ core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> fea
   return weightsFromVector(*solution, std::move(version));
 }
 
-// Version "llvmpipe-2026-11-22b": calibrated on Mesa 22.3.6 llvmpipe (LLVM 15, 256-bit SIMD;
+double fitVertexOpScale(std::span<const CostFeatures> features,
+                        std::span<const double> measured_seconds, const CostWeights& weights,
+                        double max_scale) {
+  double best_scale = 1, best_residual = std::numeric_limits<double>::infinity();
+  CostWeights trial = weights;
+  for (double scale = 1; scale <= max_scale * 1.0001; scale *= 1.05) {
+    trial.vertex_op_scale = scale;
+    std::vector<double> ratios;  // predicted / measured
+    for (size_t i = 0; i < features.size() && i < measured_seconds.size(); ++i)
+      if (measured_seconds[i] > 0) ratios.push_back(predictCost(features[i], trial) / measured_seconds[i]);
+    double sum = 0, squares = 0;
+    for (double r : ratios) sum += r, squares += r * r;
+    if (!(squares > 0)) continue;
+    const double alpha = sum / squares;  // argmin Σ (α r − 1)²
+    double residual = 0;
+    for (double r : ratios) residual += (alpha * r - 1) * (alpha * r - 1);
+    if (residual < best_residual) best_residual = residual, best_scale = scale;
+  }
+  return best_scale;
+}
+
+// Version "llvmpipe-2026-11-22c" = the per-op and invocation weights of "llvmpipe-2026-11-22b",
+// calibrated on Mesa 22.3.6 llvmpipe (LLVM 15, 256-bit SIMD;
 // 2 cores shared with other jobs, no GPU) by
 //   build/bench/bench_shader_cost --resolutions 128 64 --repeats 7
 // (49 variants of pbr / noise_phong / blend on WaterBottle / Spot / Avocado, 20 views, at 128 and
@@ -380,8 +404,20 @@ core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> fea
 // checks them against a later, independent run. Units: seconds per op, per invocation, per draw.
 // NNLS zeroes the classes whose cost the others already explain on this device (llvmpipe's JIT
 // folds most conversions and moves into the arithmetic around them).
+// Version c adds vertex_op_scale = 2.5: the vertex stage's ops cost 2.5× the fragment stage's
+// (llvmpipe shades vertices on one thread). Fitted by fitVertexOpScale on noise_phong with six
+// per-vertex-rule variants, `bench_shader_cost --only noise_phong --per-vertex turbulence nDotL
+// radiance outColor diffuse normal` on Spot (1.89 at 128/64 px, 2.53 at 192/128) and on the Dragon (2.18
+// and 3.07 in two runs); bench/RESULTS.md, cost model section.
+namespace {
+CostWeights withVertexOpScale(CostWeights weights, double scale) {
+  weights.vertex_op_scale = scale;
+  return weights;
+}
+}  // namespace
+
 const CostWeights& calibratedCostWeights() {
-  static const CostWeights weights = weightsFromVector(
+  static const CostWeights weights = withVertexOpScale(weightsFromVector(
       std::array<double, kCostModelParameterCount>{
           8.345776e-11,  // float arithmetic (per component)
           1.414071e-11,  // integer/logic
@@ -394,7 +430,7 @@ const CostWeights& calibratedCostWeights() {
           0.0,           // per fragment invocation
           0.0,           // per draw
       },
-      "llvmpipe-2026-11-22b");
+      "llvmpipe-2026-11-22c"), 2.5);
   return weights;
 }
 

@@ -98,6 +98,10 @@ struct CostWeights {
   double per_vertex_invocation = 0;  // launching one vertex invocation
   double per_fragment_invocation = 0;
   double per_draw = 0;               // fixed cost of one draw (state, binning, setup)
+  // Multiplies the per-op weights in the vertex stage: llvmpipe shades vertices on one thread and
+  // fragments on every core, so the same op costs more per vertex. Not part of the linear fit
+  // (weightVector); fitted afterwards (fitVertexOpScale).
+  double vertex_op_scale = 1;
   std::string version;               // which calibration (see calibratedCostWeights())
 };
 
@@ -129,6 +133,14 @@ core::Result<std::vector<double>> solveNonNegativeLeastSquares(
 core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> features,
                                                std::span<const double> measured_seconds,
                                                std::string version);
+
+// The vertex_op_scale in [1, max_scale] that best fits `measured_seconds` with `weights`' other
+// terms: per scale, the best common factor α (the relative fit of α·predicted to measured, in
+// closed form), then the scale with the least squared relative error, on a geometric grid. The
+// common factor leaves the per-op weights of another run usable: ranks are what the searches use.
+double fitVertexOpScale(std::span<const CostFeatures> features,
+                        std::span<const double> measured_seconds, const CostWeights& weights,
+                        double max_scale = 16);
 
 // The weights calibrated on this project's reference machine (bench/shader_cost.cpp, Mesa
 // llvmpipe), with the command that produced them in cost_model.cpp.
