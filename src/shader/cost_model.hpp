@@ -13,7 +13,9 @@
 //    invocation counts of the configuration (ARB_pipeline_statistics_query), plus a fixed cost per
 //    draw:
 //        cost = V · c_v + F · c_f + draws · w_draw,
-//        c_s  = w_invocation_s + Σ_k w_k · n_{s,k}   (n_{s,k}: class-k ops per invocation of stage s)
+//        c_s  = w_invocation_s + m_s Σ_k w_k · n_{s,k}   (n_{s,k}: class-k ops per invocation of
+//               stage s; m_fragment = 1, m_vertex = vertex_op_scale: llvmpipe shades vertices on
+//               one thread and fragments on every core)
 //    The weights are calibrated against measured llvmpipe wall time by non-negative least squares
 //    (bench/shader_cost.cpp) and stored in a versioned table, so prediction needs no timing.
 //
