@@ -335,7 +335,7 @@ core::Result<SearchResult> searchGenetic(SearchCache& cache, const GeneticSearch
   std::vector<Genome> initial{Genome{}};
   if (options.seed_aggressive_genomes) {
     std::vector<Genome> seeds =
-        aggressiveSeedGenomes(cache.original(), enumerateSites(cache.original(), cache.context()),
+        aggressiveSeedGenomes(cache.original(), cache.sitesOf(cache.original()),
                               static_cast<size_t>(options.population_size / 2));
     initial.insert(initial.end(), seeds.begin(), seeds.end());
   }
