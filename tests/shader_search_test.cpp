@@ -31,14 +31,17 @@ void main() {
 }
 )";
 
-ShaderProgram smallProgram() {
+// kVertex with `fragment_source`, parsed.
+ShaderProgram programWith(const char* fragment_source, const char* fragment_name) {
   auto vertex = compileToSpirv(kVertex, Stage::kVertex, "small.vert");
-  auto fragment = compileToSpirv(kFragment, Stage::kFragment, "small.frag");
+  auto fragment = compileToSpirv(fragment_source, Stage::kFragment, fragment_name);
   EXPECT_TRUE(vertex && fragment);
   auto program = parseProgram(*vertex, *fragment);
   EXPECT_TRUE(program) << program.error().message;
   return *program;
 }
+
+ShaderProgram smallProgram() { return programWith(kFragment, "small.frag"); }
 
 double instructionCount(const ir::Module& module) {
   double count = 0;
@@ -210,14 +213,7 @@ RuleContext allRulesWithAverages() {
   return context;
 }
 
-ShaderProgram loopProgram() {
-  auto vertex = compileToSpirv(kVertex, Stage::kVertex, "small.vert");
-  auto fragment = compileToSpirv(kLoopFragment, Stage::kFragment, "loop.frag");
-  EXPECT_TRUE(vertex && fragment);
-  auto program = parseProgram(*vertex, *fragment);
-  EXPECT_TRUE(program) << program.error().message;
-  return *program;
-}
+ShaderProgram loopProgram() { return programWith(kLoopFragment, "loop.frag"); }
 
 TEST(ShaderSearchTest, AggressiveSeedsAreTheOutputParameterTheShortestLoopsAndFunctionResults) {
   ShaderProgram program = loopProgram();

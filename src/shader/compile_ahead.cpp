@@ -43,7 +43,7 @@ void CompileAhead::enqueue(std::span<const std::shared_ptr<const ShaderProgram>>
 
 std::optional<core::Result<Variant>> CompileAhead::take(uint64_t program_hash) {
   std::unique_lock lock(mutex_);
-  changed_.wait(lock, [&] { return !(working_ && in_progress_ == program_hash); });
+  changed_.wait(lock, [&] { return in_progress_ != program_hash; });
   if (auto found = done_.find(program_hash); found != done_.end()) {
     core::Result<Variant> variant = std::move(found->second);
     done_.erase(found);
@@ -84,7 +84,6 @@ void CompileAhead::run(core::Asset asset, render::ContextOptions context) {
       std::tie(hash, program) = queue_.front();
       queue_.pop_front();
       in_progress_ = hash;
-      working_ = true;
     }
     core::Result<Variant> variant = evaluationVariant(*program);
     bool drawn = false;
@@ -102,8 +101,7 @@ void CompileAhead::run(core::Asset asset, render::ContextOptions context) {
       std::lock_guard lock(mutex_);
       done_.insert_or_assign(hash, std::move(variant));
       if (drawn) ++counters_.compiled;
-      in_progress_ = 0;
-      working_ = false;
+      in_progress_.reset();
     }
     changed_.notify_all();
   }

@@ -59,8 +59,7 @@ class CompileAhead {
   std::condition_variable changed_;
   std::deque<std::pair<uint64_t, std::shared_ptr<const ShaderProgram>>> queue_;
   std::unordered_map<uint64_t, core::Result<Variant>> done_;
-  uint64_t in_progress_ = 0;
-  bool working_ = false;
+  std::optional<uint64_t> in_progress_;  // the program the worker is making now
   bool stop_ = false;
   Counters counters_;
   std::thread worker_;
