@@ -7,6 +7,10 @@
 #   (scripts/fetch-bench-data.sh) and the shared WaterBottle, Avocado, spot.
 # Prints: mesh ratio ours meshopt ours/meshopt (instructions, inclusive).
 set -eu
+command -v valgrind >/dev/null 2>&1 || {
+  echo "simplify_callgrind.sh: needs valgrind (apt-get install valgrind)" >&2
+  exit 2
+}
 build=${1:-build}
 ratios=${2:-"0.5 0.1 0.01"}
 [ $# -ge 2 ] && shift 2 || shift $#
