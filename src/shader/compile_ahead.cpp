@@ -1,6 +1,8 @@
 // Compiling coming programs on a second GL context (compile_ahead.hpp).
 #include "shader/compile_ahead.hpp"
 
+#include <algorithm>
+
 #include "shader/instrument.hpp"
 #include "shader/ir.hpp"
 #include "shader/scoring.hpp"
@@ -9,11 +11,20 @@
 namespace duolod::shader {
 
 CompileAhead::CompileAhead(core::Asset asset, render::Sample sample, int resolution,
-                           render::ContextOptions context)
+                           render::ContextOptions context, int workers)
     : sample_(sample), resolution_(resolution) {
-  worker_ = std::thread([this, asset = std::move(asset), context]() mutable {
-    run(std::move(asset), context);
-  });
+  // The workers share one copy of the asset until each has uploaded it to its own context.
+  auto shared = std::make_shared<const core::Asset>(std::move(asset));
+  for (int i = 0; i < std::max(1, workers); ++i)
+    workers_.emplace_back([this, shared, context]() mutable { run(std::move(shared), context); });
+}
+
+int CompileAhead::defaultWorkers() {
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+bool CompileAhead::inProgress(uint64_t hash) const {
+  return std::find(in_progress_.begin(), in_progress_.end(), hash) != in_progress_.end();
 }
 
 CompileAhead::~CompileAhead() {
@@ -23,7 +34,7 @@ CompileAhead::~CompileAhead() {
     queue_.clear();
   }
   changed_.notify_all();
-  worker_.join();
+  for (std::thread& worker : workers_) worker.join();
 }
 
 void CompileAhead::enqueue(std::span<const std::shared_ptr<const ShaderProgram>> programs) {
@@ -33,7 +44,7 @@ void CompileAhead::enqueue(std::span<const std::shared_ptr<const ShaderProgram>>
     done_.clear();
     for (const std::shared_ptr<const ShaderProgram>& program : programs) {
       uint64_t hash = programHash(*program);
-      bool known = hash == in_progress_;
+      bool known = inProgress(hash);
       for (const auto& queued : queue_) known = known || queued.first == hash;
       if (!known) queue_.emplace_back(hash, program);
     }
@@ -43,7 +54,7 @@ void CompileAhead::enqueue(std::span<const std::shared_ptr<const ShaderProgram>>
 
 std::optional<core::Result<Variant>> CompileAhead::take(uint64_t program_hash) {
   std::unique_lock lock(mutex_);
-  changed_.wait(lock, [&] { return in_progress_ != program_hash; });
+  changed_.wait(lock, [&] { return !inProgress(program_hash); });
   if (auto found = done_.find(program_hash); found != done_.end()) {
     core::Result<Variant> variant = std::move(found->second);
     done_.erase(found);
@@ -64,16 +75,16 @@ CompileAhead::Counters CompileAhead::counters() const {
   return counters_;
 }
 
-void CompileAhead::run(core::Asset asset, render::ContextOptions context) {
-  // The worker's own context and copy of the asset. If either fails the worker only makes
+void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::ContextOptions context) {
+  // The worker's own context and GL copy of the asset. If either fails the worker only makes
   // evaluation forms (the scorer then compiles cold, as without a worker).
   std::unique_ptr<render::Renderer> renderer;
   render::Renderer::AssetId asset_id = -1;
   if (auto created = render::Renderer::create(context); created) {
     renderer = std::move(*created);
-    if (auto uploaded = renderer->uploadAsset(asset); uploaded) asset_id = *uploaded;
+    if (auto uploaded = renderer->uploadAsset(*asset); uploaded) asset_id = *uploaded;
   }
-  asset = core::Asset{};  // the GL copy is all the worker needs
+  asset.reset();
   for (;;) {
     std::shared_ptr<const ShaderProgram> program;
     uint64_t hash = 0;
@@ -83,7 +94,7 @@ void CompileAhead::run(core::Asset asset, render::ContextOptions context) {
       if (stop_) break;
       std::tie(hash, program) = queue_.front();
       queue_.pop_front();
-      in_progress_ = hash;
+      in_progress_.push_back(hash);
     }
     core::Result<Variant> variant = evaluationVariant(*program);
     bool drawn = false;
@@ -101,7 +112,7 @@ void CompileAhead::run(core::Asset asset, render::ContextOptions context) {
       std::lock_guard lock(mutex_);
       done_.insert_or_assign(hash, std::move(variant));
       if (drawn) ++counters_.compiled;
-      in_progress_.reset();
+      std::erase(in_progress_, hash);
     }
     changed_.notify_all();
   }

@@ -19,6 +19,7 @@
 #include <span>
 #include <thread>
 #include <unordered_map>
+#include <vector>
 
 #include "duolod/core.hpp"
 #include "duolod/render.hpp"
@@ -31,9 +32,13 @@ class CompileAhead {
  public:
   // `asset` supplies the mesh, materials and textures drawn with (the same vertex layout and
   // sampler state as the scorer's draws, so the same compiled variants); `sample` and
-  // `resolution` are one of the scorer's profile draws.
+  // `resolution` are one of the scorer's profile draws. `workers` threads (each with its own
+  // context) take the queue in order: one worker was the shader stage's critical path (it has
+  // about 3× the scorer's CPU per program), so a second one lets both cores compile.
   CompileAhead(core::Asset asset, render::Sample sample, int resolution,
-               render::ContextOptions context);
+               render::ContextOptions context, int workers = defaultWorkers());
+  // One per hardware thread, at least one.
+  static int defaultWorkers();
   ~CompileAhead();
   CompileAhead(const CompileAhead&) = delete;
   CompileAhead& operator=(const CompileAhead&) = delete;
@@ -51,7 +56,8 @@ class CompileAhead {
   Counters counters() const;
 
  private:
-  void run(core::Asset asset, render::ContextOptions context);
+  void run(std::shared_ptr<const core::Asset> asset, render::ContextOptions context);
+  bool inProgress(uint64_t hash) const;  // under mutex_
 
   render::Sample sample_;
   int resolution_ = 0;
@@ -59,10 +65,10 @@ class CompileAhead {
   std::condition_variable changed_;
   std::deque<std::pair<uint64_t, std::shared_ptr<const ShaderProgram>>> queue_;
   std::unordered_map<uint64_t, core::Result<Variant>> done_;
-  std::optional<uint64_t> in_progress_;  // the program the worker is making now
+  std::vector<uint64_t> in_progress_;  // the programs the workers are making now
   bool stop_ = false;
   Counters counters_;
-  std::thread worker_;
+  std::vector<std::thread> workers_;
 };
 
 }  // namespace duolod::shader
