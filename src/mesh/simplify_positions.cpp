@@ -40,6 +40,9 @@
 #include <limits>
 #include <memory>
 #include <utility>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include "mesh/attributes.hpp"
 #include "mesh/quadric.hpp"
@@ -67,25 +70,76 @@ uint32_t costBits(double cost) {
   return bits;
 }
 
-// A vertex's quadric at its own position: the value e = Q(p) and half its gradient g = A p + b.
-// Around p, Q(p + d) = e + 2 g·d + dᵀAd: the merged quadric of an edge is evaluated at its fixed
-// points from the two endpoints' expansions (no merged copy, and the expansion around each vertex
-// loses less to rounding than evaluating from the frame's origin).
-struct LocalExpansion {
-  double e = 0, gx = 0, gy = 0, gz = 0;
+// What pass pricing reads of a vertex, in one 64-byte line of floats: its position relative to
+// the bounding-box centre (|p| <= 1/2, so float keeps ~3e-8 of the diagonal), its quadric's value
+// e = Q(p) and half gradient g = A p + b there (computed in double, so the expansion is exact up to
+// the final rounding), and A as its diagonal and doubled off-diagonal. Around p,
+// Q(p + d) = e + 2 g·d + dᵀAd: the merged quadric of an edge is evaluated at its fixed points from
+// the two endpoints' expansions (no merged copy). Floats, four to an SSE register: the pass order
+// is by float cost anyway (the keys are float bits), and the optimal placement of an applied
+// collapse is still solved in double.
+struct alignas(16) PricingRecord {
+  float position[4];   // x, y, z, e
+  float gradient[4];   // gx, gy, gz, 0
+  float diagonal[4];   // a00, a11, a22, 0
+  float off_twice[4];  // 2 a01, 2 a02, 2 a12, 0
 };
 
-LocalExpansion expandAt(const Quadric& q, Vec3d p) {
+PricingRecord pricingRecord(const Quadric& q, Vec3d p, Vec3d centre) {
   const double gx = q.a00 * p.x + q.a01 * p.y + q.a02 * p.z + q.b0;
   const double gy = q.a01 * p.x + q.a11 * p.y + q.a12 * p.z + q.b1;
   const double gz = q.a02 * p.x + q.a12 * p.y + q.a22 * p.z + q.b2;
-  return {evaluateQuadric(q, p), gx, gy, gz};
+  return {{float(p.x - centre.x), float(p.y - centre.y), float(p.z - centre.z),
+           float(evaluateQuadric(q, p))},
+          {float(gx), float(gy), float(gz), 0},
+          {float(q.a00), float(q.a11), float(q.a22), 0},
+          {float(2 * q.a01), float(2 * q.a02), float(2 * q.a12), 0}};
 }
 
-// dᵀAd from the products xx, yy, zz, xy, xz, yz of d's components.
-inline double quadraticForm(const Quadric& q, const double (&dd)[6]) {
-  return q.a00 * dd[0] + q.a11 * dd[1] + q.a22 * dd[2] +
-         2 * (q.a01 * dd[3] + q.a02 * dd[4] + q.a12 * dd[5]);
+// The merged quadric of the edge a -> b at b, at a and at the midpoint, from the two records
+// (d = a - b): Qa(b) = ea - 2 ga·d + dᵀAa d, Qb(a) = eb + 2 gb·d + dᵀAb d, Q(b) = Qa(b) + eb,
+// Q(a) = ea + Qb(a), Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4. Each dot product sums its
+// x, y, z terms as (x + y) + z, with SSE and without.
+struct FixedPointPrices {
+  float at_b, at_a, at_mid;
+};
+inline FixedPointPrices priceFixedPoints(const PricingRecord& a, const PricingRecord& b) {
+  float form_a, form_b, slope_a, slope_b;
+#if defined(__SSE2__)
+  const __m128 d = _mm_sub_ps(_mm_load_ps(a.position), _mm_load_ps(b.position));
+  const __m128 squares = _mm_mul_ps(d, d);  // xx, yy, zz
+  const __m128 crosses = _mm_mul_ps(_mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 1, 0, 0)),
+                                    _mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 2, 2, 1)));  // xy, xz, yz
+  __m128 fa = _mm_add_ps(_mm_mul_ps(_mm_load_ps(a.diagonal), squares),
+                         _mm_mul_ps(_mm_load_ps(a.off_twice), crosses));
+  __m128 fb = _mm_add_ps(_mm_mul_ps(_mm_load_ps(b.diagonal), squares),
+                         _mm_mul_ps(_mm_load_ps(b.off_twice), crosses));
+  __m128 sa = _mm_mul_ps(_mm_load_ps(a.gradient), d);
+  __m128 sb = _mm_mul_ps(_mm_load_ps(b.gradient), d);
+  _MM_TRANSPOSE4_PS(fa, fb, sa, sb);  // rows: the x, y, z, w terms of the four dot products
+  const __m128 sums = _mm_add_ps(_mm_add_ps(fa, fb), sa);
+  alignas(16) float out[4];
+  _mm_store_ps(out, sums);
+  form_a = out[0], form_b = out[1], slope_a = out[2], slope_b = out[3];
+#else
+  const float d[3] = {a.position[0] - b.position[0], a.position[1] - b.position[1],
+                      a.position[2] - b.position[2]};
+  const float squares[3] = {d[0] * d[0], d[1] * d[1], d[2] * d[2]};
+  const float crosses[3] = {d[0] * d[1], d[0] * d[2], d[1] * d[2]};
+  auto form = [&](const PricingRecord& r) {
+    float t[3];
+    for (int i = 0; i < 3; ++i) t[i] = r.diagonal[i] * squares[i] + r.off_twice[i] * crosses[i];
+    return (t[0] + t[1]) + t[2];
+  };
+  auto slope = [&](const PricingRecord& r) {
+    return (r.gradient[0] * d[0] + r.gradient[1] * d[1]) + r.gradient[2] * d[2];
+  };
+  form_a = form(a), form_b = form(b), slope_a = slope(a), slope_b = slope(b);
+#endif
+  const float both = a.position[3] + b.position[3];
+  const float at_b = std::max(both - 2 * slope_a + form_a, 0.0f);
+  const float at_a = std::max(both + 2 * slope_b + form_b, 0.0f);
+  return {at_b, at_a, 0.5f * (at_a + at_b) - 0.25f * (form_a + form_b)};
 }
 
 class PositionSimplifier {
@@ -150,7 +204,8 @@ class PositionSimplifier {
   std::vector<Vec3d> positions_;             // normalized (bounding-box diagonal 1)
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
-  std::vector<LocalExpansion> expansions_;  // quadrics_ around positions_
+  std::vector<PricingRecord> pricing_;  // quadrics_ around positions_, for the passes
+  Vec3d centre_;                        // of the bounding box, in positions_' frame
   std::vector<VertexKind> kinds_;
   std::vector<uint32_t> border_neighbors_;  // two per constrained vertex
   std::vector<uint32_t> constrained_;       // the constrained vertices
@@ -211,6 +266,11 @@ void PositionSimplifier::setUp() {
     scale_ = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
   }
   const double inverse_scale = 1.0 / scale_;
+  if (!bounds.empty()) {
+    const core::Vec3 size = bounds.size();
+    centre_ = {0.5 * size.x * inverse_scale, 0.5 * size.y * inverse_scale,
+               0.5 * size.z * inverse_scale};
+  }
   asset_positions_ = m.positions;
   positions_.resize(vertex_count_);
   for (uint32_t v = 0; v < vertex_count_; ++v) {
@@ -449,36 +509,28 @@ void PositionSimplifier::collectCandidates() {
   // b, then a): Qa(b) = ea - 2 ga·d + dᵀAa d, Qb(a) = eb + 2 gb·d + dᵀAb d,
   // Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4.
   const Quadric* quadrics = quadrics_.data();
-  const LocalExpansion* expansions = expansions_.data();
-  const Vec3d* positions = positions_.data();
+  const PricingRecord* pricing = pricing_.data();
   PassCandidate* out = pass_candidates_.get();
   uint64_t* keys = pass_order_.get();
   size_t count = 0;
   const bool has_error_target = std::isfinite(options_.target_error);
   // Inlined into the edge walk (a call per edge costs ~15% of the pricing in saved registers).
   forEachCandidateEdge([&](uint32_t from, uint32_t to, bool endpoint_only) __attribute__((always_inline)) {
-    const Vec3d a = positions[from], b = positions[to];
-    const LocalExpansion &ea = expansions[from], &eb = expansions[to];
-    const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
-    const double dd[6] = {dx * dx, dy * dy, dz * dz, dx * dy, dx * dz, dy * dz};
-    const double a_form = quadraticForm(quadrics[from], dd);
-    const double both = ea.e + eb.e;
-    const double at_b = std::max(both - 2 * (ea.gx * dx + ea.gy * dy + ea.gz * dz) + a_form, 0.0);
-    double cost = at_b;
+    const FixedPointPrices prices = priceFixedPoints(pricing[from], pricing[to]);
+    float cost = prices.at_b;
     uint8_t at = kFixedAtB;
-    if (!endpoint_only) {
-      const double b_form = quadraticForm(quadrics[to], dd);
-      const double at_a = std::max(both + 2 * (eb.gx * dx + eb.gy * dy + eb.gz * dz) + b_form, 0.0);
-      const double at_mid = 0.5 * (at_a + at_b) - 0.25 * (a_form + b_form);
-      if (at_a < cost) cost = at_a, at = kFixedAtA;
-      if (at_mid < cost) cost = std::max(at_mid, 0.0), at = kFixedAtMid;
+    if (!endpoint_only) {  // ties to b, then a
+      if (prices.at_a < cost) cost = prices.at_a, at = kFixedAtA;
+      if (prices.at_mid < cost) cost = std::max(prices.at_mid, 0.0f), at = kFixedAtMid;
     }
     if (!std::isfinite(cost)) return;
     if (has_error_target &&
         !(errorOf(cost, quadrics[from].weight + quadrics[to].weight) <= options_.target_error))
       return;
-    keys[count] = uint64_t(costBits(cost)) << 32 | count;
-    out[count] = {from, to, float(cost), at, endpoint_only};
+    uint32_t bits;
+    std::memcpy(&bits, &cost, 4);
+    keys[count] = uint64_t(bits) << 32 | count;
+    out[count] = {from, to, cost, at, endpoint_only};
     ++count;
   });
   pass_candidate_count_ = count;
@@ -632,7 +684,7 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
       asset_positions_[to] = {float(a.x), float(a.y), float(a.z)};
     }
   }
-  expansions_[to] = expandAt(quadrics_[to], positions_[to]);
+  if (!greedy_) pricing_[to] = pricingRecord(quadrics_[to], positions_[to], centre_);
   // A border collapse: from's other border neighbour now borders on `to`.
   if (kinds_[from] == VertexKind::kConstrained) {
     const uint32_t* line = &border_neighbors_[from * 2];
@@ -775,9 +827,9 @@ SimplifyResult PositionSimplifier::run() {
   pass_order_.reset(new uint64_t[edge_room]);
   from_fan_.reset(new uint32_t[indices_.size() * 2]);
   to_fan_.reset(new uint32_t[indices_.size() * 2]);
-  expansions_.resize(vertex_count_);
+  pricing_.resize(vertex_count_);
   for (uint32_t v = 0; v < vertex_count_; ++v)
-    expansions_[v] = expandAt(quadrics_[v], positions_[v]);
+    pricing_[v] = pricingRecord(quadrics_[v], positions_[v], centre_);
   if (options_.record) {
     record_.base = base_;
     record_.values.positions = base_.positions;
