@@ -160,6 +160,9 @@ class PositionSimplifier {
   void runPasses(size_t pass_target);
   void runGreedy();
   void emitAround(uint32_t v);
+  // kGreedy: in the greedy tail (survivors are chains, triangles come from absorbed vertices
+  // too, placement is the optimal one); a template so that the passes pay for none of it.
+  template <bool kGreedy>
   bool tryCollapse(const PassCandidate& candidate, uint32_t pass);
   bool fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner, Vec3d moved) const;
   template <class Emit>
@@ -515,7 +518,8 @@ void PositionSimplifier::collectCandidates() {
   size_t count = 0;
   const bool has_error_target = std::isfinite(options_.target_error);
   // Inlined into the edge walk (a call per edge costs ~15% of the pricing in saved registers).
-  forEachCandidateEdge([&](uint32_t from, uint32_t to, bool endpoint_only) __attribute__((always_inline)) {
+  forEachCandidateEdge([&](uint32_t from, uint32_t to,
+                           bool endpoint_only) __attribute__((always_inline)) {
     const FixedPointPrices prices = priceFixedPoints(pricing[from], pricing[to]);
     float cost = prices.at_b;
     uint8_t at = kFixedAtB;
@@ -536,8 +540,9 @@ void PositionSimplifier::collectCandidates() {
   pass_candidate_count_ = count;
 }
 
-bool PositionSimplifier::fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner,
-                                  Vec3d moved) const {
+__attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const uint32_t* fan,
+                                                                        uint32_t size, Vec3d corner,
+                                                                        Vec3d moved) const {
   for (uint32_t i = 0; i < size; i += 2)
     if (turnsOverOrFlattens(corner, positions_[fan[i]], positions_[fan[i + 1]], moved)) return true;
   return false;
@@ -547,6 +552,7 @@ bool PositionSimplifier::fanFlips(const uint32_t* fan, uint32_t size, Vec3d corn
 // untouched in this pass, but their neighbours may have moved): the link condition, then the
 // optimal placement if it beats the priced point without turning a triangle over, else the
 // priced point, then the flip test.
+template <bool kGreedy>
 bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass) {
   const uint32_t from = candidate.from, to = candidate.to;
   // Raw pointers: the stores below (marks, fans) cannot alias them, so they stay in registers.
@@ -557,10 +563,14 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   const uint32_t* absorbed_next = absorbed_next_.data();
   const uint8_t* dead = dead_.data();
   const uint32_t* remap = remap_.data();
-  const bool greedy = greedy_;
-  auto survivor = [&](uint32_t v) { return greedy ? resolve(v) : remap[v]; };
+  auto survivor = [&](uint32_t v) {
+    if constexpr (kGreedy)
+      return resolve(v);
+    else
+      return remap[v];
+  };
   auto for_each_triangle = [&](uint32_t v, auto&& f) {
-    for (uint32_t u = v; u != kAbsent; u = absorbed_next[u])
+    for (uint32_t u = v; u != kAbsent; u = kGreedy ? absorbed_next[u] : kAbsent)
       for (uint32_t i = corner_start[u], end = corner_start[u + 1]; i < end; ++i) {
         const uint32_t c = corners[i], t = c / 3;
         if (!dead[t]) f(t, c - t * 3);
@@ -637,7 +647,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
            (moves_to && fanFlips(to_fan_.get(), to_fan_size_, at_to, p));
   };
   Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
-  if (greedy_ && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
+  if (kGreedy && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
     Quadric q = quadrics_[from];
     addQuadric(q, quadrics_[to]);
     priced = minimizeQuadric(q, at_from, at_to);
@@ -769,7 +779,7 @@ void PositionSimplifier::runPasses(size_t pass_target) {
       for (auto it = begin; it != end && !reached(); ++it) {
         const PassCandidate& c = pass_candidates_[uint32_t(*it)];
         if (pass_lock_[c.from] == pass || pass_lock_[c.to] == pass) continue;
-        if (tryCollapse(c, pass)) ++applied;
+        if (tryCollapse<false>(c, pass)) ++applied;
       }
     };
     apply_range(order_begin, first_rest);
@@ -810,7 +820,7 @@ void PositionSimplifier::runGreedy() {
           version_[e.to] != e.to_version)
         continue;
       const PassCandidate c{e.from, e.to, e.cost, kFixedAtB, e.endpoint_only};
-      if (tryCollapse(c, 0)) emitAround(e.to);
+      if (tryCollapse<true>(c, 0)) emitAround(e.to);
     }
     compact();
     if (stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
