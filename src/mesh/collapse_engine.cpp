@@ -1322,41 +1322,43 @@ PreparedMesh prepareMeshWithPositions(const core::Mesh& mesh) {
   bool groups_valid = false;
   std::vector<uint32_t> groups = triangleGroups(mesh, groups_valid);
   const size_t triangles = mesh.indices.size() / 3;
-  std::vector<uint32_t> kept_indices;
-  std::vector<uint32_t> kept_keys;  // rotated position triples of kept triangles
-  std::vector<uint32_t> kept_groups;
-  kept_indices.reserve(triangles * 3);
-  kept_keys.reserve(triangles * 3);
-  kept_groups.reserve(triangles);
+  // Written through raw pointers into room for every triangle (no push_back per index), cut to
+  // size after the loop.
+  std::vector<uint32_t> kept_indices(triangles * 3);
+  std::vector<uint32_t> kept_keys(triangles * 3);  // rotated position triples of kept triangles
+  std::vector<uint32_t> kept_groups(triangles);
+  uint32_t* const kept_index_out = kept_indices.data();
+  uint32_t* const keys = kept_keys.data();
+  const uint32_t* const in = mesh.indices.data();
+  uint32_t kept = 0;
   IndexTable triangle_table(triangles);
   for (size_t t = 0; t < triangles; ++t) {
     uint32_t v[3], p[3];
     bool in_range = true;
     for (int k = 0; k < 3; ++k) {
-      uint32_t index = mesh.indices[t * 3 + k];
+      uint32_t index = in[t * 3 + k];
       in_range &= index < n;
       v[k] = in_range ? representative[index] : 0;
       p[k] = in_range ? position_id[v[k]] : 0;
     }
     if (!in_range || p[0] == p[1] || p[1] == p[2] || p[0] == p[2]) continue;
     int first = p[0] < p[1] ? (p[0] < p[2] ? 0 : 2) : (p[1] < p[2] ? 1 : 2);
-    uint32_t key[3] = {p[first], p[(first + 1) % 3], p[(first + 2) % 3]};
-    uint32_t index = uint32_t(kept_groups.size());
-    for (uint32_t k : key) kept_keys.push_back(k);
+    uint32_t* key = keys + size_t(kept) * 3;  // overwritten by the next one if a duplicate
+    key[0] = p[first], key[1] = p[(first + 1) % 3], key[2] = p[(first + 2) % 3];
     // One mixing round over the three ids (the triangles are many; hashWords would mix three
     // times).
     const uint64_t hash =
         mixHash((uint64_t(key[0]) << 32 | key[1]) ^ (uint64_t(key[2]) * 0x9e3779b97f4a7c15ull));
-    uint32_t found = triangle_table.findOrInsert(index, hash, [&](uint32_t other) {
-      return std::memcmp(key, &kept_keys[size_t(other) * 3], 12) == 0;
+    uint32_t found = triangle_table.findOrInsert(kept, hash, [&](uint32_t other) {
+      return std::memcmp(key, keys + size_t(other) * 3, 12) == 0;
     });
-    if (found != index) {  // duplicate of an earlier triangle
-      kept_keys.resize(kept_keys.size() - 3);
-      continue;
-    }
-    for (uint32_t k : v) kept_indices.push_back(k);
-    kept_groups.push_back(groups[t]);
+    if (found != kept) continue;  // duplicate of an earlier triangle
+    for (int k = 0; k < 3; ++k) kept_index_out[size_t(kept) * 3 + k] = v[k];
+    kept_groups[kept] = groups[t];
+    ++kept;
   }
+  kept_indices.resize(size_t(kept) * 3);
+  kept_groups.resize(kept);
 
   // Referenced vertices, in their original order, copied stream by stream.
   std::vector<uint32_t> remap(n, kAbsent);
