@@ -14,24 +14,26 @@
 //     border vertex keeps its two border neighbours, updated when the border collapses;
 //   - candidates are read off the triangles (free endpoints) and the border neighbours, priced at
 //     the best of the endpoints and the midpoint from each endpoint's quadric expanded around its
-//     own position (LocalExpansion), and the optimal placement is solved only for the collapses
-//     applied (as CostModel::refinePlacement does);
+//     own position, in float with SSE (PricingRecord), and the optimal placement is solved (in
+//     double) only for the collapses applied (as CostModel::refinePlacement does);
 //   - the last collapses (EngineOptions::greedy_tail_triangles, at most 1/16 of the input) use a
 //     greedy queue as the engine's kGreedy does (cheapest first, priced at the optimal placement,
 //     the survivor's edges priced again after each collapse); the corner table then grows by
 //     chaining: a vertex's triangles are its own corners and those of the vertices it absorbed,
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
-// its meshes with attributes, materials or endpoint placement take the engine). Measured against
-// the engine's kPasses on the same meshes (bench/RESULTS.md, issue 3): nearly the same quality
-// table (13 of 21 cells identical, the rest moved with tie orders), 1.6-2.0x meshoptimizer 0.18's
-// instructions instead of 2.2-3.7x. Bunny 10% (273M): preparation ~30M, quadrics and state ~19M,
-// classification ~17M, corner tables and compaction ~24M, pass pricing of ~316k candidates ~53M
-// (~170 instructions each) plus the edge walk ~11M, partition and sort ~16M, ~33k pass collapses
-// ~75M (fans and link condition ~30M, flip tests ~25M, optimal placement 12M), greedy tail ~18M.
-// The rest of the gap is arithmetic meshopt 0.18 does not do (it prices by one float quadric at
-// the other endpoint, has no link condition, tests one fan, has no greedy tail): closing it needs
-// cheaper arithmetic (float quadrics around a local origin, SIMD), not another layout.
+// its meshes with attributes, materials or endpoint placement take the engine). Measured on
+// bench/simplify_callgrind.sh (bench/RESULTS.md, issue 3): 1.4-1.8x meshoptimizer 0.18's
+// instructions. Bunny 10% (242M): preparation 25M, quadrics and state 20M, classification ~13M,
+// corner tables and compaction 22M, pass pricing of 309k candidates with the edge walk 40M,
+// goal rank and sort 16M, 34k pass collapses 74M (fans and link condition ~31M, flip tests of
+// both fans ~21M, optimal placement 13M, bookkeeping 9M), greedy tail ~16M. Tried and not kept:
+// re-using prices between passes (only 16% of the edges keep both endpoints untouched, the cache
+// cost more than it saved), radix sort / radix select of the pass keys (more instructions than
+// std::sort / nth_element here), SSE addQuadric, a greedy tail of 1000 triangles (-2%, Hausdorff
+// mixed) and no optimal placement in the passes (-4%, Hausdorff and mean clearly worse). The rest
+// of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other endpoint,
+// has no link condition, tests one fan, places at endpoints, has no greedy tail).
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
