@@ -184,8 +184,8 @@ class PositionSimplifier {
   void forEachTriangle(uint32_t v, F&& f) {
     for (uint32_t u = v; u != kAbsent; u = absorbed_next_[u])
       for (uint32_t i = corner_start_[u]; i < corner_start_[u + 1]; ++i) {
-        const uint32_t c = corners_[i], t = c / 3;
-        if (!dead_[t]) f(t, c - t * 3);
+        const uint32_t c = corners_[i], t = c >> 2;
+        if (!dead_[t]) f(t, c & 3);
       }
   }
   uint32_t nextRound() {
@@ -222,7 +222,8 @@ class PositionSimplifier {
   std::vector<uint8_t> dead_;      // per triangle of indices_: collapsed in this pass
   size_t live_triangles_ = 0;
   std::vector<uint32_t> corner_start_;  // per vertex, into corners_ (vertex_count_ + 1)
-  std::vector<uint32_t> corners_;       // corners (3 * triangle + k) grouped by vertex
+  // Corners (triangle << 2 | k, so that no division is needed to split them) grouped by vertex.
+  std::vector<uint32_t> corners_;
   std::vector<uint32_t> cursor_;
   // Greedy tail: the vertices absorbed into a vertex, as a chain through absorbed_next_.
   bool greedy_ = false;
@@ -309,8 +310,16 @@ void PositionSimplifier::buildAdjacency() {
   for (uint32_t v = 0; v < vertex_count_; ++v) corner_start_[v + 1] += corner_start_[v];
   std::copy_n(corner_start_.begin(), vertex_count_, cursor_.begin());
   corners_.resize(indices_.size());
-  const uint32_t corner_count = uint32_t(indices_.size());
-  for (uint32_t c = 0; c < corner_count; ++c) corners_[cursor_[indices_[c]]++] = c;
+  const uint32_t triangle_count = uint32_t(indices_.size() / 3);
+  const uint32_t* indices = indices_.data();
+  uint32_t* corners = corners_.data();
+  uint32_t* cursor = cursor_.data();
+  for (uint32_t t = 0; t < triangle_count; ++t, indices += 3) {
+    const uint32_t a = indices[0], b = indices[1], c = indices[2];
+    corners[cursor[a]++] = t << 2;
+    corners[cursor[b]++] = t << 2 | 1;
+    corners[cursor[c]++] = t << 2 | 2;
+  }
   dead_.assign(indices_.size() / 3, 0);
 }
 
@@ -350,7 +359,7 @@ void PositionSimplifier::classify() {
     if (degree == 0) continue;
     bool locked = false;
     for (uint32_t i = 0; i < degree; ++i) {
-      const uint32_t c = corners[begin + i], t = c / 3, k = c - t * 3;
+      const uint32_t c = corners[begin + i], t = c >> 2, k = c & 3;
       const uint32_t n = indices[t * 3 + kNext[k]], p = indices[t * 3 + kPrevious[k]];
       nexts[i] = n, previouses[i] = p;
       if (as_next[n] != kAbsent)
@@ -368,7 +377,7 @@ void PositionSimplifier::classify() {
       if (border_count < 2) line[border_count] = n;
       ++border_count;
       if (n < v) return;  // its penalty plane once, from the lower end
-      const uint32_t t = corners_[begin + i] / 3;
+      const uint32_t t = corners_[begin + i] >> 2;
       const Vec3d face_normal =
           unitTriangleNormal(positions_[indices_[t * 3]], positions_[indices_[t * 3 + 1]],
                              positions_[indices_[t * 3 + 2]]);
@@ -574,8 +583,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   auto for_each_triangle = [&](uint32_t v, auto&& f) {
     for (uint32_t u = v; u != kAbsent; u = kGreedy ? absorbed_next[u] : kAbsent)
       for (uint32_t i = corner_start[u], end = corner_start[u + 1]; i < end; ++i) {
-        const uint32_t c = corners[i], t = c / 3;
-        if (!dead[t]) f(t, c - t * 3);
+        const uint32_t c = corners[i], t = c >> 2;
+        if (!dead[t]) f(t, c & 3);
       }
   };
 
@@ -858,7 +867,8 @@ SimplifyResult PositionSimplifier::run() {
 bool positionFastPathApplies(const PreparedMesh& prepared, const SimplifyOptions& options) {
   const core::Mesh& m = prepared.mesh;
   if (options.placement != Placement::kOptimal || attributeLayout(m).stride != 0 ||
-      m.submeshes.size() != 1 || m.vertexCount() >= kAbsent / 2)
+      m.submeshes.size() != 1 || m.vertexCount() >= kAbsent / 2 ||
+      m.indices.size() / 3 >= (size_t(1) << 30))  // corners_ holds triangle << 2
     return false;
   for (core::Vec3 p : m.positions)
     if (!core::isFinite(p)) return false;
