@@ -43,7 +43,7 @@
 #include <memory>
 #include <utility>
 #if defined(__SSE2__)
-#include <xmmintrin.h>
+#include <emmintrin.h>
 #endif
 
 #include "mesh/attributes.hpp"
@@ -299,7 +299,25 @@ void PositionSimplifier::setUp() {
     const uint32_t* v = &indices_[t * 3];
     Quadric plane;
     if (!triangleQuadric(positions_[v[0]], positions_[v[1]], positions_[v[2]], plane)) continue;
+#if defined(__SSE2__)
+    // The plane's 11 members in registers, added two at a time to each corner's quadric (the
+    // same sums as addQuadric; this loop runs three times per input triangle).
+    static_assert(sizeof(Quadric) == 11 * sizeof(double), "Quadric is 11 packed doubles");
+    const double* p = &plane.a00;
+    const __m128d p0 = _mm_loadu_pd(p), p1 = _mm_loadu_pd(p + 2), p2 = _mm_loadu_pd(p + 4),
+                  p3 = _mm_loadu_pd(p + 6), p4 = _mm_loadu_pd(p + 8);
+    for (int k = 0; k < 3; ++k) {
+      double* q = &quadrics_[v[k]].a00;
+      _mm_storeu_pd(q, _mm_add_pd(_mm_loadu_pd(q), p0));
+      _mm_storeu_pd(q + 2, _mm_add_pd(_mm_loadu_pd(q + 2), p1));
+      _mm_storeu_pd(q + 4, _mm_add_pd(_mm_loadu_pd(q + 4), p2));
+      _mm_storeu_pd(q + 6, _mm_add_pd(_mm_loadu_pd(q + 6), p3));
+      _mm_storeu_pd(q + 8, _mm_add_pd(_mm_loadu_pd(q + 8), p4));
+      q[10] += p[10];
+    }
+#else
     for (int k = 0; k < 3; ++k) addQuadric(quadrics_[v[k]], plane);
+#endif
   }
 }
 
