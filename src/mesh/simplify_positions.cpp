@@ -434,10 +434,23 @@ void PositionSimplifier::classify() {
 void PositionSimplifier::compact() {
   size_t out = 0;
   const size_t triangles = indices_.size() / 3;
-  for (size_t t = 0; t < triangles; ++t) {
-    if (dead_[t]) continue;
-    for (int k = 0; k < 3; ++k) indices_[out + k] = resolve(indices_[t * 3 + k]);
-    out += 3;
+  if (!greedy_) {  // a one-level remap, over raw pointers (the stores cannot alias the reads)
+    uint32_t* indices = indices_.data();
+    const uint32_t* remap = remap_.data();
+    const uint8_t* dead = dead_.data();
+    for (size_t t = 0; t < triangles; ++t) {
+      if (dead[t]) continue;
+      const uint32_t a = remap[indices[t * 3]], b = remap[indices[t * 3 + 1]],
+                     c = remap[indices[t * 3 + 2]];
+      indices[out] = a, indices[out + 1] = b, indices[out + 2] = c;
+      out += 3;
+    }
+  } else {
+    for (size_t t = 0; t < triangles; ++t) {
+      if (dead_[t]) continue;
+      for (int k = 0; k < 3; ++k) indices_[out + k] = resolve(indices_[t * 3 + k]);
+      out += 3;
+    }
   }
   indices_.resize(out);
 }
