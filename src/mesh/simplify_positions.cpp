@@ -23,17 +23,18 @@
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine). Measured on
-// bench/simplify_callgrind.sh (bench/RESULTS.md, issue 3): 1.4-1.8x meshoptimizer 0.18's
-// instructions. Bunny 10% (242M): preparation 25M, quadrics and state 20M, classification ~13M,
-// corner tables and compaction 22M, pass pricing of 309k candidates with the edge walk 40M,
-// goal rank and sort 16M, 34k pass collapses 74M (fans and link condition ~31M, flip tests of
+// bench/simplify_callgrind.sh (bench/RESULTS.md, issue 3): 1.3-1.7x meshoptimizer 0.18's
+// instructions. Bunny 10% (236M): preparation 25M, quadrics and state 19M, classification ~13M,
+// corner tables and compaction 18M, pass pricing of 309k candidates with the edge walk 40M,
+// goal rank and sort 16M, 34k pass collapses 73M (fans and link condition ~30M, flip tests of
 // both fans ~21M, optimal placement 13M, bookkeeping 9M), greedy tail ~16M. Tried and not kept:
 // re-using prices between passes (only 16% of the edges keep both endpoints untouched, the cache
 // cost more than it saved), radix sort / radix select of the pass keys (more instructions than
-// std::sort / nth_element here), SSE addQuadric, a greedy tail of 1000 triangles (-2%, Hausdorff
-// mixed) and no optimal placement in the passes (-4%, Hausdorff and mean clearly worse). The rest
-// of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other endpoint,
-// has no link condition, tests one fan, places at endpoints, has no greedy tail).
+// std::sort / nth_element here), SSE2 in addQuadric itself (only setUp's loop gains), a greedy
+// tail of 1000 triangles (-2%, Hausdorff mixed) and no optimal placement in the passes (-4%,
+// Hausdorff and mean clearly worse). The rest of the gap is work meshopt 0.18 does not do (it
+// prices by one quadric at the other endpoint, has no link condition, tests one fan, places at
+// endpoints, has no greedy tail).
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
