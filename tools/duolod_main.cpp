@@ -748,6 +748,10 @@ int runGenerate(GenerateFlags& flags) {
   std::printf("\ntime      mesh %.1f s, shader %.1f s, optimization %.1f s, export %.1f s, total %.1f s\n",
               t.mesh_seconds, t.shader_seconds, t.optimization_seconds, t.export_seconds,
               secondsSince(start));
+  if (t.shader_search_seconds > 0)
+    std::printf("          (the shader searches took %.1f s, alongside the mesh stage until it "
+                "ended; the shader stage is what they added after it)\n",
+                t.shader_search_seconds);
   std::printf("wrote     %s/{lod.gltf, lod.json, report.html, level*.*, autolod.*}\n",
               flags.out.c_str());
   if (violations > 0) {

@@ -17,10 +17,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <set>
+#include <thread>
 #include <tuple>
 
 #include "duolod/io.hpp"
@@ -97,6 +102,179 @@ struct PairRecord {
   double cost = 0;  // predicted seconds per draw
 };
 
+// §5.2's GP configurations, run on a thread of their own with their own GL context while the
+// mesh cascade goes on: each configuration starts as soon as its level's mesh set is complete.
+// Why: the cascade is bound by llvmpipe's rasterizer (one per screen, shared by all contexts:
+// perf had it ~1.4 cores busy) and the GP by LLVM compiling on the compile-ahead workers; side by
+// side they fill both cores. A configuration's results depend only on its inputs and seed, so
+// running it here instead of on the caller's thread changes nothing but the time.
+class ShaderSearchThread {
+ public:
+  struct Configuration {
+    int index = 0;  // in the order configurations are made: seed and merge order
+    int level = 0, mesh = 0;
+    core::Mesh drawn;  // a copy: the caller's mesh sets keep growing meanwhile
+    float distance = 0;
+  };
+  struct Event {
+    std::string line;  // a finished configuration's summary (empty for the end)
+    int finished = 0;  // configurations done so far
+  };
+
+  ShaderSearchThread(const core::Asset& asset, const shader::ShaderProgram& original,
+                     shader::RuleContext context, const GenerateOptions& options)
+      : asset_(asset), original_(original), context_(std::move(context)), options_(options) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~ShaderSearchThread() {
+    {
+      std::lock_guard lock(mutex_);
+      cancelled_ = closed_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();
+  }
+  void add(Configuration configuration) {
+    {
+      std::lock_guard lock(mutex_);
+      queue_.push_back(std::move(configuration));
+      ++added_;
+    }
+    changed_.notify_all();
+  }
+  int added() const {
+    std::lock_guard lock(mutex_);
+    return added_;
+  }
+  void close() {
+    {
+      std::lock_guard lock(mutex_);
+      closed_ = true;
+    }
+    changed_.notify_all();
+  }
+  // Finished-configuration lines so far (without waiting).
+  std::vector<Event> takeEvents() {
+    std::lock_guard lock(mutex_);
+    return std::exchange(events_, {});
+  }
+  // Waits for the next event; nothing once every configuration is done (or one failed).
+  std::optional<Event> waitEvent() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return !events_.empty() || done_; });
+    if (events_.empty()) return std::nullopt;
+    Event event = std::move(events_.front());
+    events_.erase(events_.begin());
+    return event;
+  }
+  // After waitEvent() returned nothing: every configuration's front, by configuration index.
+  core::Result<std::vector<std::vector<shader::SearchVariant>>> results() {
+    std::lock_guard lock(mutex_);
+    if (!failure_.empty()) return core::Error{failure_};
+    return std::move(fronts_);
+  }
+  double busySeconds() const {
+    std::lock_guard lock(mutex_);
+    return busy_seconds_;
+  }
+
+ private:
+  void run() {
+    auto failed = [&](const std::string& message) {
+      std::lock_guard lock(mutex_);
+      failure_ = message;
+      done_ = true;
+      changed_.notify_all();
+    };
+    auto renderer = Renderer::create({.device = options_.device});
+    if (!renderer) return failed("shader search context: " + renderer.error().message);
+    auto original_asset = (*renderer)->uploadAsset(asset_);
+    if (!original_asset) return failed(original_asset.error().message);
+    auto cache = std::make_shared<shader::EvaluationCache>(**renderer);
+    for (;;) {
+      Configuration configuration;
+      {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock, [&] { return cancelled_ || closed_ || !queue_.empty(); });
+        if (cancelled_ || queue_.empty()) break;
+        configuration = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      const auto start = Clock::now();
+      auto front = search(**renderer, cache, *original_asset, configuration);
+      if (!front) return failed(front.error().message);
+      const double seconds = secondsSince(start);
+      const shader::EvaluationCache::Counters& compiled = cache->counters();
+      char line[240];
+      std::snprintf(line, sizeof line,
+                    "shader search level %d (mesh %d): %zu variants on the front; so far %d "
+                    "programs compiled in %.1f s, %d cost profiles (%d compiled ahead); %.1f s",
+                    configuration.level, configuration.mesh, front->variants.size(),
+                    compiled.programs_compiled, compiled.compile_seconds, front->cost_profiles,
+                    front->compiled_ahead, seconds);
+      std::lock_guard lock(mutex_);
+      if (fronts_.size() <= size_t(configuration.index)) fronts_.resize(configuration.index + 1);
+      fronts_[configuration.index] = std::move(front->variants);
+      busy_seconds_ += seconds;
+      events_.push_back({line, ++finished_});
+      changed_.notify_all();
+    }
+    std::lock_guard lock(mutex_);
+    done_ = true;
+    changed_.notify_all();
+  }
+
+  struct Front {
+    std::vector<shader::SearchVariant> variants;
+    int cost_profiles = 0, compiled_ahead = 0;
+  };
+  core::Result<Front> search(
+      Renderer& renderer, const std::shared_ptr<shader::EvaluationCache>& cache,
+      Renderer::AssetId original_asset, const Configuration& configuration) {
+    auto asset = renderer.uploadMesh(original_asset, configuration.drawn);
+    if (!asset) return asset.error();
+    shader::EvaluationConfig config;
+    config.distance = configuration.distance;
+    config.display = options_.levels.display;
+    config.supersample = options_.supersample;
+    auto scoring = shader::ConfigurationScorer::create(renderer, cache, *asset, configuration.drawn,
+                                                       original_, config);
+    if (!scoring) return scoring.error();
+    if (options_.compile_ahead) {
+      core::Asset drawn = asset_;  // what the scorer draws: this mesh, the asset's materials
+      drawn.mesh = configuration.drawn;
+      (*scoring)->enableCompileAhead(std::move(drawn), {.device = options_.device});
+    }
+    shader::SearchCache search_cache(original_, context_, (*scoring)->scorer());
+    shader::GeneticSearchOptions genetic;
+    genetic.population_size = options_.population;
+    genetic.generations = options_.generations;
+    genetic.seed = options_.seed + static_cast<uint64_t>(configuration.index + 1);
+    // Variants erring far beyond the largest bound can never be chosen.
+    genetic.max_error = 4.0 * options_.levels.bound.e_max;
+    auto searched = shader::searchGenetic(search_cache, genetic);
+    renderer.releaseAsset(*asset);
+    if (!searched) return searched.error();
+    return Front{std::move(searched->variants), (*scoring)->costProfiles(),
+                 (*scoring)->compileAheadCounts().first};
+  }
+
+  const core::Asset& asset_;
+  const shader::ShaderProgram& original_;
+  const shader::RuleContext context_;
+  const GenerateOptions& options_;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Configuration> queue_;
+  std::vector<Event> events_;
+  std::vector<std::vector<shader::SearchVariant>> fronts_;
+  std::string failure_;
+  int added_ = 0, finished_ = 0;
+  double busy_seconds_ = 0;
+  bool closed_ = false, cancelled_ = false, done_ = false;
+  std::thread thread_;  // last: starts after every member above exists
+};
+
 class Generator {
  public:
   Generator(const core::Asset& asset, const GenerateOptions& options)
@@ -111,6 +289,11 @@ class Generator {
   core::Status setUp(const render::GlslSource& source);
   core::Status makeLevels();
   core::Status makeMeshCandidates(const render::GlslSource& source);
+  // Starts the GP configurations' thread (separate optimizer); configurations join it as their
+  // levels' mesh sets complete (addReadyConfigurations), makeShaderCandidates collects them.
+  void startShaderSearch();
+  void addReadyConfigurations(int completed_level);
+  void relayShaderSearchLines(std::string_view stage);
   core::Status makeShaderCandidates();
   core::Result<ShaderCandidate> candidateFrom(std::shared_ptr<const shader::ShaderProgram> program,
                                               std::string summary);
@@ -155,10 +338,14 @@ class Generator {
   std::vector<LevelState> levels_;
   std::vector<MeshSet> mesh_sets_;
   std::vector<int> set_of_level_;  // which mesh set each level searches
+  std::unique_ptr<ShaderSearchThread> shader_search_;
+  std::vector<int> search_levels_;  // §5.2's evenly chosen levels
+  size_t next_search_level_ = 0;    // the first of them not yet handed to shader_search_
   std::vector<ShaderCandidate> shaders_;
   std::map<std::tuple<int, int, int, int>, PairRecord> pairs_;
   std::map<std::tuple<int, int, int, int>, render::ImageBatch8> images_;
   int pair_evaluations_ = 0, transition_evaluations_ = 0;
+  double shader_search_seconds_ = 0;
 };
 
 core::Status Generator::setUp(const render::GlslSource& source) {
@@ -264,6 +451,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
   // Set 0 is the original alone: level 0 (bound 0) and the shader-only baseline use it.
   mesh_sets_.push_back(MeshSet{.meshes = {asset_.mesh}, .errors = {0.0}, .uploaded = {-1}});
   set_of_level_.assign(level_count, 0);
+  addReadyConfigurations(0);
   if (options_.scope == LodScope::kShaderOnly) return core::okStatus();
 
   if (options_.mesh_mode == MeshCandidateMode::kQuadric) {
@@ -320,6 +508,8 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
       set = std::move(combined);
     }
     set_of_level_[level] = own;
+    addReadyConfigurations(level);
+    relayShaderSearchLines("mesh candidates");
     previous_set = own;
     previous_level = level;
     if (options_.progress) {
@@ -491,70 +681,72 @@ SeparateProblem Generator::problem(LodScope scope) {
 
 // §5.2: GP fronts on (mesh, distance) configurations at a few evenly chosen levels, on the
 // coarsest meshes of each whose own error leaves room for the shader's (half the bound), united.
-core::Status Generator::makeShaderCandidates() {
-  if (options_.scope == LodScope::kMeshOnly) return core::okStatus();
+void Generator::startShaderSearch() {
+  if (options_.scope == LodScope::kMeshOnly || options_.optimizer == Optimizer::kInterleaved) return;
   const int level_count = static_cast<int>(levels_.size());
-  std::vector<int> search_levels;
   const int wanted = std::clamp(options_.shader_search_levels, 1, std::max(1, level_count - 1));
   for (int i = 0; i < wanted; ++i) {
     int level = level_count == 1 ? 0
                                  : 1 + static_cast<int>(std::lround(double(i) * (level_count - 2) /
                                                                     std::max(1, wanted - 1)));
-    if (search_levels.empty() || search_levels.back() != level) search_levels.push_back(level);
+    if (search_levels_.empty() || search_levels_.back() != level) search_levels_.push_back(level);
   }
-
   shader::RuleContext context;
   context.texture_averages = shader::textureAverages(asset_);
-  std::set<uint64_t> seen{shader::programHash(original_)};
-  std::vector<shader::SearchVariant> found;
-  int configuration = 0;
-  const int configurations = static_cast<int>(search_levels.size()) * options_.shader_search_meshes;
-  for (int level : search_levels) {
+  shader_search_ = std::make_unique<ShaderSearchThread>(asset_, original_, std::move(context), options_);
+}
+
+void Generator::addReadyConfigurations(int completed_level) {
+  if (!shader_search_) return;
+  for (; next_search_level_ < search_levels_.size() &&
+         search_levels_[next_search_level_] <= completed_level;
+       ++next_search_level_) {
+    const int level = search_levels_[next_search_level_];
     const int set = set_of_level_[level];
     const MeshSet& mesh_set = mesh_sets_[set];
     // The top meshes: the coarsest candidates that use at most half of what the bound leaves
     // above the original mesh's own error (its aliasing against f̄ already takes part of it).
     const double room = mesh_set.errors[0] + 0.5 * (levels_[level].search_bound - mesh_set.errors[0]);
-    std::vector<int> meshes;
+    int taken = 0;
     for (int mesh = static_cast<int>(mesh_set.meshes.size()) - 1;
-         mesh >= 0 && static_cast<int>(meshes.size()) < options_.shader_search_meshes; --mesh)
-      if (mesh == 0 || mesh_set.errors[mesh] <= room) meshes.push_back(mesh);
-    for (int mesh : meshes) {
-      progress("shader candidates", double(configuration++) / std::max(1, configurations));
-      auto scoring = scorerFor(level, set, mesh);
-      if (!scoring) return scoring.error();
-      if (options_.compile_ahead) {
-        core::Asset drawn = asset_;  // what the scorer draws: this mesh, the asset's materials
-        drawn.mesh = mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh];
-        (*scoring)->enableCompileAhead(std::move(drawn), {.device = options_.device});
+         mesh >= 0 && taken < options_.shader_search_meshes; --mesh)
+      if (mesh == 0 || mesh_set.errors[mesh] <= room) {
+        shader_search_->add({.index = shader_search_->added(),
+                             .level = level,
+                             .mesh = mesh,
+                             .drawn = mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh],
+                             .distance = float(levels_[level].level.distance)});
+        ++taken;
       }
-      shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
-      shader::GeneticSearchOptions genetic;
-      genetic.population_size = options_.population;
-      genetic.generations = options_.generations;
-      genetic.seed = options_.seed + static_cast<uint64_t>(configuration);
-      // Variants erring far beyond the largest bound can never be chosen.
-      genetic.max_error = 4.0 * options_.levels.bound.e_max;
-      auto config_start = Clock::now();
-      auto searched = shader::searchGenetic(search_cache, genetic);
-      if (!searched) return searched.error();
-      if (options_.progress) {
-        const shader::EvaluationCache::Counters& compiled = cache_->counters();
-        char line[240];
-        std::snprintf(line, sizeof line,
-                      "shader search level %d (mesh %d): %zu variants on the front; so far %d "
-                      "programs compiled in %.1f s, %d cost profiles (%d compiled ahead); %.1f s",
-                      level, mesh, searched->variants.size(), compiled.programs_compiled,
-                      compiled.compile_seconds, (*scoring)->costProfiles(),
-                      (*scoring)->compileAheadCounts().first, secondsSince(config_start));
-        options_.progress({"shader candidates", double(configuration) / std::max(1, configurations),
-                           line});
-      }
-      for (shader::SearchVariant& variant : searched->variants)
-        if (seen.insert(shader::programHash(*variant.program)).second)
-          found.push_back(std::move(variant));
-    }
   }
+}
+
+// The searches' finished-configuration lines, as details of whatever stage is on the display.
+void Generator::relayShaderSearchLines(std::string_view stage) {
+  if (!shader_search_ || !options_.progress) return;
+  for (const ShaderSearchThread::Event& event : shader_search_->takeEvents())
+    options_.progress({stage, 0.0, event.line});
+}
+
+core::Status Generator::makeShaderCandidates() {
+  if (!shader_search_) return core::okStatus();
+  shader_search_->close();
+  const int configurations = std::max(1, shader_search_->added());
+  relayShaderSearchLines("shader candidates");
+  while (auto event = shader_search_->waitEvent())
+    if (options_.progress)
+      options_.progress({"shader candidates", double(event->finished) / configurations, event->line});
+  auto fronts = shader_search_->results();
+  if (!fronts) return fronts.error();
+  shader_search_seconds_ = shader_search_->busySeconds();
+  shader_search_.reset();
+
+  std::set<uint64_t> seen{shader::programHash(original_)};
+  std::vector<shader::SearchVariant> found;
+  for (std::vector<shader::SearchVariant>& front : *fronts)
+    for (shader::SearchVariant& variant : front)
+      if (seen.insert(shader::programHash(*variant.program)).second)
+        found.push_back(std::move(variant));
   // Thin the union evenly along the predicted error, so the candidates span the whole range.
   std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
     return a.predicted_error < b.predicted_error;
@@ -581,7 +773,9 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   for (const LevelState& level : levels_) result.all_levels.push_back(level.level);
 
   auto mesh_start = Clock::now();
+  startShaderSearch();
   if (auto made = makeMeshCandidates(source); !made) return made.error();
+  addReadyConfigurations(static_cast<int>(levels_.size()) - 1);  // quadric mode, shader only
   result.timings.mesh_seconds = secondsSince(mesh_start);
   for (int set : set_of_level_)
     result.mesh_candidates.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
@@ -595,6 +789,7 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   if (!interleaved)
     if (auto made = makeShaderCandidates(); !made) return made.error();
   result.timings.shader_seconds = secondsSince(shader_start);
+  result.timings.shader_search_seconds = shader_search_seconds_;
 
   auto optimization_start = Clock::now();
   auto level_start = Clock::now();
