@@ -117,6 +117,41 @@ TEST(LodSeparate, BisectionFindsTheLinearWalksPairsWithFewerRenders) {
   }
 }
 
+TEST(LodSeparate, BisectionStopsWhenTheBracketingMeshesAreAlmostTheSameSize) {
+  // 101 meshes of 10000 − 10·j triangles, error 0.1·j, one shader, bound 5.05: the exact boundary
+  // is mesh 50 (errs 5.0). The walk: mesh 100 fails, M_0 passes, then bisection of (0, 100).
+  //   exact:    probes 50 (passes), 75, 62, 56, 53, 51 (fail): bracket (50, 51).
+  //   1% stop:  50, 75, 62, 56; then (50, 56) differ by 60 ≤ 1% of 9500 triangles: stop, take 50.
+  //   5% stop:  50, 75; then (50, 75) differ by 250 ≤ 5% of 9500: stop, take 50.
+  lod::SeparateProblem problem;
+  problem.level_count = 1;
+  problem.mesh_counts = {101};
+  problem.shader_count = 1;
+  problem.error_bounds = {5.05};
+  std::vector<double> sizes;
+  for (int j = 0; j <= 100; ++j) sizes.push_back(10000.0 - 10.0 * j);
+  problem.mesh_sizes = {sizes};
+  problem.evaluate = [&](int, int mesh, int) -> core::Result<lod::PairEvaluation> {
+    return lod::PairEvaluation{.error = 0.1 * mesh, .cost = sizes[mesh]};
+  };
+  problem.transition = [](int, const lod::EvaluatedPair&, const lod::EvaluatedPair&)
+      -> core::Result<double> { return 0.0; };
+  problem.cost_at = [&](int, const lod::EvaluatedPair& pair, int) -> core::Result<double> {
+    return sizes[pair.mesh];
+  };
+  auto walk = [&](double stop) {
+    lod::SeparateOptions options;
+    options.bisection_stop = stop;
+    auto solution = lod::optimizeSeparate(problem, options);
+    EXPECT_TRUE(solution.ok());
+    return std::pair{solution->chosen[0].mesh, solution->searches[0].evaluations};
+  };
+  // Evaluations: mesh 100, M_0, then the bisection's probes.
+  EXPECT_EQ(walk(0.0), std::pair(50, 2 + 6));
+  EXPECT_EQ(walk(0.01), std::pair(50, 2 + 4));
+  EXPECT_EQ(walk(0.05), std::pair(50, 2 + 2));
+}
+
 TEST(LodSeparate, SmoothingNeverRaisesTheTotalTransitionError) {
   // With a tolerance, each level has several optimal pairs; the smoothest path's total ε_t is at
   // most that of taking each level's cheapest pair.

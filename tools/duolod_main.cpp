@@ -617,6 +617,11 @@ struct GenerateFlags {
                         "outside the training domain stay within it")
         ->check(CLI::Range(0.0, 0.9))
         ->capture_default_str();
+    command->add_option("--bisection-stop", options.bisection_stop,
+                        "Algorithm 2's bisection stops when its bracketing meshes differ by at "
+                        "most this fraction of their triangles (0 = the exact boundary)")
+        ->check(CLI::Range(0.0, 0.5))
+        ->capture_default_str();
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
     command->add_flag("--quiet", quiet, "no progress display");

@@ -102,6 +102,14 @@ struct PairSearchOptions {
   // already relies on), O(L·log K) evaluations instead of O(K + L): with K = 500 candidates the
   // linear walk renders hundreds of meshes per level.
   bool bisect_meshes = false;
+  // Optional, per mesh index: its size (triangles). The bisection then stops once the feasible
+  // and infeasible meshes bracketing the boundary differ by at most `bisection_stop` of the
+  // feasible one's size, and takes the feasible one: the meshes between cost about the same (a
+  // pair's cost follows its mesh's size), so the renders that would find the exact boundary
+  // cannot change the choice by more than that fraction, well inside T. K = 500 candidates are
+  // often a few triangles apart, where the exact bisection spends half its renders.
+  std::span<const double> mesh_sizes = {};
+  double bisection_stop = 0;
 };
 
 struct PairSearchResult {
@@ -360,6 +368,9 @@ struct GenerateOptions {
   // on the Dragon and Spot), and every level must hold its bound there too.
   double bound_margin = 0.1;
   bool brute_force = false;        // 2D search over all pairs (the paper's comparison column)
+  // Algorithm 2's bisection stops when its bracketing meshes differ by at most this fraction of
+  // their triangles (PairSearchOptions::bisection_stop); 0 = find the exact boundary.
+  double bisection_stop = 0.01;
   // Interleaved optimizer (§4.3): the top N% of each generation seed the next; generation depth.
   double interleaved_top_fraction = 0.2;
   int interleaved_generations = 3;

@@ -654,6 +654,8 @@ SeparateProblem Generator::problem(LodScope scope) {
     problem.error_bounds.push_back(levels_[level].search_bound);
     int set = scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
     problem.mesh_counts.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
+    std::vector<double>& sizes = problem.mesh_sizes.emplace_back();
+    for (const core::Mesh& mesh : mesh_sets_[set].meshes) sizes.push_back(double(mesh.triangleCount()));
   }
   problem.shader_count = scope == LodScope::kMeshOnly ? 1 : static_cast<int>(shaders_.size());
   auto setOf = [this, scope](int level) {
@@ -783,6 +785,7 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   SeparateOptions separate;
   separate.time_tolerance = options_.time_tolerance;
   separate.merge_min_gain = options_.merge_min_gain;
+  separate.bisection_stop = options_.bisection_stop;
   separate.brute_force = options_.brute_force;
   const bool interleaved = options_.optimizer == Optimizer::kInterleaved;
   auto shader_start = Clock::now();

@@ -98,7 +98,12 @@ core::Result<PairSearchResult> searchPairs(int mesh_count, std::span<const int> 
       if (!finest) return finest.error();
       if (!*finest) break;
       int good = 0, bad = mesh;
-      while (bad - good > 1) {
+      const bool sized = options.mesh_sizes.size() == size_t(mesh_count);
+      auto closeEnough = [&] {
+        return sized && options.mesh_sizes[good] - options.mesh_sizes[bad] <=
+                            options.bisection_stop * options.mesh_sizes[good];
+      };
+      while (bad - good > 1 && !closeEnough()) {
         int middle = (good + bad) / 2;
         auto ok = visit(middle);
         if (!ok) return ok.error();

@@ -62,9 +62,14 @@ core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
     solution.shader_orders.push_back(sortByError(errors));
 
     // Line 8, SearchPairs (Algorithm 2) or the 2D brute force.
-    PairSearchOptions search_options{.error_bound = problem.error_bounds[level],
-                                     .time_tolerance = options.time_tolerance,
-                                     .bisect_meshes = options.bisect_meshes};
+    PairSearchOptions search_options;
+    search_options.error_bound = problem.error_bounds[level];
+    search_options.time_tolerance = options.time_tolerance;
+    search_options.bisect_meshes = options.bisect_meshes;
+    if (size_t(level) < problem.mesh_sizes.size()) {
+      search_options.mesh_sizes = problem.mesh_sizes[level];
+      search_options.bisection_stop = options.bisection_stop;
+    }
     PairEvaluator evaluate = [&](int mesh, int shader) {
       return problem.evaluate(level, mesh, shader);
     };

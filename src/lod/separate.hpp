@@ -18,6 +18,8 @@ struct SeparateProblem {
   int level_count = 0;
   std::vector<double> error_bounds;  // per level: e_a(d_i)·s_{d_i} (eq. 3)
   std::vector<int> mesh_counts;      // per level: K_i candidates, index 0 = the original M_0
+  // Optional, per level: each candidate's size in triangles (PairSearchOptions::mesh_sizes).
+  std::vector<std::vector<double>> mesh_sizes;
   int shader_count = 0;              // shared by all levels, index 0 = the original S_0
   // ε_a and cost of (mesh j of level i's set, shader k) at d_i.
   std::function<core::Result<PairEvaluation>(int level, int mesh, int shader)> evaluate;
@@ -34,6 +36,7 @@ struct SeparateOptions {
   double merge_min_gain = 0.04;   // W of §6.2
   bool brute_force = false;       // the 2D search over all K·L pairs instead of Algorithm 2
   bool bisect_meshes = true;      // PairSearchOptions::bisect_meshes
+  double bisection_stop = 0;      // PairSearchOptions::bisection_stop (needs mesh_sizes)
   bool smooth = true;             // Algorithm 3; off: each level takes its cheapest pair
   // Called as each level's search finishes (level, evaluations so far).
   std::function<void(int, int)> on_level;
