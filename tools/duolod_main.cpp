@@ -749,6 +749,8 @@ int runGenerate(GenerateFlags& flags) {
                 check.within ? "yes" : (check.original_fallback ? "no (original)" : "NO"));
     if (!check.within && !check.original_fallback) ++violations;
   }
+  if (!result->levels.empty() && result->levels.front().error_bound <= 0)
+    std::printf("  (level 0 is the original at d_near, where the bound is 0: not re-checked)\n");
   const lod::GenerateTimings& t = result->timings;
   std::printf("\ntime      mesh %.1f s, shader %.1f s, optimization %.1f s, export %.1f s, total %.1f s\n",
               t.mesh_seconds, t.shader_seconds, t.optimization_seconds, t.export_seconds,

@@ -789,6 +789,25 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   separate.brute_force = options_.brute_force;
   const bool interleaved = options_.optimizer == Optimizer::kInterleaved;
   auto shader_start = Clock::now();
+  // The baselines with the same thresholds, on the same cached renders (report plots). The
+  // mesh-only one needs only the original shader, so it runs while the GP searches finish on
+  // their own thread (the caller's thread would only wait); its renders are also the joint
+  // walk's first column (S_0 errs least on M_0).
+  std::map<LodScope, SeparateSolution> baselines;
+  if (options_.scope == LodScope::kJoint && shader_search_) {
+    const auto baseline_start = Clock::now();
+    auto baseline = optimizeSeparate(problem(LodScope::kMeshOnly), separate);
+    if (!baseline) return baseline.error();
+    if (options_.progress) {
+      char line[160];
+      std::snprintf(line, sizeof line,
+                    "mesh-only baseline (while the searches run): %d pair renders, %d "
+                    "transitions, %.1f s",
+                    pair_evaluations_, transition_evaluations_, secondsSince(baseline_start));
+      options_.progress({"shader candidates", 0.0, line});
+    }
+    baselines.emplace(LodScope::kMeshOnly, std::move(*baseline));
+  }
   if (!interleaved)
     if (auto made = makeShaderCandidates(); !made) return made.error();
   result.timings.shader_seconds = secondsSince(shader_start);
@@ -821,11 +840,10 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   logStep(interleaved ? "interleaved optimization" : "separate optimization (with smoothing, merging)",
           optimization_start, 0, 0);
   result.shader_candidates = static_cast<int>(shaders_.size());
-  // The baselines with the same thresholds, on the same cached renders (report plots).
-  std::map<LodScope, SeparateSolution> baselines;
   if (options_.scope == LodScope::kJoint) {
     separate.on_level = nullptr;
     for (LodScope scope : {LodScope::kMeshOnly, LodScope::kShaderOnly}) {
+      if (baselines.count(scope)) continue;
       const auto baseline_start = Clock::now();
       const int renders_before = pair_evaluations_, transitions_before = transition_evaluations_;
       auto baseline = optimizeSeparate(problem(scope), separate);
@@ -918,6 +936,9 @@ core::Status Generator::checkHeldOut(GenerateResult& result) {
     progress("held-out check", double(k) / result.levels.size());
     const GeneratedLevel& out = result.levels[k];
     const LevelState& level = levels_[out.level.index];
+    // At d_near eq. (4) gives a bound of 0: the level is the original by definition and no view
+    // can hold it, so re-rendering it (the largest footprint, supersampled) would show nothing.
+    if (level.bound <= 0) continue;
     render::DomainOptions held_out{.views = render::ViewSet::kIcosahedron,
                                    .light_rotation_deg = 45.0f};
     std::vector<render::Sample> samples =
