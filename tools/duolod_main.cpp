@@ -560,7 +560,7 @@ struct GenerateFlags {
   bool force = false;
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
   lod::GenerateOptions options;
-  bool quiet = false, verbose = false, no_compile_ahead = false;
+  bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
   int jobs = 0;
 
   void add(CLI::App* command) {
@@ -625,6 +625,9 @@ struct GenerateFlags {
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
     command->add_flag("--quiet", quiet, "no progress display");
+    command->add_flag("--move-to-parameter", move_to_parameter,
+                      "also offer moving to parameter in the GP searches (a computed value "
+                      "replaced by a uniform holding its average over the training domain)");
     command->add_flag("--no-compile-ahead", no_compile_ahead,
                       "compile shader variants only when scored (default: a worker thread with "
                       "its own GL context compiles the GP's coming ones; same results)");
@@ -698,6 +701,7 @@ int runGenerate(GenerateFlags& flags) {
   options.levels.display = flags.shading.display();
   options.device = flags.shading.device;
   options.compile_ahead = !flags.no_compile_ahead;
+  options.move_to_parameter = flags.move_to_parameter;
   options.optimizer =
       flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;
   options.scope = flags.only == "mesh"     ? lod::LodScope::kMeshOnly

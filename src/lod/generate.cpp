@@ -245,7 +245,12 @@ class ShaderSearchThread {
       drawn.mesh = configuration.drawn;
       (*scoring)->enableCompileAhead(std::move(drawn), {.device = options_.device});
     }
-    shader::SearchCache search_cache(original_, context_, (*scoring)->scorer());
+    // Moving to parameter (He et al.): values averaged over the training domain by an
+    // instrumented render on this configuration's mesh and distance.
+    shader::RuleContext context = context_;
+    if (options_.move_to_parameter)
+      context.average_value = (*scoring)->averageValue(options_.average_resolution);
+    shader::SearchCache search_cache(original_, context, (*scoring)->scorer());
     shader::GeneticSearchOptions genetic;
     genetic.population_size = options_.population;
     genetic.generations = options_.generations;
