@@ -40,7 +40,10 @@ run() {
   times=$(grep '^time ' "$out/$name.log" |
           sed -E 's/.*mesh ([0-9.]+) s, shader ([0-9.]+) s, optimization ([0-9.]+) s, export ([0-9.]+) s, total ([0-9.]+) s.*/\1 | \2 | \3 | \5/')
   kept=$(grep '^levels ' "$out/$name.log" | sed -E 's/levels +([0-9]+ of [0-9]+) kept.*/\1/')
-  within=$(awk '/held-out views/{f=1;next} f&&/^ +[0-9]/{n++; if($4=="yes")y++} /^time/{f=0} END{printf "%d/%d", y, n}' "$out/$name.log")
+  within=$(awk '/held-out views and lights/{f=1;next} f&&/^ +[0-9]/{n++; if($4=="yes")y++} /^time/{f=0} END{printf "%d/%d", y, n}' "$out/$name.log")
+  local dropped
+  dropped=$(grep -c '^  dropped:' "$out/$name.log" || true)
+  [ "$dropped" = 0 ] || within="$within ($dropped dropped)"
   local searches
   searches=$(grep -m1 'the shader searches took' "$out/$name.log" | sed -E 's/.*took ([0-9.]+) s.*/\1/' || true)
   printf '| %s | %s | %s | %s | %s | %.0f |\n' "$name" "$kept" "$times" "${searches:--}" "$within" "$(awk -v a="$start" -v b="$end" 'BEGIN{print b-a}')"

@@ -1,6 +1,6 @@
 // End-to-end test of `duolod generate` (issue 5): the built binary runs the separate optimizer on
 // Spot with the noise/Phong shader in its fast settings (quadric mesh candidates, 3 levels, a small
-// GP), and the output folder must hold what an engine needs: the glTF chain, lod.json the runtime
+// GP, moving to parameter offered), and the output folder must hold what an engine needs: the glTF chain, lod.json the runtime
 // loads, every level's shaders in four forms, the autoLOD shader and the report. Every kept level
 // must pass its bound on the held-out views and lights, or be the original (flagged).
 #include <gtest/gtest.h>
@@ -22,7 +22,7 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
       "generate", spot,          "--shader",       "noise_phong", "--mesh-mode", "quadric",
       "--levels", "3",           "--shader-levels", "1",          "--population", "6",
       "--generations", "2",      "--candidates",   "40",          "--quiet",     "--out",
-      out.string()};
+      out.string(),              "--move-to-parameter"};
   test::CommandRun run = test::runCommand(DUOLOD_CLI, args);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   for (const char* file : {"lod.gltf", "lod.json", "report.html", "level0.frag.spv",

@@ -381,9 +381,9 @@ struct GenerateOptions {
   double interleaved_top_fraction = 0.2;
   int interleaved_generations = 3;
   int device = -1;  // EGL device; -1 = Mesa surfaceless
-  // Compile the shader searches' coming variants on a second GL context in a worker thread (the
-  // search's CPU work and llvmpipe's compiles otherwise keep one core busy and the other idle).
-  // The results are the same either way.
+  // Compile the shader searches' coming variants in worker threads, one per core, each with its
+  // own GL context (the search's CPU work and llvmpipe's compiles otherwise keep one core busy
+  // and the other idle). The results are the same either way.
   bool compile_ahead = true;
   std::function<void(const GenerateProgress&)> progress;
 };
@@ -407,7 +407,8 @@ struct GeneratedLevel {
 };
 
 struct HeldOutCheck {
-  int level = 0;
+  int level = 0;           // index into GenerateResult::levels (dropped levels: -1)
+  int distance_level = 0;  // index into GenerateResult::all_levels
   double error = 0, bound = 0;
   bool within = false;
   bool original_fallback = false;
@@ -426,6 +427,9 @@ struct GenerateResult {
   std::vector<GeneratedLevel> levels;  // the kept levels, finest first
   std::vector<DistanceLevel> all_levels;
   std::vector<HeldOutCheck> held_out;  // every kept level on held-out views and lights
+  // Levels the optimizer kept but that broke their bound on the held-out views and lights: they
+  // are left out of the chain (the finer level before each covers its distances).
+  std::vector<HeldOutCheck> dropped;
   GenerateTimings timings;
   int pair_evaluations = 0, transition_evaluations = 0, shader_candidates = 0;
   std::vector<int> mesh_candidates;  // per level

@@ -37,7 +37,7 @@ struct ShaderLodOptions {
   // this resolution. Moving the colour output to a parameter is the front's nearly-constant end.
   bool move_to_parameter = true;
   int average_resolution = 64;
-  // Compile the GP's coming variants on a second context in a worker thread (scoring.hpp);
+  // Compile the GP's coming variants in worker threads with their own contexts (scoring.hpp);
   // the results are the same either way.
   bool compile_ahead = true;
 };
@@ -60,7 +60,7 @@ struct ShaderLodReport {
   VariantEvaluator::Counters evaluation;
   int cost_profiles = 0;  // instrumented renders of the cost model
   int average_renders = 0;  // instrumented renders averaging values (moving to parameter)
-  int compiled_ahead = 0;  // cost profiles compiled first by the worker (ShaderLodOptions::compile_ahead)
+  int compiled_ahead = 0;  // cost profiles compiled first by the workers (ShaderLodOptions::compile_ahead)
   int footprint_px = 0;
   int domain_samples = 0;
   std::string device;

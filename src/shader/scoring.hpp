@@ -49,12 +49,12 @@ class ConfigurationScorer {
       int resolution = 64);
   int averageRenders() const;
   int costProfiles() const { return cost_profiles_; }
-  // Compiles the programs the search announces (VariantScorer::prepare) ahead on a second GL
-  // context in a worker thread (compile_ahead.hpp): `asset` is what the scorer draws (this
+  // Compiles the programs the search announces (VariantScorer::prepare) ahead in worker threads,
+  // one per core, each with its own GL context (compile_ahead.hpp): `asset` is what the scorer draws (this
   // configuration's mesh with the asset's materials and textures), `context` the device. Scores
   // are the same with or without it.
   void enableCompileAhead(core::Asset asset, render::ContextOptions context);
-  // Programs the worker compiled, and evaluation forms it handed over (0, 0 without a worker).
+  // Programs the workers compiled, and evaluation forms they handed over (0, 0 without them).
   std::pair<int, int> compileAheadCounts() const;
   int footprint() const { return evaluator_->footprint(); }
 
