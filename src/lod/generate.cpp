@@ -117,7 +117,7 @@ class ShaderSearchThread {
     float distance = 0;
   };
   struct Event {
-    std::string line;  // a finished configuration's summary (empty for the end)
+    std::string line;  // a finished configuration's summary
     int finished = 0;  // configurations done so far
   };
 
