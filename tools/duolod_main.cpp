@@ -755,12 +755,15 @@ int runGenerate(GenerateFlags& flags) {
   }
   if (!result->levels.empty() && result->levels.front().error_bound <= 0)
     std::printf("  (level 0 is the original at d_near, where the bound is 0: not re-checked)\n");
-  for (const lod::HeldOutCheck& dropped : result->dropped)
+  for (const lod::HeldOutCheck& dropped : result->dropped) {
     std::printf("  dropped: the pair chosen at d = %.6g (%d px) erred %.4g there, over its bound "
-                "%.4g; the level before covers its distances\n",
+                "%.4g; the level before covers its distances and errs %.4g there (%s)\n",
                 result->all_levels[dropped.distance_level].distance,
                 result->all_levels[dropped.distance_level].footprint_px, dropped.error,
-                dropped.bound);
+                dropped.bound, dropped.covering_error,
+                dropped.covering_error < dropped.bound ? "within" : "OVER");
+    if (dropped.covering_error >= dropped.bound) ++violations;
+  }
   const lod::GenerateTimings& t = result->timings;
   std::printf("\ntime      mesh %.1f s, shader %.1f s, optimization %.1f s, export %.1f s, total %.1f s\n",
               t.mesh_seconds, t.shader_seconds, t.optimization_seconds, t.export_seconds,

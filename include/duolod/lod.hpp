@@ -412,6 +412,9 @@ struct HeldOutCheck {
   double error = 0, bound = 0;
   bool within = false;
   bool original_fallback = false;
+  // Dropped levels: the held-out error, at this level's distance, of the finer level before it,
+  // which covers its distances instead (-1 otherwise).
+  double covering_error = -1;
 };
 
 struct GenerateTimings {

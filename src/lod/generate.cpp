@@ -331,7 +331,9 @@ class Generator {
   core::Status measureChosen(GenerateResult& result);
   // ε_a of (level's set mesh, shader) against f̄ on views and lights outside the training domain
   // (an icosahedron's vertices, the light cross turned 45°), and the bound there.
-  core::Result<HeldOutCheck> checkHeldOut(int level, const EvaluatedPair& pair, bool fallback);
+  // `pair_set`: the mesh set the pair's mesh index refers to (its own level's).
+  core::Result<HeldOutCheck> checkHeldOut(int level, int pair_set, const EvaluatedPair& pair,
+                                          bool fallback);
   void fillReport(GenerateResult& result, const SeparateSolution& joint,
                   const std::map<LodScope, SeparateSolution>& baselines);
 
@@ -878,9 +880,15 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
       ++k;
       continue;
     }
-    auto check = checkHeldOut(level, joint->chosen[level], joint->fallback_to_original[level]);
+    auto check = checkHeldOut(level, setFor(level), joint->chosen[level],
+                              joint->fallback_to_original[level]);
     if (!check) return check.error();
     if (!check->within && !check->original_fallback && k > 0) {
+      // What the runtime will draw there instead: the finer level before, checked the same way.
+      const int before = kept[k - 1];
+      auto covering = checkHeldOut(level, setFor(before), joint->chosen[before], false);
+      if (!covering) return covering.error();
+      check->covering_error = covering->error;
       result.dropped.push_back(*check);
       kept.erase(kept.begin() + static_cast<std::ptrdiff_t>(k));
       continue;
@@ -966,8 +974,8 @@ core::Status Generator::measureChosen(GenerateResult& result) {
 
 // Every kept level on views and lights the optimization never saw: the icosahedron's 12 views
 // (the training set is the dodecahedron's 20) with the light cross turned by 45°.
-core::Result<HeldOutCheck> Generator::checkHeldOut(int level_index, const EvaluatedPair& pair,
-                                                    bool fallback) {
+core::Result<HeldOutCheck> Generator::checkHeldOut(int level_index, int pair_set,
+                                                    const EvaluatedPair& pair, bool fallback) {
   auto original = cache_->program(shaders_[0].variant);
   if (!original) return original.error();
   const LevelState& level = levels_[level_index];
@@ -980,7 +988,7 @@ core::Result<HeldOutCheck> Generator::checkHeldOut(int level_index, const Evalua
       original_asset_, *original, samples,
       {.resolution = resolution, .supersample = options_.supersample});
   if (!reference) return reference.error();
-  auto images = renderPairOn(samples, resolution, setFor(level_index), pair.mesh, pair.shader, nullptr);
+  auto images = renderPairOn(samples, resolution, pair_set, pair.mesh, pair.shader, nullptr);
   if (!images) return images.error();
   metric::ImageError error = metric::imageError(*images, *reference);
   HeldOutCheck check{.level = -1,
