@@ -73,6 +73,15 @@ float distanceForFootprint(const core::Sphere& bounds, int pixels, const render:
   return far;
 }
 
+// How a GP configuration scores variants: at `distance`, on the run's display and supersampling.
+shader::EvaluationConfig evaluationConfig(const GenerateOptions& options, float distance) {
+  shader::EvaluationConfig config;
+  config.distance = distance;
+  config.display = options.levels.display;
+  config.supersample = options.supersample;
+  return config;
+}
+
 struct LevelState {
   DistanceLevel level;
   std::vector<render::Sample> samples;
@@ -233,12 +242,9 @@ class ShaderSearchThread {
       Renderer::AssetId original_asset, const Configuration& configuration) {
     auto asset = renderer.uploadMesh(original_asset, configuration.drawn);
     if (!asset) return asset.error();
-    shader::EvaluationConfig config;
-    config.distance = configuration.distance;
-    config.display = options_.levels.display;
-    config.supersample = options_.supersample;
-    auto scoring = shader::ConfigurationScorer::create(renderer, cache, *asset, configuration.drawn,
-                                                       original_, config);
+    auto scoring = shader::ConfigurationScorer::create(
+        renderer, cache, *asset, configuration.drawn, original_,
+        evaluationConfig(options_, configuration.distance));
     if (!scoring) return scoring.error();
     if (options_.compile_ahead) {
       core::Asset drawn = asset_;  // what the scorer draws: this mesh, the asset's materials
@@ -329,11 +335,17 @@ class Generator {
   core::Result<int> addShaderCandidate(std::shared_ptr<const shader::ShaderProgram> program,
                                        std::string summary);
   core::Status measureChosen(GenerateResult& result);
-  // ε_a of (level's set mesh, shader) against f̄ on views and lights outside the training domain
-  // (an icosahedron's vertices, the light cross turned 45°), and the bound there.
-  // `pair_set`: the mesh set the pair's mesh index refers to (its own level's).
-  core::Result<HeldOutCheck> checkHeldOut(int level, int pair_set, const EvaluatedPair& pair,
-                                          bool fallback);
+  // Views and lights outside the training domain (an icosahedron's vertices, the light cross
+  // turned 45°) at a level's distance, with f̄ rendered there.
+  struct HeldOutDomain {
+    std::vector<render::Sample> samples;
+    render::ImageBatchF reference;
+  };
+  core::Result<HeldOutDomain> heldOutDomain(int level);
+  // ε_a of (mesh of `pair_set`, shader) against that f̄, and the bound there. `pair_set`: the
+  // mesh set the pair's mesh index refers to (its own level's).
+  core::Result<HeldOutCheck> checkHeldOut(const HeldOutDomain& domain, int level, int pair_set,
+                                          const EvaluatedPair& pair, bool fallback);
   void fillReport(GenerateResult& result, const SeparateSolution& joint,
                   const std::map<LodScope, SeparateSolution>& baselines);
 
@@ -549,13 +561,9 @@ core::Result<std::unique_ptr<shader::ConfigurationScorer>> Generator::scorerFor(
                                                                                 int mesh) {
   auto asset = meshAsset(set, mesh);
   if (!asset) return asset.error();
-  shader::EvaluationConfig config;
-  config.distance = float(levels_[level].level.distance);
-  config.display = options_.levels.display;
-  config.supersample = options_.supersample;
-  return shader::ConfigurationScorer::create(*renderer_, cache_, *asset,
-                                             mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh],
-                                             original_, config);
+  return shader::ConfigurationScorer::create(
+      *renderer_, cache_, *asset, mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh], original_,
+      evaluationConfig(options_, float(levels_[level].level.distance)));
 }
 
 // The cost model's per-invocation op counts of a shader candidate: one instrumented render of the
@@ -805,6 +813,7 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   std::map<LodScope, SeparateSolution> baselines;
   if (options_.scope == LodScope::kJoint && shader_search_) {
     const auto baseline_start = Clock::now();
+    const int renders_before = pair_evaluations_, transitions_before = transition_evaluations_;
     auto baseline = optimizeSeparate(problem(LodScope::kMeshOnly), separate);
     if (!baseline) return baseline.error();
     if (options_.progress) {
@@ -812,7 +821,8 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
       std::snprintf(line, sizeof line,
                     "mesh-only baseline (while the searches run): %d pair renders, %d "
                     "transitions, %.1f s",
-                    pair_evaluations_, transition_evaluations_, secondsSince(baseline_start));
+                    pair_evaluations_ - renders_before,
+                    transition_evaluations_ - transitions_before, secondsSince(baseline_start));
       options_.progress({"shader candidates", 0.0, line});
     }
     baselines.emplace(LodScope::kMeshOnly, std::move(*baseline));
@@ -880,13 +890,15 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
       ++k;
       continue;
     }
-    auto check = checkHeldOut(level, setFor(level), joint->chosen[level],
+    auto domain = heldOutDomain(level);
+    if (!domain) return domain.error();
+    auto check = checkHeldOut(*domain, level, setFor(level), joint->chosen[level],
                               joint->fallback_to_original[level]);
     if (!check) return check.error();
     if (!check->within && !check->original_fallback && k > 0) {
       // What the runtime will draw there instead: the finer level before, checked the same way.
       const int before = kept[k - 1];
-      auto covering = checkHeldOut(level, setFor(before), joint->chosen[before], false);
+      auto covering = checkHeldOut(*domain, level, setFor(before), joint->chosen[before], false);
       if (!covering) return covering.error();
       check->covering_error = covering->error;
       result.dropped.push_back(*check);
@@ -974,27 +986,34 @@ core::Status Generator::measureChosen(GenerateResult& result) {
 
 // Every kept level on views and lights the optimization never saw: the icosahedron's 12 views
 // (the training set is the dodecahedron's 20) with the light cross turned by 45°.
-core::Result<HeldOutCheck> Generator::checkHeldOut(int level_index, int pair_set,
-                                                    const EvaluatedPair& pair, bool fallback) {
+core::Result<Generator::HeldOutDomain> Generator::heldOutDomain(int level_index) {
   auto original = cache_->program(shaders_[0].variant);
   if (!original) return original.error();
-  const LevelState& level = levels_[level_index];
-  render::DomainOptions held_out{.views = render::ViewSet::kIcosahedron,
-                                 .light_rotation_deg = 45.0f};
-  std::vector<render::Sample> samples =
-      render::domainSamples(bounds_, float(level.level.distance), held_out);
-  const int resolution = level.level.footprint_px;
+  const DistanceLevel& level = levels_[level_index].level;
+  HeldOutDomain domain;
+  domain.samples = render::domainSamples(
+      bounds_, float(level.distance),
+      {.views = render::ViewSet::kIcosahedron, .light_rotation_deg = 45.0f});
   auto reference = renderer_->renderReference(
-      original_asset_, *original, samples,
-      {.resolution = resolution, .supersample = options_.supersample});
+      original_asset_, *original, domain.samples,
+      {.resolution = level.footprint_px, .supersample = options_.supersample});
   if (!reference) return reference.error();
-  auto images = renderPairOn(samples, resolution, pair_set, pair.mesh, pair.shader, nullptr);
+  domain.reference = std::move(*reference);
+  return domain;
+}
+
+core::Result<HeldOutCheck> Generator::checkHeldOut(const HeldOutDomain& domain, int level_index,
+                                                    int pair_set, const EvaluatedPair& pair,
+                                                    bool fallback) {
+  const DistanceLevel& level = levels_[level_index].level;
+  auto images = renderPairOn(domain.samples, level.footprint_px, pair_set, pair.mesh, pair.shader,
+                             nullptr);
   if (!images) return images.error();
-  metric::ImageError error = metric::imageError(*images, *reference);
+  metric::ImageError error = metric::imageError(*images, domain.reference);
   HeldOutCheck check{.level = -1,
                      .distance_level = level_index,
                      .error = error.epsilon,
-                     .bound = errorBound(level.level, error.coverage_px),
+                     .bound = errorBound(level, error.coverage_px),
                      .original_fallback = fallback};
   check.within = check.error < check.bound;
   return check;
