@@ -561,6 +561,7 @@ struct GenerateFlags {
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
   lod::GenerateOptions options;
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
+  bool no_sort_prefetch = false;
   int jobs = 0;
 
   void add(CLI::App* command) {
@@ -631,6 +632,10 @@ struct GenerateFlags {
     command->add_flag("--no-compile-ahead", no_compile_ahead,
                       "compile shader variants only when scored (default: a worker thread with "
                       "its own GL context compiles the GP's coming ones; same results)");
+    command->add_flag("--no-sort-prefetch", no_sort_prefetch,
+                      "render SortByError's pairs (every shader on the original mesh) only when "
+                      "the pair search reaches them (default: a second thread with its own GL "
+                      "context renders them ahead; same results)");
     command->add_option("--jobs", jobs,
                         "threads the renderer may use (Mesa llvmpipe's LP_NUM_THREADS; 0 = one "
                         "per core, its default)")
@@ -701,6 +706,7 @@ int runGenerate(GenerateFlags& flags) {
   options.levels.display = flags.shading.display();
   options.device = flags.shading.device;
   options.compile_ahead = !flags.no_compile_ahead;
+  options.sort_prefetch = !flags.no_sort_prefetch;
   options.move_to_parameter = flags.move_to_parameter;
   options.optimizer =
       flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;

@@ -385,6 +385,11 @@ struct GenerateOptions {
   // own GL context (the search's CPU work and llvmpipe's compiles otherwise keep one core busy
   // and the other idle). The results are the same either way.
   bool compile_ahead = true;
+  // Render SortByError's pairs (every shader candidate on the original mesh, per level) ahead on
+  // a second thread with its own GL context while the pair search walks (llvmpipe shades
+  // vertices and bins triangles on the drawing thread, which leaves a core idle otherwise). The
+  // results are the same either way.
+  bool sort_prefetch = true;
   std::function<void(const GenerateProgress&)> progress;
 };
 

@@ -33,6 +33,7 @@
 #include "duolod/mesh.hpp"
 #include "duolod/shader.hpp"
 #include "lod/separate.hpp"
+#include "lod/sort_prefetch.hpp"
 #include "shader/autolod.hpp"
 #include "shader/cost_model.hpp"
 #include "shader/evaluate.hpp"
@@ -306,6 +307,8 @@ class Generator {
   void addReadyConfigurations(int completed_level);
   void relayShaderSearchLines(std::string_view stage);
   core::Status makeShaderCandidates();
+  // Starts SortByError's renders of the joint search on their own thread (SortByErrorPrefetch).
+  void startSortPrefetch();
   core::Result<ShaderCandidate> candidateFrom(std::shared_ptr<const shader::ShaderProgram> program,
                                               std::string summary);
   core::Status profile(ShaderCandidate& candidate);
@@ -360,6 +363,7 @@ class Generator {
   std::vector<MeshSet> mesh_sets_;
   std::vector<int> set_of_level_;  // which mesh set each level searches
   std::unique_ptr<ShaderSearchThread> shader_search_;
+  std::unique_ptr<SortByErrorPrefetch> sort_prefetch_;
   std::vector<int> search_levels_;  // §5.2's evenly chosen levels
   size_t next_search_level_ = 0;    // the first of them not yet handed to shader_search_
   std::vector<ShaderCandidate> shaders_;
@@ -619,8 +623,17 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
   auto key = std::make_tuple(distance_level, set, mesh, shader);
   if (auto found = pairs_.find(key); found != pairs_.end()) return found->second;
   render::WorkCounts work;
-  auto images = renderPair(distance_level, set, mesh, shader, &work);
-  if (!images) return images.error();
+  std::optional<render::ImageBatch8> images;
+  if (mesh == 0 && sort_prefetch_)
+    if (auto prefetched = sort_prefetch_->take(distance_level, shader)) {
+      images = std::move(prefetched->images);
+      work = prefetched->work;
+    }
+  if (!images) {
+    auto rendered = renderPair(distance_level, set, mesh, shader, &work);
+    if (!rendered) return rendered.error();
+    images = std::move(*rendered);
+  }
   ++pair_evaluations_;
   // Kept: the transition error (eq. 5) compares pairs at these very distances (a few MB each;
   // the renders are what costs).
@@ -780,6 +793,29 @@ core::Status Generator::makeShaderCandidates() {
   return core::okStatus();
 }
 
+// Algorithm 1 line 6 renders every shader candidate on M_0 at every searched level before that
+// level's walk: those renders go to a thread of their own, which takes the levels from the
+// farthest while the walk goes from the nearest and renders itself what the thread has not
+// started, so the two meet where their work is about even (M_0's renders are most of it).
+void Generator::startSortPrefetch() {
+  std::vector<SortByErrorPrefetch::Level> levels;
+  std::vector<SortByErrorPrefetch::Job> jobs;
+  for (size_t level = 0; level < levels_.size(); ++level) {
+    levels.push_back({levels_[level].samples, levels_[level].level.footprint_px});
+    if (levels_[level].search_bound <= 0) continue;  // optimizeSeparate skips it (bound 0)
+    for (size_t shader = 0; shader < shaders_.size(); ++shader)
+      if (!pairs_.count(std::make_tuple(int(level), 0, 0, int(shader))))
+        jobs.push_back({int(level), int(shader)});
+  }
+  if (jobs.empty()) return;
+  std::reverse(jobs.begin(), jobs.end());
+  std::vector<shader::Variant> variants;
+  for (const ShaderCandidate& candidate : shaders_) variants.push_back(candidate.variant);
+  sort_prefetch_ = std::make_unique<SortByErrorPrefetch>(
+      asset_, std::move(variants), std::move(levels), std::move(jobs),
+      render::ContextOptions{.device = options_.device});
+}
+
 core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   const auto start = Clock::now();
   if (auto ready = setUp(source); !ready) return ready.error();
@@ -844,8 +880,24 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
     if (options_.progress)
       options_.progress({"pair search", double(level + 1) / levels_.size(), line});
   };
+  if (!interleaved && options_.sort_prefetch && options_.scope != LodScope::kMeshOnly)
+    startSortPrefetch();
   auto joint = interleaved ? runInterleaved(separate)
                            : optimizeSeparate(problem(options_.scope), separate);
+  if (sort_prefetch_) {
+    if (options_.progress) {
+      const std::string failure = sort_prefetch_->failure();
+      char line[160];
+      std::snprintf(line, sizeof line, "SortByError renders made ahead on a second thread: %d",
+                    sort_prefetch_->rendered());
+      options_.progress({"pair search", 1.0, line});
+      if (!failure.empty())
+        options_.progress({"pair search", 1.0,
+                           "warning: the SortByError thread stopped early (this thread rendered "
+                           "the rest): " + failure});
+    }
+    sort_prefetch_.reset();
+  }
   if (!joint) return joint.error();
   auto logStep = [&](const char* what, Clock::time_point since, int renders_before,
                      int transitions_before) {
