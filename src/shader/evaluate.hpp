@@ -95,7 +95,8 @@ struct EvaluationConfig {
 
 class VariantEvaluator {
  public:
-  // Renders the references of `original` for the configuration. `asset` is the uploaded `mesh`
+  // Renders the reduced domain's reference of `original` for the configuration (the whole
+  // domain's waits for the first renderedError()). `asset` is the uploaded `mesh`
   // (its bounds place the cameras, its content keys the error cache).
   static core::Result<std::unique_ptr<VariantEvaluator>> create(
       std::shared_ptr<EvaluationCache> cache, render::Renderer::AssetId asset,
@@ -137,6 +138,9 @@ class VariantEvaluator {
  private:
   VariantEvaluator() = default;
   core::Result<metric::ImageError> evaluate(const Variant& variant, bool predicted);
+  // f̄ of the original on `samples`, k×k supersampled.
+  core::Result<render::ImageBatchF> renderReference(std::span<const render::Sample> samples,
+                                                    int resolution);
   // eq. (6) of rendered images against the reference of their kind; counted and cached.
   metric::ImageError scoreImages(uint64_t variant_key, const render::ImageBatch8& images,
                                  bool predicted);
@@ -146,7 +150,9 @@ class VariantEvaluator {
   EvaluationConfig config_;
   int footprint_ = 0, predicted_resolution_ = 0;
   std::vector<render::Sample> samples_, predicted_samples_;
-  render::ImageBatchF reference_, predicted_reference_;
+  Variant original_;
+  render::ImageBatchF reference_;  // of the whole domain: rendered on first use
+  render::ImageBatchF predicted_reference_;
   uint64_t configuration_key_ = 0, predicted_configuration_key_ = 0;
   std::unordered_map<uint64_t, render::WorkCounts> work_;  // by variantKey
   Counters counters_;
