@@ -5,7 +5,8 @@
 # 1D walk against the 2D brute force. Prints one table row per run (stage times from duolod's own
 # summary, levels kept, held-out verdicts); keeps each run's folder and log in OUT.
 #
-#   bench/generate_assets.sh [OUT]        (default OUT: /tmp/duolod-generate-bench)
+#   bench/generate_assets.sh [OUT [RUN...]]   (default OUT: /tmp/duolod-generate-bench; RUN names
+#                                               pick rows, e.g. waterbottle-pbr; default all)
 #
 # Needs the build (scripts/build.sh) and the CGAL meshes (scripts/fetch-bench-data.sh, run here).
 # Takes tens of minutes on a 2-core llvmpipe machine; run it on an otherwise idle machine when the
@@ -22,9 +23,11 @@ assets="$root/../shared/assets"
 dragon="${DUOLOD_DATA_DIR:-/tmp/duolod-data}/cgal/data/meshes/ChineseDragon-10kv.off"
 mkdir -p "$out"
 
+selected=("${@:2}")
 run() {
   local name="$1"
   shift
+  if [ ${#selected[@]} -gt 0 ] && [[ " ${selected[*]} " != *" $name "* ]]; then return; fi
   rm -rf "${out:?}/$name"
   local start end
   # A cold Mesa shader cache per run: llvmpipe keeps compiled shaders on disk, and a re-run of
