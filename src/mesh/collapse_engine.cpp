@@ -898,6 +898,7 @@ void Engine::applyCollapse(CandidateCollapse& cand, uint8_t placement) {
   for (uint32_t i = 0; i < cand.wedge_count; ++i)
     std::copy_n(s.wedgeAttributes(cand.to_wedges[i]), stride, placed_.data() + i * stride);
   if (stride > 0) model_.placeAttributes(s, cand, placed_);
+  model_.beforeCollapse(s, cand);
 
   // Rewire from's triangles onto `to`; the ones on the edge die.
   size_t removed = 0;

@@ -188,6 +188,10 @@ class CostModel {
   virtual void setPassPricing(bool passes) { (void)passes; }
   // Once, when the engine stops (state final).
   virtual void end(const EngineState& state) { (void)state; }
+  // Just before the collapse is applied (state still the old one).
+  virtual void beforeCollapse(const EngineState& state, const CandidateCollapse& chosen) {
+    (void)state, (void)chosen;
+  }
   // After the collapse is applied (state already updated), for incremental model data.
   virtual void onCollapse(const EngineState& state, const AppliedCollapse& applied) {
     (void)state, (void)applied;

@@ -88,6 +88,38 @@ bool ImageCostModel::edgeTooLong(uint32_t from, uint32_t to) const {
   return false;
 }
 
+bool ImageCostModel::collapseUnseen(const EngineState& state, uint32_t from, uint32_t to,
+                                    int view) const {
+  // Signed area in pixels², positive for a back face (rows run down, so a front face, counter-
+  // clockwise on screen, has negative area here: see binTriangle). The margin keeps nearly edge-on
+  // triangles, whose facing the rasterizer might judge otherwise, counted as visible.
+  constexpr float kMargin = 0.01f;
+  auto facesAway = [&](const PixelPoint (&c)[3]) {
+    return (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y) > kMargin;
+  };
+  bool unseen = true;
+  state.forEachCorner(from, [&](uint32_t corner) {
+    if (!unseen) return;
+    const uint32_t t = corner / 3;
+    PixelPoint before[3], after[3];
+    bool vanishes = false;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t position = state.cornerPosition(t * 3 + k);
+      before[k] = projected(view, position);
+      vanishes |= position == to;
+      after[k] = projected(view, position == from ? to : position);
+    }
+    if (!facesAway(before) || (!vanishes && !facesAway(after))) unseen = false;
+  });
+  return unseen;
+}
+
+void ImageCostModel::beforeCollapse(const EngineState& state, const CandidateCollapse& chosen) {
+  applying_unseen_.assign(view_count_, 0);
+  for (int v = 0; v < view_count_; ++v)
+    applying_unseen_[v] = collapseUnseen(state, chosen.from, chosen.to, v);
+}
+
 void ImageCostModel::binTriangle(const EngineState& state, uint32_t triangle) {
   const int cells = cells_per_side_;
   for (int v = 0; v < view_count_; ++v) {
@@ -238,8 +270,12 @@ void ImageCostModel::keepVisible(const Region& region, std::vector<LocalTriangle
         visit(size_t(py - region.y0) * width + (px - region.x0), z);
       }
   };
+  // Occluders only where they surely cover the pixel centre (slack inwards): a triangle whose
+  // edge passes within the slack of a centre may not be drawn there by OpenGL, and then what lies
+  // behind it shows (at silhouettes: the background or a farther fold).
   for (const LocalTriangle& t : triangles)
-    rasterize(t, 0.0f, [&](size_t at, float z) { depth_scratch_[at] = std::min(depth_scratch_[at], z); });
+    rasterize(t, -kEdgeSlackPixels,
+              [&](size_t at, float z) { depth_scratch_[at] = std::min(depth_scratch_[at], z); });
   size_t kept = 0;
   for (size_t i = 0; i < triangles.size(); ++i) {
     bool visible = false;
@@ -320,6 +356,11 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
       continue;
     }
     for (const Placed& p : mine) {
+      // Nothing to render where the collapse shows nowhere: its change of eq. (6) there is 0.
+      if (collapseUnseen(state, c.from, c.to, p.view)) {
+        ++stats_.unseen_views;
+        continue;
+      }
       uint32_t tile = uint32_t(soup.tiles.size());
       soup.tiles.push_back({p.view, p.region.x0, p.region.y0, p.region.x1 - p.region.x0,
                             p.region.y1 - p.region.y0});
@@ -442,6 +483,7 @@ void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse&
   };
   auto priced = last_refined_.find(edgeKey(removed, survivor));
   for (int v = 0; v < view_count_; ++v) {
+    if (size_t(v) < applying_unseen_.size() && applying_unseen_[v]) continue;  // no pixel changed
     // Priced in the last batch, with nothing applied near it since: copy its rendered pixels.
     if (priced != last_refined_.end()) {
       const PricedTile* tile = nullptr;

@@ -45,6 +45,7 @@ struct ImageCostStats {
   size_t full_renders = 0;       // whole-domain re-renders of the current mesh
   size_t rejected_long_edges = 0;
   size_t rejected_wide_regions = 0;
+  size_t unseen_views = 0;  // (candidate, view) tiles skipped: the collapse shows nowhere there
   double render_seconds = 0;
   double predicted_change = 0;  // sum of the rendered costs of the applied collapses
 };
@@ -57,6 +58,7 @@ class ImageCostModel final : public CostModel {
   void evaluate(const EngineState& state, std::span<CandidateCollapse> batch) override;
   size_t refineBatchSize() const override { return setup_.refine_batch; }
   void refine(const EngineState& state, std::span<CandidateCollapse> batch) override;
+  void beforeCollapse(const EngineState& state, const CandidateCollapse& chosen) override;
   void onCollapse(const EngineState& state, const AppliedCollapse& applied) override;
   void end(const EngineState& state) override { renderFully(state); }
   // The current images (of the mesh as simplified so far), one per sample.
@@ -91,6 +93,11 @@ class ImageCostModel final : public CostModel {
   bool collapseRegion(const EngineState& state, const CandidateCollapse& candidate, int view,
                       Region& region) const;
   bool edgeTooLong(uint32_t from, uint32_t to) const;
+  // True when the collapse cannot change `view`'s image: every triangle at `from` faces away
+  // from that camera now, and every one that survives the collapse (its `from` corner moved to
+  // `to`) still faces away after it. Back faces are culled, so neither before nor after does one
+  // of them cover a pixel, and the other triangles do not change.
+  bool collapseUnseen(const EngineState& state, uint32_t from, uint32_t to, int view) const;
   void binTriangle(const EngineState& state, uint32_t triangle);
   // The live triangles that may cover a pixel centre of `region` in `view`, except those at
   // `skip_position` (kAbsent: none), appended to `out`.
@@ -151,6 +158,8 @@ class ImageCostModel final : public CostModel {
   std::vector<double> ratios_;  // rendered cost / quadric cost, to scale estimates
   double quadric_to_image_ = 0;
   size_t batches_since_full_ = 0;
+  // beforeCollapse's verdict for the collapse being applied: per view, collapseUnseen().
+  std::vector<uint8_t> applying_unseen_;
 };
 
 }  // namespace duolod::mesh

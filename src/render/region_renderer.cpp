@@ -6,6 +6,7 @@
 // vertex by whole pixels into its tile and four clip planes cut it to the tile, so every tile is
 // rasterized exactly like the corresponding region of the full view.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <numeric>
 #include <cctype>
@@ -20,25 +21,28 @@ using namespace internal;
 constexpr int kTileDataBinding = 15;       // SSBO binding of per-vertex tile placement
 constexpr int kAtlasTransformLocation = 30;  // uniform vec4 (scale x, scale y, band offset x, y)
 
-// Appended to the user's vertex shader, whose main() has been renamed duolod_user_main().
+// Appended to the user's vertex shader, whose main() has been renamed duolod_user_main(). The
+// vertex keeps the position the user's stage computed, so the rasterizer sees exactly the full
+// view's window coordinates (moving it into an atlas tile by whole pixels in float NDC changed
+// its 1/256-px snapping in wide atlases); it is sent to its tile's layer and clipped to the tile's
+// region there.
 constexpr const char* kWrapper = R"(
-// ---- duolod region wrapper: place the vertex in its atlas tile and clip it to the tile ----
+// ---- duolod region wrapper: the vertex's layer, clipped to its region ----
 layout(std430, binding = 15) readonly buffer DuolodTilePlacement { vec4 duolod_tile[]; };
-layout(location = 30) uniform vec4 duolod_atlas_transform;
+layout(location = 30) uniform vec4 duolod_atlas_transform;  // x lights per view, y this light
 void main() {
   duolod_user_main();
-  vec4 offset_and_min = duolod_tile[gl_VertexID * 2];  // xy clip offset, zw tile min (atlas NDC)
-  vec4 tile_max = duolod_tile[gl_VertexID * 2 + 1];     // xy tile max (atlas NDC)
+  vec4 bounds = duolod_tile[gl_VertexID * 2];  // region min x, min y, max x, max y (view NDC)
+  vec4 group = duolod_tile[gl_VertexID * 2 + 1];
   vec4 p = gl_Position;
-  vec2 band = duolod_atlas_transform.zw;
-  p.xy = p.xy * duolod_atlas_transform.xy + (offset_and_min.xy + band) * p.w;
-  gl_Position = p;
-  gl_ClipDistance[0] = p.x - (offset_and_min.z + band.x) * p.w;
-  gl_ClipDistance[1] = (tile_max.x + band.x) * p.w - p.x;
-  gl_ClipDistance[2] = p.y - (offset_and_min.w + band.y) * p.w;
-  gl_ClipDistance[3] = (tile_max.y + band.y) * p.w - p.y;
+  gl_ClipDistance[0] = p.x - bounds.x * p.w;
+  gl_ClipDistance[1] = bounds.z * p.w - p.x;
+  gl_ClipDistance[2] = p.y - bounds.y * p.w;
+  gl_ClipDistance[3] = bounds.w * p.w - p.y;
+  gl_Layer = int(group.x) * int(duolod_atlas_transform.x) + int(duolod_atlas_transform.y);
 }
 )";
+constexpr const char* kLayerExtension = "#extension GL_ARB_shader_viewport_layer_array : require\n";
 
 // Finds "void main()" / "void main(void)" (any spacing) and returns [begin, end) of it, or npos.
 std::pair<size_t, size_t> findMainDefinition(const std::string& text) {
@@ -63,6 +67,9 @@ std::pair<size_t, size_t> findMainDefinition(const std::string& text) {
 }  // namespace
 
 core::Result<Renderer::ProgramId> Renderer::compileRegionProgram(const GlslSource& source) {
+  if (!epoxy_has_gl_extension("GL_ARB_shader_viewport_layer_array"))
+    return Error{"region rendering needs GL_ARB_shader_viewport_layer_array (gl_Layer written by "
+                 "the vertex stage), which this OpenGL context lacks"};
   auto [begin, end] = findMainDefinition(source.vertex);
   if (begin == std::string::npos)
     return Error{source.vertex_name + ": no 'void main()' found to wrap for region rendering"};
@@ -72,6 +79,10 @@ core::Result<Renderer::ProgramId> Renderer::compileRegionProgram(const GlslSourc
     return Error{source.vertex_name +
                  ": redeclares gl_PerVertex; region rendering needs gl_ClipDistance[4]"};
   wrapped += kWrapper;
+  // The extension directive must precede the code: right after the #version line.
+  size_t version = wrapped.find("#version");
+  size_t line_end = version == std::string::npos ? 0 : wrapped.find('\n', version);
+  wrapped.insert(line_end == std::string::npos ? wrapped.size() : line_end + 1, kLayerExtension);
   GlslSource region = source;
   region.vertex = std::move(wrapped);
   region.vertex_name = source.vertex_name + " (region wrapper)";
@@ -114,14 +125,55 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   batch.pixels.assign(size_t(batch.count) * tile_size * tile_size * 4, 0);
   if (tile_count == 0) return batch;
 
-  // Atlas: one band per light; in each band, tile t sits at slot t.
-  const int columns = std::max(1, std::min(tile_count, s.max_size / tile_size));
-  const int rows = (tile_count + columns - 1) / columns;
-  const int band_height = rows * tile_size;
-  const int width = columns * tile_size, height = band_height * lights_per_view;
-  if (height > s.max_size)
-    return Error{"renderRegions: " + std::to_string(tile_count) + " tiles of " +
-                 std::to_string(tile_size) + " px exceed one atlas; split the batch"};
+  // Layers: tiles whose regions overlap (in any view: a layer is one view-sized canvas) go to
+  // different groups; group g's tiles for light l are drawn in layer g * lights + l.
+  const int R = view_resolution;
+  std::vector<int> tile_group(tile_count);
+  std::vector<std::vector<uint8_t>> occupied;
+  auto regionOf = [&](const RegionTile& tile) {
+    int w = tile.width > 0 ? std::min(tile.width, tile_size) : tile_size;
+    int h = tile.height > 0 ? std::min(tile.height, tile_size) : tile_size;
+    return std::array<int, 4>{std::clamp(tile.x0, 0, R), std::clamp(tile.y0, 0, R),
+                              std::clamp(tile.x0 + w, 0, R), std::clamp(tile.y0 + h, 0, R)};
+  };
+  for (int t = 0; t < tile_count; ++t) {
+    auto [x0, y0, x1, y1] = regionOf(soup.tiles[t]);
+    size_t g = 0;
+    for (;; ++g) {
+      if (g == occupied.size()) occupied.emplace_back(size_t(R) * R, 0);
+      bool free = true;
+      for (int y = y0; y < y1 && free; ++y)
+        for (int x = x0; x < x1 && free; ++x) free = !occupied[g][size_t(y) * R + x];
+      if (free) break;
+    }
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) occupied[g][size_t(y) * R + x] = 1;
+    tile_group[t] = int(g);
+  }
+  const int layers = int(occupied.size()) * lights_per_view;
+  GLint max_layers = 0;
+  glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+  if (layers > max_layers)
+    return Error{"renderRegions: " + std::to_string(tile_count) + " tiles need " +
+                 std::to_string(layers) + " layers, more than the device's " +
+                 std::to_string(max_layers) + "; split the batch"};
+  if (s.region_size != R || s.region_layers < layers) {
+    if (s.region_fbo) glDeleteFramebuffers(1, &s.region_fbo);
+    GLuint old_textures[] = {s.region_color, s.region_depth};
+    glDeleteTextures(2, old_textures);
+    const int allocate = std::max(layers, s.region_size == R ? 2 * s.region_layers : layers);
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s.region_color);
+    glTextureStorage3D(s.region_color, 1, GL_RGBA8, R, R, allocate);
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s.region_depth);
+    glTextureStorage3D(s.region_depth, 1, GL_DEPTH_COMPONENT24, R, R, allocate);
+    glCreateFramebuffers(1, &s.region_fbo);
+    glNamedFramebufferTexture(s.region_fbo, GL_COLOR_ATTACHMENT0, s.region_color, 0);
+    glNamedFramebufferTexture(s.region_fbo, GL_DEPTH_ATTACHMENT, s.region_depth, 0);
+    if (glCheckNamedFramebufferStatus(s.region_fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      return Error{"renderRegions: the layered target is incomplete"};
+    s.region_size = R;
+    s.region_layers = allocate;
+  }
 
   // Draw order: by view (one camera per draw), then material (one material per draw).
   std::vector<uint32_t> order(triangle_count);
@@ -132,22 +184,15 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
     return va != vb ? va < vb : soup.triangle_material[a] < soup.triangle_material[b];
   });
 
-  // Per-vertex placement, in the sorted order: clip-space offset and tile bounds (atlas NDC, band 0).
-  // A view pixel (px, py) (GL: y up) maps to atlas pixel (px − gx0 + ax, py − gy0 + ay).
+  // Per-vertex placement, in the sorted order: the region's bounds in the view's NDC (GL's y up)
+  // and the tile's group.
   std::vector<float> placement(triangle_count * 3 * 8);
-  const float R = float(view_resolution), W = float(width), H = float(height);
   for (size_t i = 0; i < triangle_count; ++i) {
     uint32_t t = soup.triangle_tile[order[i]];
-    const RegionTile& tile = soup.tiles[t];
-    float ax = float((t % columns) * tile_size), ay = float((t / columns) * tile_size);
-    float gx0 = float(tile.x0), gy0 = float(view_resolution - tile.y0 - tile_size);
-    // Clip to the region (its top rows are the tile's top rows: GL's y runs up).
-    float region_w = float(tile.width > 0 ? std::min(tile.width, tile_size) : tile_size);
-    float region_h = float(tile.height > 0 ? std::min(tile.height, tile_size) : tile_size);
-    float clip_y0 = ay + tile_size - region_h;
-    float values[8] = {(R - 2 * gx0 + 2 * ax) / W - 1, (R - 2 * gy0 + 2 * ay) / H - 1,
-                       2 * ax / W - 1, 2 * clip_y0 / H - 1,
-                       2 * (ax + region_w) / W - 1, 2 * (ay + tile_size) / H - 1, 0, 0};
+    auto [x0, y0, x1, y1] = regionOf(soup.tiles[t]);
+    const float r = float(R);
+    float values[8] = {2 * x0 / r - 1, 2 * (r - y1) / r - 1, 2 * x1 / r - 1, 2 * (r - y0) / r - 1,
+                       float(tile_group[t]), 0, 0, 0};
     for (int v = 0; v < 3; ++v) std::copy_n(values, 8, placement.data() + (i * 3 + v) * 8);
   }
 
@@ -187,11 +232,10 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   drawer.uploadFrames(samples, stride);
 
   RenderStats local;
-  if (auto ok = ensureFramebuffer(s.atlas, width, height, 0, GL_RGBA8, true, false); !ok) {
-    releaseSoup();
-    return ok.error();
-  }
-  beginDrawing(s.atlas);
+  Framebuffer target;
+  target.fbo = s.region_fbo;
+  target.width = target.height = R;
+  beginDrawing(target);
   glDisable(GL_SCISSOR_TEST);
   for (int plane = 0; plane < 4; ++plane) glEnable(GL_CLIP_DISTANCE0 + plane);
   drawer.bindInputs();
@@ -212,7 +256,7 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
       int sample = view * lights_per_view + light;
       glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo, stride * sample,
                         sizeof(FrameBlock));
-      glUniform4f(kAtlasTransformLocation, R / W, R / H, 0.0f, 2.0f * band_height * light / H);
+      glUniform4f(kAtlasTransformLocation, float(lights_per_view), float(light), 0.0f, 0.0f);
       glDrawArrays(GL_TRIANGLES, GLint(run_start * 3), GLsizei((run_end - run_start) * 3));
       ++local.draws;
     }
@@ -220,22 +264,24 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   }
   for (int plane = 0; plane < 4; ++plane) glDisable(GL_CLIP_DISTANCE0 + plane);
 
-  std::vector<uint8_t> atlas_pixels(size_t(width) * height * 4);
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, s.atlas.fbo);
+  std::vector<uint8_t> layer_pixels(size_t(R) * R * 4 * layers);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, atlas_pixels.data());
+  glGetTextureSubImage(s.region_color, 0, 0, 0, 0, R, R, layers, GL_RGBA, GL_UNSIGNED_BYTE,
+                       GLsizei(layer_pixels.size()), layer_pixels.data());
   releaseSoup();
   if (GLenum error = glGetError(); error != GL_NO_ERROR)
     return Error{"renderRegions: OpenGL error " + std::to_string(error)};
 
-  // Tile t of light band l → output tile t * lights + l (rows top first).
+  // Tile t, light l → output tile t * lights + l: the region's pixels at its top-left, rows top
+  // first (the layer's rows run up).
   for (int light = 0; light < lights_per_view; ++light)
     for (int t = 0; t < tile_count; ++t) {
-      int x0 = (t % columns) * tile_size, y0 = light * band_height + (t / columns) * tile_size;
+      auto [x0, y0, x1, y1] = regionOf(soup.tiles[t]);
+      const size_t layer = size_t(tile_group[t]) * lights_per_view + light;
       uint8_t* out = batch.tile(t * lights_per_view + light);
-      for (int row = 0; row < tile_size; ++row)
-        std::copy_n(atlas_pixels.data() + (size_t(y0 + tile_size - 1 - row) * width + x0) * 4,
-                    size_t(tile_size) * 4, out + size_t(row) * tile_size * 4);
+      for (int y = y0; y < y1; ++y)
+        std::copy_n(layer_pixels.data() + ((layer * R + size_t(R - 1 - y)) * R + x0) * 4,
+                    size_t(x1 - x0) * 4, out + size_t(y - y0) * tile_size * 4);
     }
   local.chunks = 1;
   local.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -139,6 +139,9 @@ struct Renderer::State {
   GLint ubo_alignment = 256;
   GLint max_size = 4096;
   internal::Framebuffer atlas, resolved, reference_float;
+  // renderRegions(): a layered target (2D array colour + depth), view-sized.
+  GLuint region_fbo = 0, region_color = 0, region_depth = 0;
+  int region_size = 0, region_layers = 0;
   GLuint downsample_program = 0;
   GLuint empty_vao = 0;
   internal::WorkQueries work_queries;
@@ -154,6 +157,9 @@ struct Renderer::State {
       destroyFramebuffer(atlas);
       destroyFramebuffer(resolved);
       destroyFramebuffer(reference_float);
+      if (region_fbo) glDeleteFramebuffers(1, &region_fbo);
+      GLuint region_textures[] = {region_color, region_depth};
+      glDeleteTextures(2, region_textures);
       if (downsample_program) glDeleteProgram(downsample_program);
       GLuint textures[] = {white_texture, flat_normal_texture};
       glDeleteTextures(2, textures);
