@@ -109,10 +109,10 @@ int main(int argc, char** argv) {
   std::printf("| quadric | %zu | %.3f | %.5f | %.3f s |\n", quadric.mesh.triangleCount(),
               quadric_error.epsilon, quadric_error.per_pixel, quadric_seconds);
   std::printf("\nimage-driven: %zu rendered evaluations in %zu batches (%.1f s rendering), "
-              "%zu regions re-rendered, %zu copied, %zu full re-renders, %zu long-edge and %zu wide-region refusals, reference %.1f s\n",
+              "%zu regions re-rendered, %zu copied, %zu full re-renders, %zu long-edge and %zu wide-region refusals, %zu unseen views skipped, reference %.1f s\n",
               stats.rendered_evaluations, stats.refine_batches, stats.render_seconds,
               stats.refreshed_regions, stats.copied_regions, stats.full_renders, stats.rejected_long_edges, stats.rejected_wide_regions,
-              stats.reference_seconds);
+              stats.unseen_views, stats.reference_seconds);
   std::printf("predicted change of epsilon %.3f, measured %.3f\n", stats.predicted_change,
               stats.final_error - stats.initial_error);
   std::printf("ratio epsilon image/quadric: %.3f\n", image_error.epsilon / quadric_error.epsilon);

@@ -149,6 +149,7 @@ struct ImageSimplifyStats {
   size_t full_renders = 0;       // whole-domain re-renders of the current mesh
   size_t rejected_long_edges = 0;
   size_t rejected_wide_regions = 0;
+  size_t unseen_views = 0;  // (candidate, view) tiles not rendered: the collapse shows nowhere there
   double reference_seconds = 0;  // rendering f̄ and the input's images
   double render_seconds = 0;     // pricing candidates by rendering
   double predicted_change = 0;   // Σ of the applied collapses' rendered costs (≈ final − initial)

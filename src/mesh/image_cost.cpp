@@ -15,6 +15,13 @@ constexpr float kForbidden = std::numeric_limits<float>::infinity();
 
 uint64_t edgeKey(uint32_t from, uint32_t to) { return uint64_t(from) << 32 | to; }
 
+// Twice the signed area of a screen triangle in pixels². Rows run down, so OpenGL's counter-
+// clockwise front faces have negative area here, back faces positive.
+template <class Point>
+float signedArea(const Point (&c)[3]) {
+  return (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
+}
+
 }  // namespace
 
 ImageCostModel::ImageCostModel(ImageCostSetup setup)
@@ -90,13 +97,10 @@ bool ImageCostModel::edgeTooLong(uint32_t from, uint32_t to) const {
 
 bool ImageCostModel::collapseUnseen(const EngineState& state, uint32_t from, uint32_t to,
                                     int view) const {
-  // Signed area in pixels², positive for a back face (rows run down, so a front face, counter-
-  // clockwise on screen, has negative area here: see binTriangle). The margin keeps nearly edge-on
-  // triangles, whose facing the rasterizer might judge otherwise, counted as visible.
+  // The margin keeps nearly edge-on triangles, whose facing the rasterizer might judge
+  // otherwise, counted as visible.
   constexpr float kMargin = 0.01f;
-  auto facesAway = [&](const PixelPoint (&c)[3]) {
-    return (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y) > kMargin;
-  };
+  auto facesAway = [&](const PixelPoint (&c)[3]) { return signedArea(c) > kMargin; };
   bool unseen = true;
   state.forEachCorner(from, [&](uint32_t corner) {
     if (!unseen) return;
@@ -131,7 +135,7 @@ void ImageCostModel::binTriangle(const EngineState& state, uint32_t triangle) {
       min_y = std::min(min_y, p.y), max_y = std::max(max_y, p.y);
     }
     // Back-facing now: never drawn, so not listed (re-binned if a collapse turns it).
-    if (!((c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y) < 0))
+    if (!(signedArea(c) < 0))
       continue;
     int cx0 = std::clamp(int(std::floor(min_x)) / cell_pixels_, 0, cells - 1);
     int cx1 = std::clamp(int(std::floor(max_x)) / cell_pixels_, 0, cells - 1);
@@ -242,7 +246,7 @@ void ImageCostModel::keepVisible(const Region& region, std::vector<LocalTriangle
   auto rasterize = [&](const LocalTriangle& t, float slack, auto&& visit) {
     const PixelPoint* c = t.corners;
     // Rows top first flip the winding: OpenGL's counter-clockwise front faces have negative area.
-    float area = (c[1].x - c[0].x) * (c[2].y - c[0].y) - (c[2].x - c[0].x) * (c[1].y - c[0].y);
+    float area = signedArea(t.corners);
     if (!(area < 0)) return;  // back-facing or degenerate: culled like glCullFace(GL_BACK)
     float min_x = std::min({c[0].x, c[1].x, c[2].x}), max_x = std::max({c[0].x, c[1].x, c[2].x});
     float min_y = std::min({c[0].y, c[1].y, c[2].y}), max_y = std::max({c[0].y, c[1].y, c[2].y});

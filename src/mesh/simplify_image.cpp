@@ -130,6 +130,7 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
     stats->full_renders = s.full_renders;
     stats->rejected_long_edges = s.rejected_long_edges;
     stats->rejected_wide_regions = s.rejected_wide_regions;
+    stats->unseen_views = s.unseen_views;
     stats->reference_seconds = reference_seconds;
     stats->render_seconds = s.render_seconds;
     stats->predicted_change = s.predicted_change;
