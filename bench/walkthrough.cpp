@@ -191,6 +191,7 @@ int main(int argc, char** argv) {
       error_every = 1;
   float fov_y_deg = 45;
   bool quick = false;
+  std::vector<int> dump_frames;
   app.add_option("--object", object_texts,
                  "FOLDER_PREFIX:SHADER[:ASSET]: reads PREFIX-mesh, -shader, -sep, -int "
                  "(repeat for a mixed scene)");
@@ -213,6 +214,9 @@ int main(int argc, char** argv) {
   app.add_option("--strip-frames", strip_frames)->capture_default_str();
   app.add_option("--strip-reduce", strip_reduce, "strip images are 1/N of the display")
       ->capture_default_str();
+  app.add_option("--dump-frames", dump_frames,
+                 "also write these frames of every configuration at full size, as "
+                 "frame-F-C.png (C: 0 no LOD ... 4 interleaved)");
   app.add_flag("--quick", quick,
                "36 objects, 320x180, 8 frames, 1 repeat; generates Spot's folders when no "
                "--object; exits 1 when a deterministic check fails");
@@ -340,15 +344,22 @@ int main(int argc, char** argv) {
     core::ImageRGBA8 reference;
     const bool strip_frame = std::find(strip_at.begin(), strip_at.end(), f) != strip_at.end();
     const bool error_frame = error_every > 0 && f % error_every == 0;
+    const bool dump_frame =
+        std::find(dump_frames.begin(), dump_frames.end(), f) != dump_frames.end();
     for (int c = 0; c < kTimed; ++c) {
       FrameRecord& record = records[c][f];
       record.selection = selectors[c].select(scene.path[f], cameras[f]);
-      const bool read_back = c < kConfigurations && (strip_frame || error_frame);
+      const bool read_back = c < kConfigurations && (strip_frame || error_frame || dump_frame);
       auto frame = drawFrame(c, f, {.read_back = read_back, .count_work = can_count});
       if (!frame) return fail(frame.error().message);
       record.work = frame->work;
       record.draws = frame->draws;
       if (frame->image.pixels.empty()) continue;
+      if (dump_frame) {
+        const std::string name = "frame-" + std::to_string(f) + "-" + std::to_string(c) + ".png";
+        if (auto ok = io::writePng(frame->image, (fs::path(out_dir) / name).string()); !ok)
+          return fail(ok.error().message);
+      }
       if (c == 0) reference = frame->image;
       if (error_frame) {
         record.error = frameSquaredError(frame->image, reference);

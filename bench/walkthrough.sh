@@ -7,8 +7,10 @@
 #
 # RUNS_DIR (default /work/runs) holds walk-NAME-{sep,mesh,shader,int}/ and their .log (the
 # generator's summary, where the table's generation times come from). The Dragon needs
-# scripts/fetch-bench-data.sh once. Generation uses fast settings (quadric mesh candidates, a small
-# GP): minutes per folder on llvmpipe, not the paper's hours.
+# scripts/fetch-bench-data.sh once. Generation uses `duolod generate`'s defaults (10 levels,
+# image-driven mesh candidates, the full GP search): about 25 minutes for all 16 folders on 2 cores
+# with llvmpipe, most of it the interleaved optimizer. WALK_FAST=1 uses the fast settings of
+# session 4 instead (quadric mesh candidates, 4 levels, a small GP) for a quick look.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 runs="${1:-/work/runs}"
@@ -19,9 +21,13 @@ bench="$root/build/bench/bench_walkthrough"
 assets="$root/../shared/assets"
 dragon=/tmp/duolod-data/cgal/data/meshes/ChineseDragon-10kv.off
 mkdir -p "$runs" "$out"
+settings=""
+if [ "${WALK_FAST:-0}" = 1 ]; then
+  settings="--mesh-mode quadric --levels 4 --shader-levels 2 --population 8 --generations 3 --candidates 100"
+fi
 
 generate() {  # NAME ASSET SHADER
-  local name=$1 asset=$2 shader=$3 kind extra folder
+  local name=$1 asset=$2 shader=$3 kind extra folder cache
   for kind in sep mesh shader int; do
     folder="$runs/walk-$name-$kind"
     [ -f "$folder/lod.json" ] && continue
@@ -32,10 +38,12 @@ generate() {  # NAME ASSET SHADER
       *) extra="" ;;
     esac
     echo "generating $folder"
+    # A cold Mesa shader cache per folder, so the generation times compare.
+    cache="$(mktemp -d)"
     # shellcheck disable=SC2086
-    "$duolod" generate "$asset" --shader "$shader" --mesh-mode quadric --levels 4 \
-      --shader-levels 2 --population 8 --generations 3 --candidates 100 --quiet --force \
-      $extra --out "$folder" > "$folder.log"
+    MESA_SHADER_CACHE_DIR="$cache" "$duolod" generate "$asset" --shader "$shader" $settings \
+      --quiet --force $extra --out "$folder" > "$folder.log"
+    rm -rf "$cache"
   done
 }
 
@@ -43,6 +51,7 @@ generate() {  # NAME ASSET SHADER
 generate dragon "$dragon" noise_phong
 generate spot "$assets/obj/spot/spot.obj" pbr
 generate avocado "$assets/gltf/Avocado/Avocado.gltf" blend
+generate bottle "$assets/gltf/WaterBottle/WaterBottle.gltf" pbr
 
 : > "$out/tables.md"
 run() {  # NAME OBJECT...
@@ -58,5 +67,7 @@ EXTRA=("$@")
 run dragon "$runs/walk-dragon:noise_phong"
 run spot "$runs/walk-spot:pbr"
 run avocado "$runs/walk-avocado:blend"
+run bottle "$runs/walk-bottle:pbr"
 run mix-dragon-spot "$runs/walk-dragon:noise_phong" "$runs/walk-spot:pbr"
+run mix-avocado-bottle-spot "$runs/walk-avocado:blend" "$runs/walk-bottle:pbr" "$runs/walk-spot:pbr"
 echo "tables: $out/tables.md"

@@ -8,6 +8,7 @@
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
 #include "duolod/shader.hpp"
+#include "mesh_test_meshes.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -377,6 +378,96 @@ TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
 
 namespace duolod {
 namespace {
+
+// A diffuse point-lit shader, and its "simplification" that only holds with the object at the
+// origin: normalize(light − position) reduced to normalize(light), what operation removal found on
+// the Avocado when every training sample had the object at the origin.
+constexpr const char* kLitVertex = R"(#version 450 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) out vec3 vWorldPosition;
+layout(location = 1) out vec3 vWorldNormal;
+void main() {
+  vec4 world = uModel * vec4(inPosition, 1.0);
+  vWorldPosition = world.xyz;
+  vWorldNormal = mat3(uNormalMatrix) * inNormal;
+  gl_Position = uProjection * (uView * world);
+})";
+std::string litFragment(bool origin_only) {
+  return std::string(R"(#version 450 core
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) in vec3 vWorldPosition;
+layout(location = 1) in vec3 vWorldNormal;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 toLight = )") +
+         (origin_only ? "normalize(uLightPosition.xyz);" : "normalize(uLightPosition.xyz - vWorldPosition);") +
+         R"(
+  outColor = vec4(vec3(max(dot(normalize(vWorldNormal), toLight), 0.0)), 1.0);
+})";
+}
+
+TEST_F(RendererTest, PlacementMovesTheWorldNotTheImageAndExposesOriginOnlyShaders) {
+  core::Asset asset;
+  asset.source_path = "icosphere";
+  asset.mesh = test::icosphere(3);
+  asset.mesh.normals = asset.mesh.positions;
+  asset.mesh.submeshes = {{0, static_cast<uint32_t>(asset.mesh.indices.size()), 0}};
+  asset.materials = {core::Material{}};
+  auto id = renderer_->uploadAsset(asset);
+  ASSERT_TRUE(id) << id.error().message;
+  auto lit = renderer_->compileProgram({kLitVertex, litFragment(false), "lit.vert", "lit.frag"});
+  ASSERT_TRUE(lit) << lit.error().message;
+  auto origin_only =
+      renderer_->compileProgram({kLitVertex, litFragment(true), "lit.vert", "origin_only.frag"});
+  ASSERT_TRUE(origin_only) << origin_only.error().message;
+
+  const core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
+  const float distance = 4.0f;
+  auto at_origin = render::domainSamples(sphere, distance, {.placement_scale = 0});
+  auto placed = render::domainSamples(sphere, distance);
+  ASSERT_EQ(placed.size(), at_origin.size());
+  for (size_t i = 0; i < placed.size(); ++i) {
+    EXPECT_EQ(at_origin[i].placement.x, 0.0f);
+    // 0.75–1.25 × 1.5 × the camera distance, and no two samples alike.
+    const float length = core::length(placed[i].placement);
+    EXPECT_GE(length, 0.75f * 1.5f * distance - 1e-3f) << i;
+    EXPECT_LE(length, 1.25f * 1.5f * distance + 1e-3f) << i;
+    if (i > 0) {
+      EXPECT_GT(core::length(placed[i].placement - placed[i - 1].placement), 0.1f) << i;
+    }
+    // The object-relative camera is the same.
+    EXPECT_EQ(placed[i].eye.x, at_origin[i].eye.x);
+  }
+
+  const render::RenderOptions options{.resolution = 48};
+  auto render = [&](render::Renderer::ProgramId program, const std::vector<render::Sample>& s) {
+    auto images = renderer_->render(*id, program, s, options);
+    EXPECT_TRUE(images) << images.error().message;
+    return std::move(*images);
+  };
+  const auto lit_origin = render(*lit, at_origin), lit_placed = render(*lit, placed);
+  const auto origin_only_origin = render(*origin_only, at_origin);
+  const auto origin_only_placed = render(*origin_only, placed);
+  // Moving object, camera and light together changes only float rounding...
+  const double placement_change = metric::imageError(lit_placed, lit_origin).epsilon;
+  // ...while the origin-only variant, nearly right at the origin, is far off once placed.
+  const double error_at_origin = metric::imageError(origin_only_origin, lit_origin).epsilon;
+  const double error_placed = metric::imageError(origin_only_placed, lit_placed).epsilon;
+  EXPECT_LT(placement_change, 0.01 * error_placed);
+  EXPECT_GT(error_placed, 3 * error_at_origin)
+      << "at the origin " << error_at_origin << ", placed " << error_placed;
+  std::printf("placement change %.4g; origin-only variant: %.4g at the origin, %.4g placed\n",
+              placement_change, error_at_origin, error_placed);
+  renderer_->releaseAsset(*id);
+}
 
 TEST(RendererDevices, ChoosesAnEglDeviceOrSaysHowManyExist) {
   // Mesa lists at least its software device; a GPU machine lists its GPUs too.

@@ -90,6 +90,7 @@ struct Mat4 {
   float& at(int row, int column) { return m[column * 4 + row]; }
   float at(int row, int column) const { return m[column * 4 + row]; }
   static Mat4 identity();
+  static Mat4 translation(Vec3 offset);
 };
 Mat4 operator*(const Mat4& a, const Mat4& b);
 Vec3 transformPoint(const Mat4& m, Vec3 p);   // w = 1, no perspective divide

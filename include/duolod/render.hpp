@@ -26,6 +26,9 @@ enum class ViewSet {
 
 struct DomainOptions {
   ViewSet views = ViewSet::kDodecahedron;
+  // Where the object stands in the world, as a multiple of the camera distance (see
+  // Sample::placement). 0 keeps every sample's object at the origin.
+  float placement_scale = 1.5f;
   // Cross arm length as a fraction of the camera distance: lights sit up to atan(0.5) ≈ 27° off
   // the view axis, so every light reaches what the camera sees.
   float light_cross_arm = 0.5f;
@@ -44,10 +47,16 @@ struct Display {
 struct Sample {
   int view_index = 0;
   int light_index = 0;
-  core::Vec3 eye;    // world space
-  core::Vec3 light;  // world space
-  core::Mat4 view;
+  core::Vec3 eye;    // relative to the object (its coordinates with the object at the origin)
+  core::Vec3 light;  // likewise
+  core::Mat4 view;   // likewise
   core::Mat4 projection;
+  // Where the object stands in the world for this sample. The shaders get the model matrix
+  // translate(placement) and the eye, light and view moved with it, so the image is the same as
+  // at the origin (up to float rounding), but a simplified shader that only works at the origin
+  // (e.g. normalize(light − position) reduced to normalize(light)) errs: engines draw objects
+  // anywhere. Everything on the CPU side (eye, light, view above) stays object-relative.
+  core::Vec3 placement{};
 };
 
 std::vector<core::Vec3> viewDirections(ViewSet views);

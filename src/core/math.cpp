@@ -11,6 +11,14 @@ Mat4 Mat4::identity() {
   return r;
 }
 
+Mat4 Mat4::translation(Vec3 offset) {
+  Mat4 r = identity();
+  r.m[12] = offset.x;
+  r.m[13] = offset.y;
+  r.m[14] = offset.z;
+  return r;
+}
+
 Mat4 operator*(const Mat4& a, const Mat4& b) {
   Mat4 r;
   for (int c = 0; c < 4; ++c)

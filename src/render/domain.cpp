@@ -14,6 +14,21 @@ using core::Vec3;
 constexpr float kPhi = 1.6180339887498949f;  // golden ratio
 constexpr float kPi = 3.14159265358979f;
 
+// Sample i of n's placement in the world (Sample::placement): directions spread over the sphere
+// by the golden-angle spiral, lengths between 0.75 and 1.25 × `length` by the golden ratio's
+// fractional multiples. Deterministic, and comparable to the camera distance, so that a shader
+// whose result depends on where the object stands (world position against camera or light)
+// changes visibly between samples.
+Vec3 placementOffset(size_t i, size_t n, float length) {
+  if (length <= 0 || n == 0) return {0, 0, 0};
+  const float z = 1.0f - 2.0f * (static_cast<float>(i) + 0.5f) / static_cast<float>(n);
+  const float ring = std::sqrt(std::max(0.0f, 1.0f - z * z));
+  const float angle = static_cast<float>(i) * 2.39996323f;  // golden angle, radians
+  const float fraction = static_cast<float>(i) * 0.61803398875f;
+  const float scale = 0.75f + 0.5f * (fraction - std::floor(fraction));
+  return Vec3{ring * std::cos(angle), z, ring * std::sin(angle)} * (length * scale);
+}
+
 // Keeps a camera outside the sphere it frames, where the framing angle is defined.
 float clampedDistance(const core::Sphere& bounds, float distance) {
   return std::max(distance, bounds.radius * 1.001f);
@@ -84,8 +99,10 @@ std::vector<Sample> domainSamples(const core::Sphere& bounds, float distance,
       for (float sign : {1.f, -1.f}) offsets.push_back(axis * (sign * arm));
     for (size_t l = 0; l < offsets.size(); ++l)
       samples.push_back({static_cast<int>(v), static_cast<int>(l), eye, eye + offsets[l], view,
-                         projection});
+                         projection, {}});
   }
+  for (size_t i = 0; i < samples.size(); ++i)
+    samples[i].placement = placementOffset(i, samples.size(), options.placement_scale * d);
   return samples;
 }
 
