@@ -379,39 +379,42 @@ TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
 namespace duolod {
 namespace {
 
-// A diffuse point-lit shader, and its "simplification" that only holds with the object at the
-// origin: normalize(light − position) reduced to normalize(light), what operation removal found on
-// the Avocado when every training sample had the object at the origin.
-constexpr const char* kLitVertex = R"(#version 450 core
-layout(location = 0) in vec3 inPosition;
-layout(location = 1) in vec3 inNormal;
+// A diffuse point-lit shader, and two "simplifications" of it that only hold for an object at
+// the origin as modelled, both found by operation removal when every training sample had the
+// identity model matrix: normalize(light − position) reduced to normalize(light) (Avocado's
+// separate LOD), and the normal matrix dropped from the normal's transform (its interleaved LOD).
+enum class LitVariant { kFull, kLightFromOrigin, kNoNormalMatrix };
+render::GlslSource litShader(LitVariant variant) {
+  const std::string frame = R"(
 layout(std140, binding = 0) uniform Frame {
   mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
   vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
 };
+)";
+  const std::string vertex = "#version 450 core\n" + frame + R"(
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
 layout(location = 0) out vec3 vWorldPosition;
 layout(location = 1) out vec3 vWorldNormal;
 void main() {
   vec4 world = uModel * vec4(inPosition, 1.0);
   vWorldPosition = world.xyz;
-  vWorldNormal = mat3(uNormalMatrix) * inNormal;
+  vWorldNormal = )" + std::string(variant == LitVariant::kNoNormalMatrix
+                                      ? "inNormal;"
+                                      : "mat3(uNormalMatrix) * inNormal;") + R"(
   gl_Position = uProjection * (uView * world);
 })";
-std::string litFragment(bool origin_only) {
-  return std::string(R"(#version 450 core
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
+  const std::string fragment = "#version 450 core\n" + frame + R"(
 layout(location = 0) in vec3 vWorldPosition;
 layout(location = 1) in vec3 vWorldNormal;
 layout(location = 0) out vec4 outColor;
 void main() {
-  vec3 toLight = )") +
-         (origin_only ? "normalize(uLightPosition.xyz);" : "normalize(uLightPosition.xyz - vWorldPosition);") +
-         R"(
+  vec3 toLight = )" + std::string(variant == LitVariant::kLightFromOrigin
+                                      ? "normalize(uLightPosition.xyz);"
+                                      : "normalize(uLightPosition.xyz - vWorldPosition);") + R"(
   outColor = vec4(vec3(max(dot(normalize(vWorldNormal), toLight), 0.0)), 1.0);
 })";
+  return {vertex, fragment, "lit.vert", "lit.frag"};
 }
 
 TEST_F(RendererTest, PlacementMovesTheWorldNotTheImageAndExposesOriginOnlyShaders) {
@@ -423,49 +426,50 @@ TEST_F(RendererTest, PlacementMovesTheWorldNotTheImageAndExposesOriginOnlyShader
   asset.materials = {core::Material{}};
   auto id = renderer_->uploadAsset(asset);
   ASSERT_TRUE(id) << id.error().message;
-  auto lit = renderer_->compileProgram({kLitVertex, litFragment(false), "lit.vert", "lit.frag"});
-  ASSERT_TRUE(lit) << lit.error().message;
-  auto origin_only =
-      renderer_->compileProgram({kLitVertex, litFragment(true), "lit.vert", "origin_only.frag"});
-  ASSERT_TRUE(origin_only) << origin_only.error().message;
 
   const core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
   const float distance = 4.0f;
-  auto at_origin = render::domainSamples(sphere, distance, {.placement_scale = 0});
+  auto as_modelled = render::domainSamples(sphere, distance, {.place_objects = false});
   auto placed = render::domainSamples(sphere, distance);
-  ASSERT_EQ(placed.size(), at_origin.size());
+  ASSERT_EQ(placed.size(), as_modelled.size());
   for (size_t i = 0; i < placed.size(); ++i) {
-    EXPECT_EQ(at_origin[i].placement.x, 0.0f);
-    // 0.75–1.25 × 1.5 × the camera distance, and no two samples alike.
-    const float length = core::length(placed[i].placement);
-    EXPECT_GE(length, 0.75f * 1.5f * distance - 1e-3f) << i;
-    EXPECT_LE(length, 1.25f * 1.5f * distance + 1e-3f) << i;
-    if (i > 0) {
-      EXPECT_GT(core::length(placed[i].placement - placed[i - 1].placement), 0.1f) << i;
-    }
+    EXPECT_EQ(as_modelled[i].placement.m, core::Mat4::identity().m);
+    // Scale 0.5–2, and the translation 0.75–1.25 × 1.5 × the camera distance × that scale.
+    const core::Mat4& pose = placed[i].placement;
+    const float scale = core::length(core::transformVector(pose, {1, 0, 0}));
+    EXPECT_GE(scale, 0.5f - 1e-4f) << i;
+    EXPECT_LE(scale, 2.0f + 1e-4f) << i;
+    EXPECT_NEAR(core::length(core::transformVector(pose, {0, 0, 1})), scale, 1e-4f) << i;
+    const float offset = core::length(core::transformPoint(pose, {0, 0, 0})) / scale;
+    EXPECT_GE(offset, 0.75f * 1.5f * distance - 1e-3f) << i;
+    EXPECT_LE(offset, 1.25f * 1.5f * distance + 1e-3f) << i;
     // The object-relative camera is the same.
-    EXPECT_EQ(placed[i].eye.x, at_origin[i].eye.x);
+    EXPECT_EQ(placed[i].eye.x, as_modelled[i].eye.x);
   }
 
   const render::RenderOptions options{.resolution = 48};
-  auto render = [&](render::Renderer::ProgramId program, const std::vector<render::Sample>& s) {
-    auto images = renderer_->render(*id, program, s, options);
+  auto render = [&](LitVariant variant, const std::vector<render::Sample>& samples) {
+    auto program = renderer_->compileProgram(litShader(variant));
+    EXPECT_TRUE(program) << program.error().message;
+    auto images = renderer_->render(*id, *program, samples, options);
     EXPECT_TRUE(images) << images.error().message;
+    renderer_->releaseProgram(*program);
     return std::move(*images);
   };
-  const auto lit_origin = render(*lit, at_origin), lit_placed = render(*lit, placed);
-  const auto origin_only_origin = render(*origin_only, at_origin);
-  const auto origin_only_placed = render(*origin_only, placed);
-  // Moving object, camera and light together changes only float rounding...
-  const double placement_change = metric::imageError(lit_placed, lit_origin).epsilon;
-  // ...while the origin-only variant, nearly right at the origin, is far off once placed.
-  const double error_at_origin = metric::imageError(origin_only_origin, lit_origin).epsilon;
-  const double error_placed = metric::imageError(origin_only_placed, lit_placed).epsilon;
-  EXPECT_LT(placement_change, 0.01 * error_placed);
-  EXPECT_GT(error_placed, 3 * error_at_origin)
-      << "at the origin " << error_at_origin << ", placed " << error_placed;
-  std::printf("placement change %.4g; origin-only variant: %.4g at the origin, %.4g placed\n",
-              placement_change, error_at_origin, error_placed);
+  const auto full_as_modelled = render(LitVariant::kFull, as_modelled);
+  const auto full_placed = render(LitVariant::kFull, placed);
+  // Moving, turning and scaling object, camera and light together changes only float rounding...
+  const double placement_change = metric::imageError(full_placed, full_as_modelled).epsilon;
+  // ...while each origin-only variant, right or nearly right as modelled, is far off once placed.
+  for (LitVariant variant : {LitVariant::kLightFromOrigin, LitVariant::kNoNormalMatrix}) {
+    const double as_modelled_error =
+        metric::imageError(render(variant, as_modelled), full_as_modelled).epsilon;
+    const double placed_error = metric::imageError(render(variant, placed), full_placed).epsilon;
+    std::printf("variant %d: %.4g as modelled, %.4g placed; the placement alone changes %.4g\n",
+                static_cast<int>(variant), as_modelled_error, placed_error, placement_change);
+    EXPECT_LT(placement_change, 0.01 * placed_error);
+    EXPECT_GT(placed_error, 3 * as_modelled_error + 10);
+  }
   renderer_->releaseAsset(*id);
 }
 

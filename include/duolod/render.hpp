@@ -26,9 +26,11 @@ enum class ViewSet {
 
 struct DomainOptions {
   ViewSet views = ViewSet::kDodecahedron;
-  // Where the object stands in the world, as a multiple of the camera distance (see
-  // Sample::placement). 0 keeps every sample's object at the origin.
-  float placement_scale = 1.5f;
+  // Each sample's object pose in the world (Sample::placement): turned about a varying axis,
+  // scaled by 0.5–2, and moved 0.75–1.25 × this many camera distances from the origin. false
+  // keeps every sample's object at the origin as it is (the identity).
+  bool place_objects = true;
+  float placement_distance = 1.5f;
   // Cross arm length as a fraction of the camera distance: lights sit up to atan(0.5) ≈ 27° off
   // the view axis, so every light reaches what the camera sees.
   float light_cross_arm = 0.5f;
@@ -51,12 +53,14 @@ struct Sample {
   core::Vec3 light;  // likewise
   core::Mat4 view;   // likewise
   core::Mat4 projection;
-  // Where the object stands in the world for this sample. The shaders get the model matrix
-  // translate(placement) and the eye, light and view moved with it, so the image is the same as
-  // at the origin (up to float rounding), but a simplified shader that only works at the origin
-  // (e.g. normalize(light − position) reduced to normalize(light)) errs: engines draw objects
-  // anywhere. Everything on the CPU side (eye, light, view above) stays object-relative.
-  core::Vec3 placement{};
+  // The object's pose in the world for this sample (object -> world: a rotation, a uniform scale
+  // and a translation). The shaders get it as the model matrix, with the eye, light and view
+  // moved along, so the image is the same as with the identity (up to float rounding), but a
+  // simplified shader that only holds for an object at the origin as modelled errs: e.g.
+  // normalize(light − position) reduced to normalize(light), or the normal matrix dropped from
+  // the normal's transform. Engines draw objects anywhere, turned and scaled. Everything on the
+  // CPU side (eye, light, view above) stays relative to the object as modelled.
+  core::Mat4 placement = core::Mat4::identity();
 };
 
 std::vector<core::Vec3> viewDirections(ViewSet views);

@@ -14,19 +14,38 @@ using core::Vec3;
 constexpr float kPhi = 1.6180339887498949f;  // golden ratio
 constexpr float kPi = 3.14159265358979f;
 
-// Sample i of n's placement in the world (Sample::placement): directions spread over the sphere
-// by the golden-angle spiral, lengths between 0.75 and 1.25 × `length` by the golden ratio's
-// fractional multiples. Deterministic, and comparable to the camera distance, so that a shader
-// whose result depends on where the object stands (world position against camera or light)
-// changes visibly between samples.
-Vec3 placementOffset(size_t i, size_t n, float length) {
-  if (length <= 0 || n == 0) return {0, 0, 0};
-  const float z = 1.0f - 2.0f * (static_cast<float>(i) + 0.5f) / static_cast<float>(n);
+float fractionalPart(float x) { return x - std::floor(x); }
+
+// Point i of n on the unit sphere by the golden-angle spiral (evenly spread, deterministic).
+Vec3 spiralDirection(size_t i, size_t n) {
+  const float z = 1.0f - 2.0f * (static_cast<float>(i % n) + 0.5f) / static_cast<float>(n);
   const float ring = std::sqrt(std::max(0.0f, 1.0f - z * z));
   const float angle = static_cast<float>(i) * 2.39996323f;  // golden angle, radians
-  const float fraction = static_cast<float>(i) * 0.61803398875f;
-  const float scale = 0.75f + 0.5f * (fraction - std::floor(fraction));
-  return Vec3{ring * std::cos(angle), z, ring * std::sin(angle)} * (length * scale);
+  return {ring * std::cos(angle), z, ring * std::sin(angle)};
+}
+
+// Sample i of n's pose in the world (Sample::placement): a turn about a spiral axis by an angle,
+// a uniform scale in [0.5, 2] and a translation 0.75–1.25 × `distance` × scale along another
+// spiral direction, each spread by a different irrational step so that they vary independently.
+// The translation is comparable to the camera distance (the camera moves with the object, at
+// scale × its distance), so a shader whose result depends on the pose changes visibly.
+core::Mat4 placementPose(size_t i, size_t n, float distance) {
+  const float index = static_cast<float>(i);
+  // Rodrigues' rotation matrix about a unit axis.
+  const Vec3 axis = spiralDirection(i * 7 + 3, n);
+  const float angle = 2.0f * kPi * fractionalPart(index * 0.7548776662f);
+  const float c = std::cos(angle), s = std::sin(angle), t = 1 - c;
+  const float scale = std::exp2(2.0f * fractionalPart(index * 0.5698402910f) - 1.0f);
+  const Vec3 offset = spiralDirection(i, n) *
+                      (distance * scale * (0.75f + 0.5f * fractionalPart(index * 0.6180339887f)));
+  core::Mat4 pose = core::Mat4::translation(offset);
+  const float rotation[3][3] = {
+      {t * axis.x * axis.x + c, t * axis.x * axis.y - s * axis.z, t * axis.x * axis.z + s * axis.y},
+      {t * axis.x * axis.y + s * axis.z, t * axis.y * axis.y + c, t * axis.y * axis.z - s * axis.x},
+      {t * axis.x * axis.z - s * axis.y, t * axis.y * axis.z + s * axis.x, t * axis.z * axis.z + c}};
+  for (int row = 0; row < 3; ++row)
+    for (int column = 0; column < 3; ++column) pose.at(row, column) = scale * rotation[row][column];
+  return pose;
 }
 
 // Keeps a camera outside the sphere it frames, where the framing angle is defined.
@@ -99,10 +118,11 @@ std::vector<Sample> domainSamples(const core::Sphere& bounds, float distance,
       for (float sign : {1.f, -1.f}) offsets.push_back(axis * (sign * arm));
     for (size_t l = 0; l < offsets.size(); ++l)
       samples.push_back({static_cast<int>(v), static_cast<int>(l), eye, eye + offsets[l], view,
-                         projection, {}});
+                         projection, core::Mat4::identity()});
   }
-  for (size_t i = 0; i < samples.size(); ++i)
-    samples[i].placement = placementOffset(i, samples.size(), options.placement_scale * d);
+  if (options.place_objects)
+    for (size_t i = 0; i < samples.size(); ++i)
+      samples[i].placement = placementPose(i, samples.size(), options.placement_distance * d);
   return samples;
 }
 

@@ -241,15 +241,14 @@ struct ChunkDrawer {
 
   void uploadFrames(std::span<const Sample> samples, GLsizeiptr stride) {
     std::vector<uint8_t> bytes(samples.size() * stride);
-    // A translation's normal matrix is the identity.
-    const core::Mat4 normal_matrix = core::Mat4::identity();
     for (size_t i = 0; i < samples.size(); ++i) {
       const Sample& sample = samples[i];
-      const core::Vec3 offset = sample.placement;
-      const core::Mat4 model = core::Mat4::translation(offset);
-      const core::Mat4 view = sample.view * core::Mat4::translation(-offset);
+      const core::Mat4& model = sample.placement;
+      const core::Mat4 normal_matrix = core::transpose(core::inverse(model));
+      const core::Mat4 view = sample.view * core::inverse(model);
       FrameBlock block = makeFrameBlock(s, model, normal_matrix, view, sample.projection,
-                                        sample.eye + offset, sample.light + offset, asset.bounds);
+                                        core::transformPoint(model, sample.eye),
+                                        core::transformPoint(model, sample.light), asset.bounds);
       std::memcpy(bytes.data() + i * stride, &block, sizeof block);
     }
     uploadFrameBytes(s, bytes);
