@@ -175,6 +175,7 @@ core::Result<std::string> generateQuickFolders(const fs::path& directory) {
 struct FrameRecord {
   runtime::FrameSelector::Frame selection;
   render::WorkCounts work;
+  std::vector<uint64_t> level_fragments;  // fragment invocations per level (ground excluded)
   int draws = 0;
   double error = -1, bound = -1;  // -1: not measured at this frame
   std::vector<double> seconds;    // one per timed repeat
@@ -350,9 +351,16 @@ int main(int argc, char** argv) {
       FrameRecord& record = records[c][f];
       record.selection = selectors[c].select(scene.path[f], cameras[f]);
       const bool read_back = c < kConfigurations && (strip_frame || error_frame || dump_frame);
-      auto frame = drawFrame(c, f, {.read_back = read_back, .count_work = can_count});
+      auto frame = drawFrame(
+          c, f, {.read_back = read_back, .count_work = can_count, .count_work_per_batch = can_count});
       if (!frame) return fail(frame.error().message);
       record.work = frame->work;
+      const std::vector<int>& batch_levels = record.selection.batch_levels;
+      for (size_t b = 0; b < frame->batch_work.size() && b < batch_levels.size(); ++b) {
+        const size_t level = static_cast<size_t>(batch_levels[b]);
+        if (record.level_fragments.size() <= level) record.level_fragments.resize(level + 1, 0);
+        record.level_fragments[level] += frame->batch_work[b].fragment_invocations;
+      }
       record.draws = frame->draws;
       if (frame->image.pixels.empty()) continue;
       if (dump_frame) {
@@ -400,6 +408,7 @@ int main(int argc, char** argv) {
     double vertices = 0, fragments = 0, triangles = 0, draws = 0;  // per frame
     double error_ratio_max = 0, error_ratio_median = 0;
     std::vector<long> levels;  // instance-frames per level
+    std::vector<double> level_fragments;  // object fragment invocations per level, summed
   };
   std::vector<Summary> summaries(kTimed);
   for (int c = 0; c < kTimed; ++c) {
@@ -415,6 +424,10 @@ int main(int argc, char** argv) {
       const auto& histogram = record.selection.level_histogram;
       if (summary.levels.size() < histogram.size()) summary.levels.resize(histogram.size(), 0);
       for (size_t k = 0; k < histogram.size(); ++k) summary.levels[k] += histogram[k];
+      if (summary.level_fragments.size() < record.level_fragments.size())
+        summary.level_fragments.resize(record.level_fragments.size(), 0);
+      for (size_t k = 0; k < record.level_fragments.size(); ++k)
+        summary.level_fragments[k] += double(record.level_fragments[k]);
     }
     summary.ms = percentiles(frame_ms);
     if (!ratios.empty()) {
@@ -439,21 +452,31 @@ int main(int argc, char** argv) {
   md << line;
   md << "| configuration | frame ms | speedup | p10–p90 ms | vertex inv./frame | fragment "
         "inv./frame | triangles/frame | draws/frame | error/bound median (max) | instance-frames "
-        "per level |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+        "per level | object fragments per level |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
   for (int c = 0; c < kTimed; ++c) {
     const Summary& s = summaries[c];
     std::string levels;
     for (size_t k = 0; k < s.levels.size(); ++k)
       levels += (k ? " / " : "") + std::to_string(s.levels[k]);
+    // Where the shading goes: each level's share of the objects' fragment invocations.
+    double object_fragments = 0;
+    for (double count : s.level_fragments) object_fragments += count;
+    std::string fragment_shares;
+    for (size_t k = 0; k < s.level_fragments.size(); ++k) {
+      char share[16];
+      std::snprintf(share, sizeof share, "%.0f%%",
+                    object_fragments > 0 ? 100 * s.level_fragments[k] / object_fragments : 0.0);
+      fragment_shares += (k ? " / " : "") + std::string(share);
+    }
     std::snprintf(line, sizeof line,
-                  "| %s | %.2f | %.2fx | %.2f–%.2f | %.0f | %.0f | %.0f | %.0f | %s | %s |\n",
+                  "| %s | %.2f | %.2fx | %.2f–%.2f | %.0f | %.0f | %.0f | %.0f | %s | %s | %s |\n",
                   kConfigurationNames[c], s.ms.mean, summaries[0].ms.mean / s.ms.mean, s.ms.p10,
                   s.ms.p90, s.vertices, s.fragments, s.triangles, s.draws,
                   c == 0 || c == kConfigurations ? "—"
                          : (std::to_string(s.error_ratio_median).substr(0, 5) + " (" +
                             std::to_string(s.error_ratio_max).substr(0, 5) + ")")
                                .c_str(),
-                  levels.c_str());
+                  levels.c_str(), fragment_shares.c_str());
     md << line;
   }
   md << "\nLOD generation time (s, from FOLDER.log):";

@@ -72,6 +72,20 @@ TEST(Walkthrough, SceneFrameDrawsEachInstanceWhereItsModelPutsIt) {
   EXPECT_EQ(pixel(32, 32), (std::array<int, 4>{0, 0, 0, 0}));      // nothing at the centre
   if (renderer->canCountWork()) {
     EXPECT_EQ(frame->work.primitives_submitted, 6u);
+    // Per batch: the two red squares and the green one, each square 2×2 units = 32×32 pixels at
+    // the same block alignment (llvmpipe counts fragment invocations per block, not per pixel);
+    // the batches add up to the whole frame's counts.
+    auto per_batch = renderer->renderScene(
+        batches, camera, {.count_work = true, .count_work_per_batch = true});
+    ASSERT_TRUE(per_batch) << per_batch.error().message;
+    ASSERT_EQ(per_batch->batch_work.size(), 2u);
+    EXPECT_EQ(per_batch->batch_work[0].primitives_submitted, 4u);
+    EXPECT_EQ(per_batch->batch_work[1].primitives_submitted, 2u);
+    EXPECT_EQ(per_batch->batch_work[0].fragment_invocations,
+              2 * per_batch->batch_work[1].fragment_invocations);
+    EXPECT_GT(per_batch->batch_work[1].fragment_invocations, 0u);
+    EXPECT_EQ(per_batch->work.fragment_invocations, frame->work.fragment_invocations);
+    EXPECT_EQ(per_batch->work.primitives_submitted, 6u);
   }
 
   // Bad ids are errors, not crashes.

@@ -213,11 +213,15 @@ struct InstanceBatch {
 struct SceneOptions {
   bool read_back = false;   // fill SceneFrame::image
   bool count_work = false;  // fill SceneFrame::work (ARB_pipeline_statistics_query)
+  // Also fill SceneFrame::batch_work (needs count_work). Waits for the counters after every
+  // batch, so frames counted this way are not for timing.
+  bool count_work_per_batch = false;
 };
 struct SceneFrame {
   double seconds = 0;  // wall clock from the clear to glFinish (excludes the readback)
   int draws = 0;
   WorkCounts work;
+  std::vector<WorkCounts> batch_work;  // per batch, with SceneOptions::count_work_per_batch
   core::ImageRGBA8 image;  // width x height when read back, top row first
 };
 

@@ -61,10 +61,14 @@ core::Result<SceneFrame> Renderer::renderScene(std::span<const InstanceBatch> ba
   glClearColor(camera.clear_color.x, camera.clear_color.y, camera.clear_color.z, 0);
   glClear(GL_COLOR_BUFFER_BIT);
   glClearColor(0, 0, 0, 0);
-  if (options.count_work) s.work_queries.begin();
+  const bool per_batch = options.count_work && options.count_work_per_batch;
+  if (per_batch) frame.batch_work.resize(batches.size());
+  if (options.count_work && !per_batch) s.work_queries.begin();
   slot = 0;
-  for (const InstanceBatch& batch : batches) {
+  for (size_t b = 0; b < batches.size(); ++b) {
+    const InstanceBatch& batch = batches[b];
     if (batch.models.empty()) continue;
+    if (per_batch) s.work_queries.begin();
     const GpuAsset& asset = *s.assets[batch.asset];
     ChunkDrawer drawer{s, asset, s.programs[batch.program]};
     drawer.bindInputs();
@@ -81,11 +85,25 @@ core::Result<SceneFrame> Renderer::renderScene(std::span<const InstanceBatch> ba
         ++frame.draws;
       }
     }
+    if (per_batch) {
+      s.work_queries.end();
+      s.work_queries.addResults(frame.batch_work[b]);
+    }
   }
-  if (options.count_work) s.work_queries.end();
+  if (options.count_work && !per_batch) s.work_queries.end();
   glFinish();
   frame.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (options.count_work) s.work_queries.addResults(frame.work);
+  if (per_batch) {
+    for (const WorkCounts& work : frame.batch_work) {
+      frame.work.vertex_invocations += work.vertex_invocations;
+      frame.work.fragment_invocations += work.fragment_invocations;
+      frame.work.primitives_submitted += work.primitives_submitted;
+      frame.work.clipping_input_primitives += work.clipping_input_primitives;
+      frame.work.clipping_output_primitives += work.clipping_output_primitives;
+    }
+  } else if (options.count_work) {
+    s.work_queries.addResults(frame.work);
+  }
 
   if (options.read_back) {
     std::vector<uint8_t> rows(size_t(camera.width) * camera.height * 4);

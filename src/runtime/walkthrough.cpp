@@ -350,6 +350,7 @@ FrameSelector::Frame FrameSelector::select(const CameraPose& pose,
     const Pick& pick = picks[p];
     if (p == 0 || pick.level != picks[p - 1].level || pick.kind != picks[p - 1].kind) {
       const KindLevels& kind = configuration_.kinds[pick.kind];
+      frame.batch_levels.push_back(pick.level);
       frame.batches.push_back({.asset = kind.assets[pick.level],
                                .program = kind.programs[pick.level],
                                .models = {}});

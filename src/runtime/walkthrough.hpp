@@ -114,6 +114,7 @@ class FrameSelector {
                 SelectorOptions options = {});
   struct Frame {
     std::vector<render::InstanceBatch> batches;  // by (level, kind), finest first, front to back
+    std::vector<int> batch_levels;               // each batch's level
     std::vector<int> level_histogram;            // visible instances per level
     int visible = 0;
     // Σ over visible instances of e_a(d)·(projected bounding-disk area in pixels): the bound of
