@@ -83,6 +83,36 @@ void main() {
 }
 )";
 
+// The bound pass: every object pixel gets e_a(d) of eq. (4) at its object's distance, so the
+// frame's bound Σ e_a(d)·pixels is exact per pixel (nearest surface wins, as in the image). The
+// distance is the runtime's: eye to the bounding-sphere centre, in asset units on the display the
+// LOD was made for. e_a / uScale.y is written as 16 bits, high byte in red, low byte in green.
+constexpr const char* kBoundVertex = R"(#version 450 core
+layout(location = 0) in vec3 inPosition;
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+void main() { gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0))); }
+)";
+constexpr const char* kBoundFragment = R"(#version 450 core
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) uniform vec4 uBound;  // d_near, d_far, Q, e_max
+layout(location = 1) uniform vec4 uScale;   // display factor, 1 / the encoding's full scale
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 centre = (uModel * vec4(uObjectInfo.xyz, 1.0)).xyz;
+  float distance = length(uCameraPosition.xyz - centre) / length(uModel[0].xyz) * uScale.x;
+  float t = clamp((distance - uBound.x) / max(uBound.y - uBound.x, 1e-9), 0.0, 1.0);
+  float value = clamp(pow(t, uBound.z) * uBound.w * uScale.y, 0.0, 1.0) * 65535.0;
+  float high = floor(value / 256.0);
+  outColor = vec4(high / 255.0, (value - high * 256.0) / 255.0, 0.0, 1.0);
+}
+)";
+
 struct ObjectSpec {
   std::string prefix, shader, asset;  // asset empty: lod.json's asset.source
 };
@@ -110,20 +140,45 @@ Percentiles percentiles(std::vector<double> values) {
   return p;
 }
 
-// Σ over pixels of |rgb_a − rgb_b|² (RGB in [0, 1]): eq. (6) for one frame.
-double frameSquaredError(const core::ImageRGBA8& a, const core::ImageRGBA8& b) {
+// The anti-aliased frame f̄ of eq. (1): `big` (factor × the display on each side) box-filtered
+// to the display, RGBA in [0, 1] (alpha: object coverage; the ground writes 0).
+std::vector<float> boxFiltered(const core::ImageRGBA8& big, int factor) {
+  const int w = big.width / factor, h = big.height / factor;
+  std::vector<float> rgba(size_t(w) * h * 4, 0.0f);
+  const float weight = 1.0f / (255.0f * factor * factor);
+  for (int y = 0; y < big.height; ++y)
+    for (int x = 0; x < big.width; ++x) {
+      const uint8_t* p = &big.pixels[(size_t(y) * big.width + x) * 4];
+      float* out = &rgba[(size_t(y / factor) * w + x / factor) * 4];
+      for (int c = 0; c < 4; ++c) out[c] += p[c] * weight;
+    }
+  return rgba;
+}
+
+// Σ over the objects' pixels of |rgb − rgb_reference|² (RGB in [0, 1]): eq. (6) for one frame,
+// against the anti-aliased frame as the paper's bound is (§3.3: errors are measured against f̄).
+// Pixels where neither image has an object are left out: there only the ground's own aliasing
+// differs, which no LOD changes and the objects' bound does not cover.
+double frameSquaredError(const core::ImageRGBA8& image, const std::vector<float>& reference) {
   double sum = 0;
-  for (size_t i = 0; i < a.pixels.size(); i += 4)
+  for (size_t i = 0; i < image.pixels.size(); i += 4) {
+    if (image.pixels[i + 3] == 0 && reference[i + 3] == 0) continue;
     for (int c = 0; c < 3; ++c) {
-      double d = (a.pixels[i + c] - b.pixels[i + c]) / 255.0;
+      double d = image.pixels[i + c] / 255.0 - reference[i + c];
       sum += d * d;
     }
+  }
   return sum;
 }
-double coveredPixels(const core::ImageRGBA8& image) {
+
+// Σ over pixels of the bound pass's e_a (decoded from 16 bits), divided by factor² when the pass
+// was rendered factor × larger: fractional coverage at the silhouettes, as f̄ has.
+double boundSum(const core::ImageRGBA8& image, double full_scale, int factor) {
   double sum = 0;
-  for (size_t i = 3; i < image.pixels.size(); i += 4) sum += image.pixels[i] / 255.0;
-  return sum;
+  for (size_t i = 0; i < image.pixels.size(); i += 4)
+    if (image.pixels[i + 3] > 0)
+      sum += (image.pixels[i] * 256.0 + image.pixels[i + 1]) / 65535.0 * full_scale;
+  return sum / (double(factor) * factor);
 }
 
 // Box-filters `image` down by `factor` into the strip at (x0, y0).
@@ -189,7 +244,7 @@ int main(int argc, char** argv) {
   std::string out_dir = "out/walkthrough", scene_name;
   runtime::WalkSceneOptions scene_options;
   int width = 1280, height = 720, repeats = 3, strip_frames = 3, strip_reduce = 4,
-      error_every = 1;
+      error_every = 1, reference_supersample = 4;
   float fov_y_deg = 45;
   bool quick = false;
   std::vector<int> dump_frames;
@@ -211,6 +266,10 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "timed passes over the path per configuration")
       ->capture_default_str();
   app.add_option("--error-every", error_every, "image error at every Nth frame (0: none)")
+      ->capture_default_str();
+  app.add_option("--reference-supersample", reference_supersample,
+                 "the image error's reference: no LOD rendered K×K larger and box-filtered (the "
+                 "anti-aliased f̄ the bound is defined against); 1 = the plain no-LOD frame")
       ->capture_default_str();
   app.add_option("--strip-frames", strip_frames)->capture_default_str();
   app.add_option("--strip-reduce", strip_reduce, "strip images are 1/N of the display")
@@ -314,6 +373,28 @@ int main(int argc, char** argv) {
                                            .program = *ground_program,
                                            .models = {core::Mat4::identity()}};
 
+  // The bound pass's programs, one per kind (its eq. (4) configuration and display factor).
+  double bound_full_scale = 0;
+  for (const runtime::KindLevels& kind : configurations[0].kinds)
+    bound_full_scale = std::max(bound_full_scale, double(kind.bound.e_max));
+  std::vector<render::Renderer::ProgramId> bound_programs;
+  for (const runtime::KindLevels& kind : configurations[0].kinds) {
+    auto program = renderer.compileProgram(
+        render::GlslSource{kBoundVertex, kBoundFragment, "bound.vert", "bound.frag"});
+    if (!program) return fail(program.error().message);
+    const std::vector<render::UniformValue> uniforms = {
+        {.location = 0,
+         .components = 4,
+         .value = {kind.bound.d_near, kind.bound.d_far, kind.bound.q, kind.bound.e_max}},
+        {.location = 1,
+         .components = 4,
+         .value = {float(kind.display_factor), float(1.0 / std::max(bound_full_scale, 1e-9)), 0,
+                   0}}};
+    if (auto set = renderer.setProgramUniforms(*program, uniforms); !set)
+      return fail(set.error().message);
+    bound_programs.push_back(*program);
+  }
+
   const int frames = static_cast<int>(scene.path.size());
   std::vector<render::SceneCamera> cameras;
   for (const runtime::CameraPose& pose : scene.path)
@@ -341,15 +422,37 @@ int main(int argc, char** argv) {
     batches.push_back(ground_batch);
     return renderer.renderScene(batches, cameras[f], options);
   };
+  const int supersample = std::max(1, reference_supersample);
   for (int f = 0; f < frames; ++f) {
-    core::ImageRGBA8 reference;
     const bool strip_frame = std::find(strip_at.begin(), strip_at.end(), f) != strip_at.end();
     const bool error_frame = error_every > 0 && f % error_every == 0;
     const bool dump_frame =
         std::find(dump_frames.begin(), dump_frames.end(), f) != dump_frames.end();
+    for (int c = 0; c < kTimed; ++c)
+      records[c][f].selection = selectors[c].select(scene.path[f], cameras[f]);
+    // The anti-aliased no-LOD frame: the same camera on a display `supersample` times larger.
+    std::vector<float> reference;
+    double frame_bound = 0;
+    if (error_frame) {
+      render::SceneCamera big = cameras[f];
+      big.width *= supersample;
+      big.height *= supersample;
+      const runtime::FrameSelector::Frame& no_lod = records[0][f].selection;
+      std::vector<render::InstanceBatch> batches = no_lod.batches;
+      batches.push_back(ground_batch);
+      auto frame = renderer.renderScene(batches, big, {.read_back = true});
+      if (!frame) return fail("the supersampled reference: " + frame.error().message);
+      reference = boxFiltered(frame->image, supersample);
+      // eq. (3) summed over the frame: Σ over the objects' pixels of e_a(d) at their distance.
+      batches.pop_back();
+      for (size_t b = 0; b < batches.size(); ++b)
+        batches[b].program = bound_programs[no_lod.batch_kinds[b]];
+      auto bound_frame = renderer.renderScene(batches, big, {.read_back = true});
+      if (!bound_frame) return fail("the bound pass: " + bound_frame.error().message);
+      frame_bound = boundSum(bound_frame->image, bound_full_scale, supersample);
+    }
     for (int c = 0; c < kTimed; ++c) {
       FrameRecord& record = records[c][f];
-      record.selection = selectors[c].select(scene.path[f], cameras[f]);
       const bool read_back = c < kConfigurations && (strip_frame || error_frame || dump_frame);
       auto frame = drawFrame(
           c, f, {.read_back = read_back, .count_work = can_count, .count_work_per_batch = can_count});
@@ -368,15 +471,9 @@ int main(int argc, char** argv) {
         if (auto ok = io::writePng(frame->image, (fs::path(out_dir) / name).string()); !ok)
           return fail(ok.error().message);
       }
-      if (c == 0) reference = frame->image;
       if (error_frame) {
         record.error = frameSquaredError(frame->image, reference);
-        const auto& s = record.selection;
-        // eq. (3) summed over the frame: each visible object's e_a(d) weighted by its share of
-        // the covered pixels (its bounding-disk area, normalised to the covered pixel count).
-        record.bound = s.disk_area_sum > 0
-                           ? s.bound_disk_sum / s.disk_area_sum * coveredPixels(reference)
-                           : 0;
+        record.bound = frame_bound;
       }
       if (strip_frame) {
         const int row = int(std::find(strip_at.begin(), strip_at.end(), f) - strip_at.begin());
@@ -407,14 +504,20 @@ int main(int argc, char** argv) {
     Percentiles ms;
     double vertices = 0, fragments = 0, triangles = 0, draws = 0;  // per frame
     double error_ratio_max = 0, error_ratio_median = 0;
+    // (error − no LOD's error) / bound: what the LOD adds to the original's own aliasing, which
+    // level 0 (the original, exempt from the bound: e_a(d_near) = 0) keeps in every configuration.
+    double added_ratio_max = 0, added_ratio_median = 0;
     std::vector<long> levels;  // instance-frames per level
     std::vector<double> level_fragments;  // object fragment invocations per level, summed
   };
   std::vector<Summary> summaries(kTimed);
   for (int c = 0; c < kTimed; ++c) {
     Summary& summary = summaries[c];
-    std::vector<double> frame_ms, ratios;
-    for (const FrameRecord& record : records[c]) {
+    std::vector<double> frame_ms, ratios, added;
+    for (int f = 0; f < frames; ++f) {
+      const FrameRecord& record = records[c][f];
+      if (record.error >= 0 && record.bound > 0)
+        added.push_back((record.error - records[0][f].error) / record.bound);
       frame_ms.push_back(core::median(record.seconds) * 1e3);
       summary.vertices += double(record.work.vertex_invocations) / frames;
       summary.fragments += double(record.work.fragment_invocations) / frames;
@@ -433,6 +536,8 @@ int main(int argc, char** argv) {
     if (!ratios.empty()) {
       summary.error_ratio_max = *std::max_element(ratios.begin(), ratios.end());
       summary.error_ratio_median = core::median(ratios);
+      summary.added_ratio_max = *std::max_element(added.begin(), added.end());
+      summary.added_ratio_median = core::median(added);
     }
   }
   const Percentiles fixed_ms = [&] {
@@ -441,18 +546,24 @@ int main(int argc, char** argv) {
   }();
 
   std::ostringstream md;
-  char line[512];
+  char line[1024];
   std::snprintf(line, sizeof line,
                 "### %s — %zu objects, %d frames, %dx%d, %d timed repeats\n\n"
                 "Frame time: mean over the path of each frame's median over repeats (ms), the "
                 "speedup of that mean against no LOD, and the 10th–90th percentile over frames. "
-                "Ground only (clear + ground): %.2f ms median.\n\n",
+                "Ground only (clear + ground): %.2f ms median. Error/bound: eq. (6) over the frame "
+                "against the no-LOD frame rendered %d×%d larger and box-filtered (f̄, what the "
+                "bound is defined against; no LOD's own row is its aliasing), over the frame's "
+                "bound Σ e_a(d) over the objects' pixels (each at its object's distance); added: "
+                "(error − no LOD's error) / bound, what the LOD adds to the original's own "
+                "aliasing (level 0 is the original in every configuration).\n\n",
                 scene_name.c_str(), scene.instances.size(), frames, width, height, repeats,
-                fixed_ms.median);
+                fixed_ms.median, supersample, supersample);
   md << line;
   md << "| configuration | frame ms | speedup | p10–p90 ms | vertex inv./frame | fragment "
-        "inv./frame | triangles/frame | draws/frame | error/bound median (max) | instance-frames "
-        "per level | object fragments per level |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+        "inv./frame | triangles/frame | draws/frame | error/bound median (max) | added/bound "
+        "median (max) | instance-frames per level | object fragments per level |\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
   for (int c = 0; c < kTimed; ++c) {
     const Summary& s = summaries[c];
     std::string levels;
@@ -469,13 +580,18 @@ int main(int argc, char** argv) {
       fragment_shares += (k ? " / " : "") + std::string(share);
     }
     std::snprintf(line, sizeof line,
-                  "| %s | %.2f | %.2fx | %.2f–%.2f | %.0f | %.0f | %.0f | %.0f | %s | %s | %s |\n",
+                  "| %s | %.2f | %.2fx | %.2f–%.2f | %.0f | %.0f | %.0f | %.0f | %s | %s | %s | %s |\n",
                   kConfigurationNames[c], s.ms.mean, summaries[0].ms.mean / s.ms.mean, s.ms.p10,
                   s.ms.p90, s.vertices, s.fragments, s.triangles, s.draws,
-                  c == 0 || c == kConfigurations ? "—"
+                  c == kConfigurations ? "—"
                          : (std::to_string(s.error_ratio_median).substr(0, 5) + " (" +
                             std::to_string(s.error_ratio_max).substr(0, 5) + ")")
                                .c_str(),
+                  c == 0 || c == kConfigurations
+                      ? "—"
+                      : (std::to_string(s.added_ratio_median).substr(0, 5) + " (" +
+                         std::to_string(s.added_ratio_max).substr(0, 5) + ")")
+                            .c_str(),
                   levels.c_str(), fragment_shares.c_str());
     md << line;
   }

@@ -308,8 +308,6 @@ FrameSelector::Frame FrameSelector::select(const CameraPose& pose,
     length = std::sqrt(length);
     for (float& v : planes[p]) v /= length;
   }
-  const double focal = camera.height / (2.0 * (1.0 / camera.projection.at(1, 1)));
-  const double screen_area = double(camera.width) * camera.height;
 
   struct Pick {
     int level, kind;
@@ -335,10 +333,6 @@ FrameSelector::Frame FrameSelector::select(const CameraPose& pose,
       frame.level_histogram.resize(selection.level + 1, 0);
     ++frame.level_histogram[selection.level];
     ++frame.visible;
-    const double radius_px = focal * radius / std::max(distance, 1e-3f);
-    const double disk = std::min(std::numbers::pi * radius_px * radius_px, screen_area);
-    frame.disk_area_sum += disk;
-    frame.bound_disk_sum += metric::perPixelBound(kind.bound, equivalent) * disk;
   }
   std::sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) {
     if (a.level != b.level) return a.level < b.level;
@@ -351,6 +345,7 @@ FrameSelector::Frame FrameSelector::select(const CameraPose& pose,
     if (p == 0 || pick.level != picks[p - 1].level || pick.kind != picks[p - 1].kind) {
       const KindLevels& kind = configuration_.kinds[pick.kind];
       frame.batch_levels.push_back(pick.level);
+      frame.batch_kinds.push_back(pick.kind);
       frame.batches.push_back({.asset = kind.assets[pick.level],
                                .program = kind.programs[pick.level],
                                .models = {}});

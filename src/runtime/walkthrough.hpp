@@ -115,11 +115,9 @@ class FrameSelector {
   struct Frame {
     std::vector<render::InstanceBatch> batches;  // by (level, kind), finest first, front to back
     std::vector<int> batch_levels;               // each batch's level
+    std::vector<int> batch_kinds;                // and kind
     std::vector<int> level_histogram;            // visible instances per level
     int visible = 0;
-    // Σ over visible instances of e_a(d)·(projected bounding-disk area in pixels): the bound of
-    // eq. (3) summed over the frame, before scaling disk areas to the covered pixels.
-    double bound_disk_sum = 0, disk_area_sum = 0;
   };
   // Chooses every visible instance's level for `pose` (sphere-frustum culled) and batches them.
   Frame select(const CameraPose& pose, const render::SceneCamera& camera);
