@@ -617,7 +617,7 @@ int main(int argc, char** argv) {
   for (int f = 0; f < frames; ++f)
     for (int c = 0; c < kTimed; ++c) {
       const FrameRecord& r = records[c][f];
-      std::snprintf(line, sizeof line, "%d,%s,%.3f,%llu,%llu,%llu,%d,%d,%.4g,%.4g\n", f,
+      std::snprintf(line, sizeof line, "%d,\"%s\",%.3f,%llu,%llu,%llu,%d,%d,%.4g,%.4g\n", f,
                     kConfigurationNames[c], core::median(r.seconds) * 1e3,
                     (unsigned long long)r.work.vertex_invocations,
                     (unsigned long long)r.work.fragment_invocations,
