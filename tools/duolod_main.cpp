@@ -559,6 +559,7 @@ struct GenerateFlags {
   std::string in, out;
   bool force = false;
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
+  std::string level_spacing = "linear";
   lod::GenerateOptions options;
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
   bool no_sort_prefetch = false;
@@ -588,6 +589,12 @@ struct GenerateFlags {
         ->check(CLI::IsMember({"image", "quadric"}))
         ->capture_default_str();
     command->add_option("--levels", options.levels.level_count, "number of distance levels N")
+        ->capture_default_str();
+    command
+        ->add_option("--level-spacing", level_spacing,
+                     "linear: d_i evenly spaced in [d_near, d_far] (§3.3); geometric: equal "
+                     "ratios of projected size, so level 1 begins nearer")
+        ->check(CLI::IsMember({"linear", "geometric"}))
         ->capture_default_str();
     command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
         ->capture_default_str();
@@ -710,6 +717,8 @@ int runGenerate(GenerateFlags& flags) {
   options.move_to_parameter = flags.move_to_parameter;
   options.optimizer =
       flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;
+  options.levels.spacing =
+      flags.level_spacing == "geometric" ? lod::LevelSpacing::kGeometric : lod::LevelSpacing::kLinear;
   options.scope = flags.only == "mesh"     ? lod::LodScope::kMeshOnly
                   : flags.only == "shader" ? lod::LodScope::kShaderOnly
                                            : lod::LodScope::kJoint;
