@@ -87,14 +87,7 @@ void main() {
 // frame's bound Σ e_a(d)·pixels is exact per pixel (nearest surface wins, as in the image). The
 // distance is the runtime's: eye to the bounding-sphere centre, in asset units on the display the
 // LOD was made for. e_a / uScale.y is written as 16 bits, high byte in red, low byte in green.
-constexpr const char* kBoundVertex = R"(#version 450 core
-layout(location = 0) in vec3 inPosition;
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
-void main() { gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0))); }
-)";
+// Its vertex stage is the constant shader's (position only).
 constexpr const char* kBoundFragment = R"(#version 450 core
 layout(std140, binding = 0) uniform Frame {
   mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
@@ -380,7 +373,8 @@ int main(int argc, char** argv) {
   std::vector<render::Renderer::ProgramId> bound_programs;
   for (const runtime::KindLevels& kind : configurations[0].kinds) {
     auto program = renderer.compileProgram(
-        render::GlslSource{kBoundVertex, kBoundFragment, "bound.vert", "bound.frag"});
+        render::GlslSource{constant_shader->vertex, kBoundFragment, constant_shader->vertex_name,
+                           "bound.frag"});
     if (!program) return fail(program.error().message);
     const std::vector<render::UniformValue> uniforms = {
         {.location = 0,

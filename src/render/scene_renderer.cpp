@@ -88,22 +88,13 @@ core::Result<SceneFrame> Renderer::renderScene(std::span<const InstanceBatch> ba
     if (per_batch) {
       s.work_queries.end();
       s.work_queries.addResults(frame.batch_work[b]);
+      s.work_queries.addResults(frame.work);  // the same results, into the frame's total
     }
   }
   if (options.count_work && !per_batch) s.work_queries.end();
   glFinish();
   frame.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (per_batch) {
-    for (const WorkCounts& work : frame.batch_work) {
-      frame.work.vertex_invocations += work.vertex_invocations;
-      frame.work.fragment_invocations += work.fragment_invocations;
-      frame.work.primitives_submitted += work.primitives_submitted;
-      frame.work.clipping_input_primitives += work.clipping_input_primitives;
-      frame.work.clipping_output_primitives += work.clipping_output_primitives;
-    }
-  } else if (options.count_work) {
-    s.work_queries.addResults(frame.work);
-  }
+  if (options.count_work && !per_batch) s.work_queries.addResults(frame.work);
 
   if (options.read_back) {
     std::vector<uint8_t> rows(size_t(camera.width) * camera.height * 4);
