@@ -11,6 +11,7 @@
 #include "duolod/render.hpp"
 #include "duolod/shader.hpp"
 #include "shader/rules.hpp"
+#include "shader/scoring.hpp"
 #include "shader_rules_support.hpp"
 #include "test_support.hpp"
 
@@ -413,6 +414,50 @@ TEST_F(RuleRender, TextureAverageAndMipRenderGrey) {
   // One level coarser still shows pure cells; three levels coarser is the 2×2-cell average.
   EXPECT_GE(maxDeviation(renderQuad(applyOrDie(program, mip[0]), asset, size), 128), 126);
   EXPECT_LE(maxDeviation(renderQuad(applyOrDie(program, mip[2]), asset, size), 128), 2);
+}
+
+// A texture the material lacks is bound to a solid texel (white; flat normal for the normal map):
+// its average is that texel, so removing its samples leaves the image as it was. (Found on the
+// Avocado: the blend shader's occlusion and emissive layers sampled white and were never offered.)
+TEST_F(RuleRender, MissingTexturesAverageToTheTexelBoundInTheirPlace) {
+  core::Asset asset = quadAsset({1, 1, 1, 1}, nullptr);
+  RuleContext context;
+  context.texture_averages = textureAverages(asset);
+  ASSERT_TRUE(context.texture_averages.count(0));
+  ASSERT_TRUE(context.texture_averages.count(2));
+  EXPECT_EQ(context.texture_averages[0], (std::array<float, 4>{1, 1, 1, 1}));
+  EXPECT_FLOAT_EQ(context.texture_averages[2][0], 128.0f / 255.0f);
+  EXPECT_FLOAT_EQ(context.texture_averages[2][2], 1.0f);
+
+  ShaderProgram program = programOrDie(kQuadVertex, R"(#version 450 core
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(binding = 2) uniform sampler2D uNormalTexture;
+layout(location = 0) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 base = texture(uBaseColorTexture, vUV).rgb;
+  vec3 normal = texture(uNormalTexture, vUV * 3.0).rgb;
+  outColor = vec4(base.r * 0.5, normal.r, normal.b * 0.25, 1.0);
+}
+)");
+  std::vector<RuleSite> average =
+      sitesOfKind(enumerateSites(program, context), RuleKind::kTextureAverage);
+  ASSERT_EQ(average.size(), 2u);
+  ShaderProgram folded = applyOrDie(program, average[0], context);
+  std::vector<RuleSite> left =
+      sitesOfKind(enumerateSites(folded, context), RuleKind::kTextureAverage);
+  ASSERT_EQ(left.size(), 1u);
+  folded = applyOrDie(folded, left[0], context);
+  EXPECT_TRUE(sitesOfKind(enumerateSites(folded, context), RuleKind::kTextureAverage).empty());
+  const int size = 8;
+  core::ImageRGBA8 original = renderQuad(program, asset, size);
+  core::ImageRGBA8 after = renderQuad(folded, asset, size);
+  ASSERT_EQ(original.pixels.size(), size_t(size * size * 4));
+  ASSERT_EQ(after.pixels.size(), original.pixels.size());
+  EXPECT_NEAR(pixel(original, 4, 4)[0], 128, 1);  // white base colour, halved
+  EXPECT_NEAR(pixel(original, 4, 4)[1], 128, 1);  // the flat normal's 0.5
+  EXPECT_NEAR(pixel(original, 4, 4)[2], 64, 1);
+  EXPECT_EQ(after.pixels, original.pixels);
 }
 
 // ------------------------------------------------------------------------------------------------

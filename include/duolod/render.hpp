@@ -104,6 +104,12 @@ struct Bindings {
   // Texture unit per material texture; -1 = not bound.
   int base_color = 0, metallic_roughness = 1, normal_map = 2, occlusion = 3, emissive = 4;
 };
+// The RGBA8 texel bound in place of a texture the material lacks (INTERFACE.md): white, and for
+// the normal map a flat tangent-space normal. Shader rules read the same values as those
+// textures' average colour, so a sample of a missing texture folds to the constant it returns.
+inline constexpr std::array<uint8_t, 4> kMissingTextureTexel = {255, 255, 255, 255};
+inline constexpr std::array<uint8_t, 4> kMissingNormalTexel = {128, 128, 255, 255};
+
 // Parses a bindings JSON file ({"attributes": {"position": 0, ...}, "blocks": {"frame": 0,
 // "material": 1}, "textures": {"baseColor": 0, ...}}); unknown keys are errors naming the key.
 core::Result<Bindings> parseBindings(const std::string& json_text, const std::string& file_name);

@@ -177,12 +177,11 @@ struct Renderer::State {
     asset.textures.reset();
   }
 
-  GLuint makeSolidTexture(uint8_t r, uint8_t g, uint8_t b) {
+  GLuint makeSolidTexture(const std::array<uint8_t, 4>& texel) {
     GLuint texture;
     glCreateTextures(GL_TEXTURE_2D, 1, &texture);
     glTextureStorage2D(texture, 1, GL_RGBA8, 1, 1);
-    uint8_t texel[4] = {r, g, b, 255};
-    glTextureSubImage2D(texture, 0, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel);
+    glTextureSubImage2D(texture, 0, 0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, texel.data());
     return texture;
   }
 

@@ -34,8 +34,9 @@ float srgbToLinear(float encoded) {
 
 std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset) {
   std::map<uint32_t, std::array<float, 4>> averages;
-  if (asset.materials.empty()) return averages;
-  const core::Material& material = asset.materials.front();
+  const core::Material no_material;  // the renderer's fallback: no textures at all
+  const core::Material& material =
+      asset.materials.empty() ? no_material : asset.materials.front();
   render::Bindings bindings;  // shaders/INTERFACE.md's texture units
   const std::pair<int, int> textures[] = {
       {bindings.base_color, material.base_color_texture},
@@ -44,7 +45,18 @@ std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asse
       {bindings.occlusion, material.occlusion_texture},
       {bindings.emissive, material.emissive_texture}};
   for (const auto& [binding, index] : textures) {
-    if (index < 0 || index >= static_cast<int>(asset.textures.size())) continue;
+    if (binding < 0) continue;
+    if (index < 0 || index >= static_cast<int>(asset.textures.size())) {
+      // The renderer binds a solid texel here (renderer_internal.hpp's bindMaterial): a linear
+      // RGBA8 texture, so its samples return exactly texel / 255.
+      const std::array<uint8_t, 4>& texel = binding == bindings.normal_map
+                                                ? render::kMissingNormalTexel
+                                                : render::kMissingTextureTexel;
+      std::array<float, 4> solid{};
+      for (int c = 0; c < 4; ++c) solid[c] = texel[c] / 255.0f;
+      averages[static_cast<uint32_t>(binding)] = solid;
+      continue;
+    }
     const core::Texture& texture = asset.textures[index];
     const size_t texels = size_t(texture.image.width) * texture.image.height;
     if (texels == 0) continue;
