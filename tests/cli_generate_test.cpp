@@ -22,13 +22,17 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
       "generate", spot,          "--shader",       "noise_phong", "--mesh-mode", "quadric",
       "--levels", "3",           "--shader-levels", "1",          "--population", "6",
       "--generations", "2",      "--candidates",   "40",          "--quiet",     "--out",
-      out.string(),              "--move-to-parameter"};
+      out.string(),              "--move-to-parameter", "--views",      "upright"};
   test::CommandRun run = test::runCommand(DUOLOD_CLI, args);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   for (const char* file : {"lod.gltf", "lod.json", "report.html", "level0.frag.spv",
                            "level0.frag.glsl", "level0.frag.es.glsl", "level0.frag.hlsl",
                            "level0.vert.glsl", "autolod.frag.glsl", "autolod.vert.spv"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
+
+  // The training views are recorded (the upright band here; its held-out views check it below).
+  EXPECT_NE(test::readText((out / "lod.json").string()).find("\"views\": \"upright\""),
+            std::string::npos);
 
   runtime::Policy policy;
   std::string error;
@@ -62,6 +66,12 @@ TEST(CliGenerate, BadInputIsAClearError) {
                    (test::scratchDir("cli_generate_bad") / "lod").string()});
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.err.find("/nonexistent/asset.obj"), std::string::npos) << run.err;
+
+  test::CommandRun views = test::runCommand(
+      DUOLOD_CLI, {"generate", "/nonexistent/asset.obj", "--views", "diagonal", "--out",
+                   (test::scratchDir("cli_generate_bad") / "lod").string()});
+  EXPECT_NE(views.exit_code, 0);
+  EXPECT_NE(views.err.find("--views"), std::string::npos) << views.err;
 }
 
 }  // namespace

@@ -27,6 +27,7 @@ io::LodJsonDocument threeLevelDocument() {
   document.e_max = 0.1;
   document.time_tolerance = 0.05;
   document.merge_min_gain = 0.04;
+  document.views = "upright";
   document.optimizer = "separate";
   document.cost_source = "measured";
   document.cost_unit = "ms";
@@ -76,6 +77,7 @@ TEST(LodJson, RuntimeReadsWhatIoWrites) {
   EXPECT_EQ(root["levels"][0]["cost"]["predicted"], nullptr);
   EXPECT_EQ(root["levels"][0]["cost"]["measured"], 3.0);
   EXPECT_EQ(root["bound"]["merge_min_gain"], 0.04);
+  EXPECT_EQ(root["bound"]["views"], "upright");
   EXPECT_EQ(root["display"]["height_px"], 1080);
   EXPECT_EQ(root["cost"]["source"], "measured");
   // Deterministic: the same document gives the same bytes.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
@@ -203,6 +204,34 @@ TEST(Domain, DodecahedronHasTwentyUnitViewsAndFiveLightsEach) {
   EXPECT_EQ(render::viewDirections(render::ViewSet::kIcosahedron).size(), 12u);
 }
 
+TEST(Domain, UprightViewsStayInTheirBandAndHeldOutViewsAreNew) {
+  auto training = render::viewDirections(render::ViewSet::kUpright);
+  auto held_out = render::viewDirections(render::heldOutViews(render::ViewSet::kUpright));
+  ASSERT_EQ(training.size(), 20u);
+  ASSERT_EQ(held_out.size(), 12u);
+  auto elevation_deg = [](Vec3 d) { return std::asin(d.y) * 180.0f / 3.14159265f; };
+  std::map<int, int> per_ring;
+  for (Vec3 d : training) {
+    EXPECT_NEAR(core::length(d), 1.0f, 1e-5f);
+    ++per_ring[int(std::lround(elevation_deg(d)))];
+  }
+  EXPECT_EQ(per_ring, (std::map<int, int>{{-10, 5}, {5, 5}, {20, 5}, {35, 5}}));
+  float closest = 1.0f;  // cosine of the smallest angle between a held-out and a training view
+  for (Vec3 h : held_out) {
+    EXPECT_GE(elevation_deg(h), -10.0f);
+    EXPECT_LE(elevation_deg(h), 43.0f);
+    for (Vec3 t : training) closest = std::min(closest, 1.0f - core::dot(h, t));
+  }
+  EXPECT_GT(closest, 1e-3f);  // no held-out view repeats a training view
+  // Distinct training views, so the 20 × 5 samples are 100 different images.
+  for (size_t i = 0; i < training.size(); ++i)
+    for (size_t j = i + 1; j < training.size(); ++j)
+      EXPECT_LT(core::dot(training[i], training[j]), 0.99f);
+  EXPECT_EQ(render::heldOutViews(render::ViewSet::kDodecahedron), render::ViewSet::kIcosahedron);
+  auto samples = render::domainSamples({{0, 0, 0}, 1.0f}, 4.0f, {.views = render::ViewSet::kUpright});
+  EXPECT_EQ(samples.size(), 100u);
+}
+
 TEST(Domain, FootprintMatchesTheProjectedSphere) {
   // fov 90°: tan(45°) = 1. r = 1, d = 2: tan(asin(1/2)) = 1/√3 → 1000/√3 = 577.35 → 578 px.
   EXPECT_EQ(render::footprintPixels({{0, 0, 0}, 1.0f}, 2.0f, {90.0f, 1000}), 578);
@@ -371,6 +400,52 @@ TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
   EXPECT_EQ(differing, 0u) << differing << " of " << compared << " pixels differ";
   EXPECT_LE(last_bit, compared / 100) << last_bit << " of " << compared << " differ in a last bit";
   EXPECT_EQ(stats.draws, int(tiles.size()) * 5);
+}
+
+// Small views, where every tile overlaps every other: 500 tiles × 5 lights need 2500 layers, more
+// than llvmpipe's 2048. (Found by generate --views upright on WaterBottle at 16 px.) The batch is
+// split and drawn in parts; every tile still holds its region of the full view.
+TEST_F(RendererTest, RegionTilesBeyondTheLayerLimitAreDrawnInParts) {
+  core::Asset asset;
+  asset.mesh = test::icosphere(1);
+  asset.source_path = "icosphere";
+  auto id = renderer_->uploadAsset(asset);
+  ASSERT_TRUE(id);
+  auto source = render::loadShaderPair(test::sourcePath("shaders/noise_phong"));
+  ASSERT_TRUE(source);
+  auto program = renderer_->compileProgram(*source);
+  auto region_program = renderer_->compileRegionProgram(*source);
+  ASSERT_TRUE(program && region_program)
+      << (program ? region_program.error().message : program.error().message);
+  const int resolution = 16, tile = 8, tile_count = 500;
+  auto samples = render::domainSamples(core::computeBoundingSphere(asset.mesh), 4.0f);
+  auto full = renderer_->render(*id, *program, samples, {.resolution = resolution});
+  ASSERT_TRUE(full);
+  std::vector<render::Renderer::RegionTile> tiles;
+  for (int t = 0; t < tile_count; ++t) tiles.push_back({t % 20, 4 + t % 3, 4 + t % 5});
+  render::RenderStats stats;
+  auto regions = renderer_->renderRegions(*id, *region_program, soupOfWholeMesh(asset.mesh, tiles),
+                                          samples, 5, resolution, tile, &stats);
+  ASSERT_TRUE(regions) << regions.error().message;
+  ASSERT_EQ(regions->count, tile_count * 5);
+  EXPECT_GE(stats.chunks, 2);  // drawn in parts
+  size_t differing = 0, covered = 0;
+  for (int t = 0; t < tile_count; ++t)
+    for (int light = 0; light < 5; ++light) {
+      const uint8_t* region = regions->tile(t * 5 + light);
+      const uint8_t* view = full->tile(tiles[t].view_index * 5 + light);
+      for (int y = 0; y < tile; ++y)
+        for (int x = 0; x < tile; ++x) {
+          const uint8_t* a = region + (y * tile + x) * 4;
+          const uint8_t* b = view + ((tiles[t].y0 + y) * resolution + tiles[t].x0 + x) * 4;
+          covered += b[3] > 0;
+          int worst = 0;
+          for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(int(a[c]) - int(b[c])));
+          differing += worst > 2;
+        }
+    }
+  EXPECT_GT(covered, size_t(tile_count) * 5 * tile * tile / 2);
+  EXPECT_EQ(differing, 0u);
 }
 
 }  // namespace

@@ -559,7 +559,7 @@ struct GenerateFlags {
   std::string in, out;
   bool force = false;
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
-  std::string level_spacing = "linear";
+  std::string level_spacing = "linear", views = "sphere";
   lod::GenerateOptions options;
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
   bool no_sort_prefetch = false;
@@ -595,6 +595,13 @@ struct GenerateFlags {
                      "linear: d_i evenly spaced in [d_near, d_far] (§3.3); geometric: equal "
                      "ratios of projected size, so level 1 begins nearer")
         ->check(CLI::IsMember({"linear", "geometric"}))
+        ->capture_default_str();
+    command
+        ->add_option("--views", views,
+                     "training views: sphere (20 around the object, the paper's §7) or upright "
+                     "(20 from -10 to 35 degrees of elevation, for objects standing on the "
+                     "ground with +Y up, seen from around eye height)")
+        ->check(CLI::IsMember({"sphere", "upright"}))
         ->capture_default_str();
     command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
         ->capture_default_str();
@@ -719,6 +726,7 @@ int runGenerate(GenerateFlags& flags) {
       flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;
   options.levels.spacing =
       flags.level_spacing == "geometric" ? lod::LevelSpacing::kGeometric : lod::LevelSpacing::kLinear;
+  options.views = flags.views == "upright" ? render::ViewSet::kUpright : render::ViewSet::kDodecahedron;
   options.scope = flags.only == "mesh"     ? lod::LodScope::kMeshOnly
                   : flags.only == "shader" ? lod::LodScope::kShaderOnly
                                            : lod::LodScope::kJoint;

@@ -80,6 +80,7 @@ struct LodJsonDocument {
   int screen_height_px = 1080;
   double d_near = 0, d_far = 0, q = 0, e_max = 0;  // eq. (4)
   double time_tolerance = 0, merge_min_gain = 0;   // T (Algorithm 2), W (§6.2)
+  std::string views = "sphere";                     // training views: "sphere" or "upright"
   std::string optimizer, cost_source, cost_unit;   // e.g. "separate", "measured", "ms"
   std::vector<LodJsonLevel> levels;
 };

@@ -373,6 +373,10 @@ struct GenerateOptions {
   // outside the training domain run a few percent above the training error (up to 6% measured
   // on the Dragon and Spot), and every level must hold its bound there too.
   double bound_margin = 0.1;
+  // The training views (§7's domain): the paper's sphere (kDodecahedron), or kUpright for objects
+  // that stand on the ground and are seen from around eye height. The held-out check uses the
+  // matching held-out set (render::heldOutViews).
+  render::ViewSet views = render::ViewSet::kDodecahedron;
   bool brute_force = false;        // 2D search over all pairs (the paper's comparison column)
   // Algorithm 2's bisection stops when its bracketing meshes differ by at most this fraction of
   // their triangles (PairSearchOptions::bisection_stop); 0 = find the exact boundary.

@@ -123,6 +123,7 @@ struct ImageSimplifyOptions {
   double target_error = std::numeric_limits<double>::infinity();
   float distance = 0;  // camera distance from the bounding-sphere centre, asset units
   render::Display display;
+  render::DomainOptions domain = {};  // the views × lights the error is summed over
   int supersample = 4;           // k of the reference f̄
   float max_edge_pixels = 1.0f;  // D
   int tile_size = 8;  // pixels; a collapse whose neighbourhood is wider in some view is refused
@@ -134,7 +135,7 @@ struct ImageSimplifyOptions {
   // still the original asset): lets a farther level continue from a nearer level's result.
   const core::Mesh* start = nullptr;
   // f̄ already rendered for this distance (render::domainSamples of the original's bounding
-  // sphere, the footprint of `display`, `supersample`): saves rendering it again.
+  // sphere with `domain`, the footprint of `display`, `supersample`): saves rendering it again.
   const render::ImageBatchF* reference = nullptr;
 };
 

@@ -22,7 +22,18 @@ namespace duolod::render {
 enum class ViewSet {
   kDodecahedron,  // 20 views: the paper's training domain
   kIcosahedron,   // 12 views: a held-out domain sharing no direction with the dodecahedron
+  // For objects that stand upright (+Y up) and are seen by a viewer walking among them, as props
+  // on the ground are: 20 views in four rings at −10°, 5°, 20° and 35° of elevation, 5 azimuths
+  // each (the rings staggered by 18°). The sphere's views include the top and the underside
+  // (4 of 20 within 21° of a pole), which such objects never show.
+  kUpright,
+  // 12 held-out views of the same band, sharing no direction with kUpright: four rings at −2.5°,
+  // 12.5°, 27.5° and 42.5°, 3 azimuths each.
+  kUprightHeldOut,
 };
+// The held-out counterpart of a training view set (kDodecahedron → kIcosahedron, kUpright →
+// kUprightHeldOut); a held-out set is its own.
+ViewSet heldOutViews(ViewSet training);
 
 struct DomainOptions {
   ViewSet views = ViewSet::kDodecahedron;
@@ -156,6 +167,14 @@ struct WorkCounts {
   uint64_t primitives_submitted = 0;        // GL_PRIMITIVES_SUBMITTED
   uint64_t clipping_input_primitives = 0;   // GL_CLIPPING_INPUT_PRIMITIVES (after culling stages)
   uint64_t clipping_output_primitives = 0;  // GL_CLIPPING_OUTPUT_PRIMITIVES
+  WorkCounts& operator+=(const WorkCounts& other) {
+    vertex_invocations += other.vertex_invocations;
+    fragment_invocations += other.fragment_invocations;
+    primitives_submitted += other.primitives_submitted;
+    clipping_input_primitives += other.clipping_input_primitives;
+    clipping_output_primitives += other.clipping_output_primitives;
+    return *this;
+  }
 };
 
 struct RenderStats {

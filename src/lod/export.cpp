@@ -73,6 +73,7 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   document.e_max = options.levels.bound.e_max;
   document.time_tolerance = options.time_tolerance;
   document.merge_min_gain = options.merge_min_gain;
+  document.views = options.views == render::ViewSet::kUpright ? "upright" : "sphere";
   document.optimizer = options.optimizer == Optimizer::kSeparate ? "separate" : "interleaved";
   document.cost_source = result.cost_source;
   document.cost_unit = "seconds per draw";

@@ -80,6 +80,7 @@ shader::EvaluationConfig evaluationConfig(const GenerateOptions& options, float 
   config.distance = distance;
   config.display = options.levels.display;
   config.supersample = options.supersample;
+  config.domain.views = options.views;
   return config;
 }
 
@@ -429,7 +430,8 @@ core::Status Generator::makeLevels() {
     progress("references", double(i) / levels->size());
     LevelState state;
     state.level = (*levels)[i];
-    state.samples = render::domainSamples(bounds_, float(state.level.distance));
+    state.samples =
+        render::domainSamples(bounds_, float(state.level.distance), {.views = options_.views});
     render::RenderOptions render_options{.resolution = state.level.footprint_px,
                                          .supersample = options_.supersample};
     auto reference = renderer_->renderReference(original_asset_, *program, state.samples,
@@ -499,6 +501,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     mesh::ImageSimplifyOptions image{.target_error = levels_[level].search_bound,
                                      .distance = float(levels_[level].level.distance),
                                      .display = options_.levels.display,
+                                     .domain = {.views = options_.views},
                                      .supersample = options_.supersample};
     image.start = previous_set >= 0 ? &mesh_sets_[previous_set].meshes.back() : nullptr;
     image.reference = &levels_[level].reference;
@@ -1036,8 +1039,9 @@ core::Status Generator::measureChosen(GenerateResult& result) {
   return core::okStatus();
 }
 
-// Every kept level on views and lights the optimization never saw: the icosahedron's 12 views
-// (the training set is the dodecahedron's 20) with the light cross turned by 45°.
+// Every kept level on views and lights the optimization never saw: the held-out counterpart of
+// the training views (the icosahedron's 12 for the dodecahedron's 20, the upright band's 12 for
+// its 20) with the light cross turned by 45°.
 core::Result<Generator::HeldOutDomain> Generator::heldOutDomain(int level_index) {
   auto original = cache_->program(shaders_[0].variant);
   if (!original) return original.error();
@@ -1045,7 +1049,7 @@ core::Result<Generator::HeldOutDomain> Generator::heldOutDomain(int level_index)
   HeldOutDomain domain;
   domain.samples = render::domainSamples(
       bounds_, float(level.distance),
-      {.views = render::ViewSet::kIcosahedron, .light_rotation_deg = 45.0f});
+      {.views = render::heldOutViews(options_.views), .light_rotation_deg = 45.0f});
   auto reference = renderer_->renderReference(
       original_asset_, *original, domain.samples,
       {.resolution = level.footprint_px, .supersample = options_.supersample});

@@ -35,7 +35,8 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   // Frame everything by the original's bounding sphere, as the LOD levels will be.
   core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
   const int resolution = render::footprintPixels(sphere, options.distance, options.display);
-  std::vector<render::Sample> samples = render::domainSamples(sphere, options.distance);
+  std::vector<render::Sample> samples =
+      render::domainSamples(sphere, options.distance, options.domain);
   core::Result<render::ImageBatchF> reference = render::ImageBatchF{};
   if (options.reference) {
     if (options.reference->count != int(samples.size()) || options.reference->width != resolution)
@@ -62,7 +63,7 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   setup.region_program = *region_program;
   setup.program = *program;
   setup.samples = samples;
-  setup.lights_per_view = int(samples.size() / render::viewDirections(render::ViewSet::kDodecahedron).size());
+  setup.lights_per_view = int(samples.size() / render::viewDirections(options.domain.views).size());
   setup.resolution = resolution;
   setup.tile_size = options.tile_size;
   setup.max_edge_pixels = options.max_edge_pixels;

@@ -68,6 +68,21 @@ std::vector<Vec3> viewDirections(ViewSet views) {
         directions.push_back({a / kPhi, b * kPhi, 0});
         directions.push_back({a * kPhi, 0, b / kPhi});
       }
+  } else if (views == ViewSet::kUpright || views == ViewSet::kUprightHeldOut) {
+    const bool held_out = views == ViewSet::kUprightHeldOut;
+    const float elevations[4] = {-10.0f, 5.0f, 20.0f, 35.0f};
+    const int per_ring = held_out ? 3 : 5;
+    const float step = 360.0f / per_ring;
+    for (int ring = 0; ring < 4; ++ring) {
+      // Held out: halfway between the training rings, and azimuths off the training ones.
+      const float elevation = (elevations[ring] + (held_out ? 7.5f : 0.0f)) * kPi / 180.0f;
+      for (int k = 0; k < per_ring; ++k) {
+        const float azimuth =
+            (k * step + ring * step / 4 + (held_out ? 9.0f : 0.0f)) * kPi / 180.0f;
+        directions.push_back({std::cos(elevation) * std::sin(azimuth), std::sin(elevation),
+                              std::cos(elevation) * std::cos(azimuth)});
+      }
+    }
   } else {
     // (0, ±1, ±φ), (±1, ±φ, 0), (±φ, 0, ±1): the dual's vertices are the dodecahedron's face
     // centres, so no held-out view coincides with a training view.
@@ -80,6 +95,14 @@ std::vector<Vec3> viewDirections(ViewSet views) {
   }
   for (Vec3& d : directions) d = core::normalize(d);
   return directions;
+}
+
+ViewSet heldOutViews(ViewSet training) {
+  switch (training) {
+    case ViewSet::kDodecahedron: return ViewSet::kIcosahedron;
+    case ViewSet::kUpright: return ViewSet::kUprightHeldOut;
+    default: return training;
+  }
 }
 
 int footprintPixels(const core::Sphere& bounds, float distance, const Display& display) {

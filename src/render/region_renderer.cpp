@@ -64,6 +64,30 @@ std::pair<size_t, size_t> findMainDefinition(const std::string& text) {
   return {std::string::npos, std::string::npos};
 }
 
+// Tiles [first, last) of a soup and their triangles, tile indices renumbered from 0.
+Renderer::RegionSoup soupOfTiles(const Renderer::RegionSoup& soup, int first, int last) {
+  Renderer::RegionSoup part;
+  part.tiles.assign(soup.tiles.begin() + first, soup.tiles.begin() + last);
+  const core::Mesh& all = soup.triangles;
+  core::Mesh& kept = part.triangles;
+  auto copyCorners = [](const auto& from, auto& to, size_t triangle) {
+    if (!from.empty()) to.insert(to.end(), from.begin() + triangle * 3, from.begin() + triangle * 3 + 3);
+  };
+  for (size_t t = 0; t < soup.triangle_tile.size(); ++t) {
+    const uint32_t tile = soup.triangle_tile[t];
+    if (tile < uint32_t(first) || tile >= uint32_t(last)) continue;
+    part.triangle_tile.push_back(tile - uint32_t(first));
+    part.triangle_material.push_back(soup.triangle_material[t]);
+    copyCorners(all.positions, kept.positions, t);
+    copyCorners(all.normals, kept.normals, t);
+    copyCorners(all.tangents, kept.tangents, t);
+    copyCorners(all.uv0, kept.uv0, t);
+    copyCorners(all.uv1, kept.uv1, t);
+    copyCorners(all.colors, kept.colors, t);
+  }
+  return part;
+}
+
 }  // namespace
 
 core::Result<Renderer::ProgramId> Renderer::compileRegionProgram(const GlslSource& source) {
@@ -153,10 +177,32 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   const int layers = int(occupied.size()) * lights_per_view;
   GLint max_layers = 0;
   glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
-  if (layers > max_layers)
-    return Error{"renderRegions: " + std::to_string(tile_count) + " tiles need " +
-                 std::to_string(layers) + " layers, more than the device's " +
-                 std::to_string(max_layers) + "; split the batch"};
+  if (layers > max_layers) {
+    // More overlapping tiles than the device has layers (small views, where every tile overlaps
+    // most others): draw the two halves of the tile list apart. Outputs are tile-major, so the
+    // halves' batches are the whole one's, concatenated.
+    if (tile_count < 2 || lights_per_view > max_layers)
+      return Error{"renderRegions: one tile needs " + std::to_string(lights_per_view) +
+                   " layers, more than the device's " + std::to_string(max_layers)};
+    const int half = tile_count / 2;
+    RenderStats total;
+    for (auto [first, last] : {std::pair{0, half}, std::pair{half, tile_count}}) {
+      RegionSoup part = soupOfTiles(soup, first, last);
+      RenderStats part_stats;
+      auto images = renderRegions(asset_id, program_id, part, samples, lights_per_view,
+                                  view_resolution, tile_size, &part_stats);
+      if (!images) return images.error();
+      std::copy(images->pixels.begin(), images->pixels.end(),
+                batch.pixels.begin() + ptrdiff_t(size_t(first) * lights_per_view) *
+                                           tile_size * tile_size * 4);
+      total.draws += part_stats.draws;
+      total.chunks += part_stats.chunks;
+      total.work += part_stats.work;
+    }
+    total.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (stats) *stats = total;
+    return batch;
+  }
   if (s.region_size != R || s.region_layers < layers) {
     if (s.region_fbo) glDeleteFramebuffers(1, &s.region_fbo);
     GLuint old_textures[] = {s.region_color, s.region_depth};
