@@ -175,8 +175,10 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
     tile_group[t] = int(g);
   }
   const int layers = int(occupied.size()) * lights_per_view;
-  GLint max_layers = 0;
+  GLint max_layers = 0, max_framebuffer_layers = 0;
   glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+  glGetIntegerv(GL_MAX_FRAMEBUFFER_LAYERS, &max_framebuffer_layers);
+  if (max_framebuffer_layers > 0) max_layers = std::min(max_layers, max_framebuffer_layers);
   if (layers > max_layers) {
     // More overlapping tiles than the device has layers (small views, where every tile overlaps
     // most others): draw the two halves of the tile list apart. Outputs are tile-major, so the
@@ -207,7 +209,9 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
     if (s.region_fbo) glDeleteFramebuffers(1, &s.region_fbo);
     GLuint old_textures[] = {s.region_color, s.region_depth};
     glDeleteTextures(2, old_textures);
-    const int allocate = std::max(layers, s.region_size == R ? 2 * s.region_layers : layers);
+    // Grown by doubling (fewer reallocations as batches grow), never past the device's limit.
+    const int allocate = std::min<int>(
+        max_layers, std::max(layers, s.region_size == R ? 2 * s.region_layers : layers));
     glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s.region_color);
     glTextureStorage3D(s.region_color, 1, GL_RGBA8, R, R, allocate);
     glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s.region_depth);
