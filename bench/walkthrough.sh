@@ -9,8 +9,10 @@
 # generator's summary, where the table's generation times come from). The Dragon needs
 # scripts/fetch-bench-data.sh once. Generation uses `duolod generate`'s defaults (10 levels,
 # image-driven mesh candidates, the full GP search): about 25 minutes for all 16 folders on 2 cores
-# with llvmpipe, most of it the interleaved optimizer. WALK_FAST=1 uses the fast settings of
-# session 4 instead (quadric mesh candidates, 4 levels, a small GP) for a quick look.
+# with llvmpipe, most of it the interleaved optimizer. The walk-through stands its objects on the
+# ground (+Y up) and walks at eye height, so the LODs are trained on `--views upright`;
+# WALK_VIEWS=sphere trains them on the paper's sphere of views instead. WALK_FAST=1 uses the fast
+# settings of session 4 (quadric mesh candidates, 4 levels, a small GP) for a quick look.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 runs="${1:-/work/runs}"
@@ -21,9 +23,9 @@ bench="$root/build/bench/bench_walkthrough"
 assets="$root/../shared/assets"
 dragon=/tmp/duolod-data/cgal/data/meshes/ChineseDragon-10kv.off
 mkdir -p "$runs" "$out"
-settings=""
+settings="--views ${WALK_VIEWS:-upright}"
 if [ "${WALK_FAST:-0}" = 1 ]; then
-  settings="--mesh-mode quadric --levels 4 --shader-levels 2 --population 8 --generations 3 --candidates 100"
+  settings="$settings --mesh-mode quadric --levels 4 --shader-levels 2 --population 8 --generations 3 --candidates 100"
 fi
 
 generate() {  # NAME ASSET SHADER
