@@ -39,8 +39,16 @@ struct ShadingFlags {
   int screen_height = 1080;
   float distance = 0;
   int pixels = 0;
+  std::string views = "sphere";
 
   void add(CLI::App* command) {
+    command
+        ->add_option("--views", views,
+                     "the domain's views: sphere (20 around the object, the paper's §7) or "
+                     "upright (20 from -10 to 35 degrees of elevation, for objects standing on "
+                     "the ground with +Y up, seen from around eye height)")
+        ->check(CLI::IsMember({"sphere", "upright"}))
+        ->capture_default_str();
     command->add_option("--shader", shader,
                         "duolod shader by name (pbr, noise_phong, blend, constant) or a path "
                         "prefix P with P.vert and P.frag")
@@ -78,6 +86,9 @@ struct ShadingFlags {
   }
 
   render::Display display() const { return {fov_y_deg, screen_height}; }
+  render::ViewSet viewSet() const {
+    return views == "upright" ? render::ViewSet::kUpright : render::ViewSet::kDodecahedron;
+  }
 };
 
 struct Session {
@@ -179,7 +190,8 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
   float distance = resolveDistance(flags, sphere);
   int resolution = render::footprintPixels(sphere, distance, flags.display());
-  std::vector<render::Sample> all = render::domainSamples(sphere, distance);
+  std::vector<render::Sample> all =
+      render::domainSamples(sphere, distance, {.views = flags.viewSet()});
   std::vector<render::Sample> chosen;
   for (const render::Sample& s : all)
     if ((view < 0 || s.view_index == view) && s.light_index == light) chosen.push_back(s);
@@ -218,13 +230,15 @@ struct ImageComparison {
 
 core::Result<ImageComparison> compareRendered(Session& session, const core::Asset& original,
                                               std::span<const core::Asset* const> approximations,
-                                              float distance, const render::Display& display,
+                                              float distance, const ShadingFlags& shading,
                                               int supersample) {
+  const render::Display display = shading.display();
   auto& renderer = *session.renderer;
   ImageComparison comparison;
   core::Sphere sphere = core::computeBoundingSphere(original.mesh);
   comparison.footprint_px = render::footprintPixels(sphere, distance, display);
-  std::vector<render::Sample> samples = render::domainSamples(sphere, distance);
+  std::vector<render::Sample> samples =
+      render::domainSamples(sphere, distance, {.views = shading.viewSet()});
   render::RenderOptions options{.resolution = comparison.footprint_px, .supersample = supersample};
   auto original_id = renderer.uploadAsset(original);
   if (!original_id) return original_id.error();
@@ -256,7 +270,7 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   float distance = resolveDistance(flags, core::computeBoundingSphere(a->mesh));
   const core::Asset* approximations[] = {&*b};
   auto comparison =
-      compareRendered(*session, *a, approximations, distance, flags.display(), supersample);
+      compareRendered(*session, *a, approximations, distance, flags, supersample);
   if (!comparison) return fail(comparison.error().message);
   const metric::ImageError& error = comparison->errors[0];
   double e_a = metric::perPixelBound(bound, distance);
@@ -481,6 +495,7 @@ int runSimplify(SimplifyFlags& flags) {
                                            .target_error = target_error,
                                            .distance = distance,
                                            .display = flags.shading.display(),
+                                           .domain = {.views = flags.shading.viewSet()},
                                            .lock_border = flags.lock_border,
                                            .record = false},
                                           &image_stats);
@@ -534,8 +549,8 @@ int runSimplify(SimplifyFlags& flags) {
     start = std::chrono::steady_clock::now();
     const int supersample = 4;
     const core::Asset* approximations[] = {&output, &*asset};
-    auto comparison = compareRendered(session, *asset, approximations, distance,
-                                      flags.shading.display(), supersample);
+    auto comparison =
+        compareRendered(session, *asset, approximations, distance, flags.shading, supersample);
     if (!comparison) return fail(comparison.error().message);
     const metric::ImageError& simplified = comparison->errors[0];
     const metric::ImageError& original = comparison->errors[1];
@@ -559,7 +574,7 @@ struct GenerateFlags {
   std::string in, out;
   bool force = false;
   std::string optimizer = "separate", only = "joint", cost = "predicted", mesh_mode = "image";
-  std::string level_spacing = "linear", views = "sphere";
+  std::string level_spacing = "linear";
   lod::GenerateOptions options;
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
   bool no_sort_prefetch = false;
@@ -595,13 +610,6 @@ struct GenerateFlags {
                      "linear: d_i evenly spaced in [d_near, d_far] (§3.3); geometric: equal "
                      "ratios of projected size, so level 1 begins nearer")
         ->check(CLI::IsMember({"linear", "geometric"}))
-        ->capture_default_str();
-    command
-        ->add_option("--views", views,
-                     "training views: sphere (20 around the object, the paper's §7) or upright "
-                     "(20 from -10 to 35 degrees of elevation, for objects standing on the "
-                     "ground with +Y up, seen from around eye height)")
-        ->check(CLI::IsMember({"sphere", "upright"}))
         ->capture_default_str();
     command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
         ->capture_default_str();
@@ -726,7 +734,7 @@ int runGenerate(GenerateFlags& flags) {
       flags.optimizer == "separate" ? lod::Optimizer::kSeparate : lod::Optimizer::kInterleaved;
   options.levels.spacing =
       flags.level_spacing == "geometric" ? lod::LevelSpacing::kGeometric : lod::LevelSpacing::kLinear;
-  options.views = flags.views == "upright" ? render::ViewSet::kUpright : render::ViewSet::kDodecahedron;
+  options.views = flags.shading.viewSet();
   options.scope = flags.only == "mesh"     ? lod::LodScope::kMeshOnly
                   : flags.only == "shader" ? lod::LodScope::kShaderOnly
                                            : lod::LodScope::kJoint;
@@ -883,6 +891,7 @@ int runShader(ShaderFlags& flags) {
   shader::ShaderLodOptions options;
   options.distance = resolveDistance(flags.shading, core::computeBoundingSphere(asset->mesh));
   options.display = flags.shading.display();
+  options.evaluation.domain.views = flags.shading.viewSet();
   options.device = flags.shading.device;
   options.method = flags.search == "gp" ? shader::SearchMethod::kGenetic : shader::SearchMethod::kGreedy;
   options.genetic.seed = flags.seed;
