@@ -71,7 +71,8 @@ Renderer::RegionSoup soupOfTiles(const Renderer::RegionSoup& soup, int first, in
   const core::Mesh& all = soup.triangles;
   core::Mesh& kept = part.triangles;
   auto copyCorners = [](const auto& from, auto& to, size_t triangle) {
-    if (!from.empty()) to.insert(to.end(), from.begin() + triangle * 3, from.begin() + triangle * 3 + 3);
+    if (!from.empty())
+      to.insert(to.end(), from.begin() + triangle * 3, from.begin() + triangle * 3 + 3);
   };
   for (size_t t = 0; t < soup.triangle_tile.size(); ++t) {
     const uint32_t tile = soup.triangle_tile[t];
