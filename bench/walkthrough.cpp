@@ -253,6 +253,10 @@ int main(int argc, char** argv) {
   app.add_option("--seed", scene_options.seed)->capture_default_str();
   app.add_option("--spacing", scene_options.spacing, "grid step in object radii")
       ->capture_default_str();
+  app.add_flag("--compound", scene_options.compound,
+               "each grid point holds one model made of every --object, as parts on a ring "
+               "around it, each part with its own LOD (the paper's Table 4, the Trooper); "
+               "--objects counts models");
   app.add_option("--width", width)->capture_default_str();
   app.add_option("--height", height)->capture_default_str();
   app.add_option("--fov", fov_y_deg, "vertical field of view, degrees")->capture_default_str();

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The walk-through benchmark (issue 6; Liang et al. §7.2.2, Table 2) in one command: generates the
 # LOD folders each scene needs (once; existing folders are reused) and runs bench_walkthrough on
-# three single-asset scenes and one mixed scene. Tables go to OUT/tables.md.
+# four single-asset scenes, two mixed scenes and one of compound models (Table 4's kind). Tables go
+# to OUT/tables.md.
 #
 #   bench/walkthrough.sh [RUNS_DIR] [OUT_DIR] [extra bench_walkthrough flags...]
 #
@@ -56,11 +57,13 @@ generate avocado "$assets/gltf/Avocado/Avocado.gltf" blend
 generate bottle "$assets/gltf/WaterBottle/WaterBottle.gltf" pbr
 
 : > "$out/tables.md"
-run() {  # NAME OBJECT...
+run() {  # NAME [bench flags...] OBJECT...
   local name=$1
   shift
   local args=()
-  for object in "$@"; do args+=(--object "$object"); done
+  for object in "$@"; do
+    case $object in -*) args+=("$object") ;; *) args+=(--object "$object") ;; esac
+  done
   "$bench" "${args[@]}" --name "$name" --out "$out/$name" "${EXTRA[@]}"
   cat "$out/$name/walkthrough.md" >> "$out/tables.md"
   echo >> "$out/tables.md"
@@ -72,4 +75,8 @@ run avocado "$runs/walk-avocado:blend"
 run bottle "$runs/walk-bottle:pbr"
 run mix-dragon-spot "$runs/walk-dragon:noise_phong" "$runs/walk-spot:pbr"
 run mix-avocado-bottle-spot "$runs/walk-avocado:blend" "$runs/walk-bottle:pbr" "$runs/walk-spot:pbr"
+# Table 4's kind of scene (the Trooper: one model whose parts each have their own LOD): 134 models
+# of three parts each (about 400 parts, as in the other scenes), a wider grid for the wider models.
+run compound-avocado-bottle-spot --compound --objects=134 --spacing=8 \
+  "$runs/walk-avocado:blend" "$runs/walk-bottle:pbr" "$runs/walk-spot:pbr"
 echo "tables: $out/tables.md"

@@ -147,5 +147,31 @@ TEST(Walkthrough, SceneIsSeededAndLevelsFollowDistance) {
   EXPECT_LT(frame.visible, 49) << "the camera sees part of the field, not all of it";
 }
 
+// Table 4's scene: every grid point holds one model of every kind, its parts on a ring around the
+// point (so each part is its own instance, with its own level); --objects counts models.
+TEST(Walkthrough, CompoundModelsHoldEveryKindAroundTheirGridPoint) {
+  core::Asset square = squareAsset({1, 1, 1}), other = squareAsset({1, 0, 0});
+  const core::Mesh* kinds[] = {&square.mesh, &other.mesh, &square.mesh};
+  runtime::WalkSceneOptions options{.objects = 16, .seed = 3, .frames = 2};
+  options.compound = true;
+  const runtime::WalkScene scene = runtime::buildWalkScene(kinds, options);
+  ASSERT_EQ(scene.instances.size(), 48u);
+  for (size_t model = 0; model < 16; ++model) {
+    core::Vec3 middle{0, 0, 0};
+    for (int part = 0; part < 3; ++part) {
+      const runtime::WalkInstance& instance = scene.instances[model * 3 + part];
+      EXPECT_EQ(instance.kind, part);
+      middle = middle + instance.center * (1.0f / 3.0f);
+    }
+    // The parts sit on a ring of part_ring radii around the model's point, 120° apart.
+    for (int part = 0; part < 3; ++part) {
+      const core::Vec3 d = scene.instances[model * 3 + part].center - middle;
+      EXPECT_NEAR(std::sqrt(d.x * d.x + d.z * d.z), options.part_ring, 1e-3f);
+    }
+  }
+  options.compound = false;
+  EXPECT_EQ(runtime::buildWalkScene(kinds, options).instances.size(), 16u);
+}
+
 }  // namespace
 }  // namespace duolod

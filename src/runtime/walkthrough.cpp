@@ -176,17 +176,11 @@ WalkScene buildWalkScene(std::span<const core::Mesh* const> kinds,
   const int columns = static_cast<int>(std::ceil(std::sqrt(double(options.objects))));
   const float step = options.spacing;
   scene.half_extent = 0.5f * columns * step + step;
-  for (int i = 0; i < options.objects; ++i) {
-    const int column = i % columns, row = i / columns;
-    const int kind = static_cast<int>(unit(random) * kinds.size()) % int(kinds.size());
-    const float x = (column - 0.5f * (columns - 1)) * step +
-                    float(unit(random) * 2 - 1) * options.jitter * step;
-    const float z = (row - 0.5f * (columns - 1)) * step +
-                    float(unit(random) * 2 - 1) * options.jitter * step;
-    const float turn = float(unit(random) * 2 * std::numbers::pi);
+  // One object of `kind` standing at (x, z) (its sphere centred over it, its lowest point on the
+  // ground), turned by `turn`, scaled to radius 1.
+  auto place = [&](int kind, float x, float z, float turn) {
     const KindFrame& frame = frames[kind];
     const float scale = 1.0f / frame.sphere.radius;
-    // Centre the sphere over (x, z) and put the lowest point on the ground.
     const core::Vec3 pivot{frame.sphere.center.x, frame.lowest, frame.sphere.center.z};
     WalkInstance instance;
     instance.kind = kind;
@@ -195,6 +189,25 @@ WalkScene buildWalkScene(std::span<const core::Mesh* const> kinds,
                      translation(-pivot);
     instance.center = core::transformPoint(instance.model, frame.sphere.center);
     scene.instances.push_back(instance);
+  };
+  for (int i = 0; i < options.objects; ++i) {
+    const int column = i % columns, row = i / columns;
+    const int kind = static_cast<int>(unit(random) * kinds.size()) % int(kinds.size());
+    const float x = (column - 0.5f * (columns - 1)) * step +
+                    float(unit(random) * 2 - 1) * options.jitter * step;
+    const float z = (row - 0.5f * (columns - 1)) * step +
+                    float(unit(random) * 2 - 1) * options.jitter * step;
+    const float turn = float(unit(random) * 2 * std::numbers::pi);
+    if (!options.compound || kinds.size() == 1) {
+      place(kind, x, z, turn);
+      continue;
+    }
+    // The model's parts on a ring around (x, z), the ring turned with the model.
+    for (size_t part = 0; part < kinds.size(); ++part) {
+      const float angle = turn + float(2 * std::numbers::pi * double(part) / double(kinds.size()));
+      place(int(part), x + options.part_ring * std::sin(angle),
+            z + options.part_ring * std::cos(angle), turn);
+    }
   }
 
   // The corridor between the two middle columns (a grid line when the count is odd, so shift by

@@ -52,6 +52,12 @@ struct WalkSceneOptions {
   float jitter = 0.15f;     // random offset from the grid point, in grid steps
   int frames = 60;          // camera poses along the path
   float eye_height = 1.2f;  // in object radii above the ground
+  // Each grid point holds one model made of every kind, as parts around the point (a ring of
+  // `part_ring` object radii, turned with the model), instead of one object of a random kind: the
+  // paper's Table 4 (§7.2.2, the Trooper: a model whose sub-meshes each have their own LOD,
+  // rendered together). Every part still picks its own level by its own distance.
+  bool compound = false;
+  float part_ring = 1.25f;
 };
 
 struct WalkInstance {
