@@ -348,29 +348,39 @@ render::Renderer::RegionSoup soupOfWholeMesh(const core::Mesh& mesh,
   return soup;
 }
 
+// A duolod shader (shaders/NAME) compiled as is and wrapped for region rendering.
+struct RegionPrograms {
+  render::Renderer::ProgramId plain = -1, region = -1;
+};
+core::Result<RegionPrograms> compileForRegions(render::Renderer& renderer, const std::string& name) {
+  auto source = render::loadShaderPair(test::sourcePath("shaders/" + name));
+  if (!source) return source.error();
+  auto plain = renderer.compileProgram(*source);
+  if (!plain) return plain.error();
+  auto region = renderer.compileRegionProgram(*source);
+  if (!region) return region.error();
+  return RegionPrograms{*plain, *region};
+}
+
 TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
   auto asset = io::loadAsset(path);
   ASSERT_TRUE(asset) << asset.error().message;
   auto id = renderer_->uploadAsset(*asset);
   ASSERT_TRUE(id);
-  auto source = render::loadShaderPair(test::sourcePath("shaders/pbr"));
-  ASSERT_TRUE(source);
-  auto program = renderer_->compileProgram(*source);
-  auto region_program = renderer_->compileRegionProgram(*source);
-  ASSERT_TRUE(program && region_program)
-      << (program ? region_program.error().message : program.error().message);
+  auto programs = compileForRegions(*renderer_, "pbr");
+  ASSERT_TRUE(programs) << programs.error().message;
   core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
   const int resolution = 96, tile = 16;
   auto samples = render::domainSamples(sphere, 1.5f);
-  auto full = renderer_->render(*id, *program, samples, {.resolution = resolution});
+  auto full = renderer_->render(*id, programs->plain, samples, {.resolution = resolution});
   ASSERT_TRUE(full);
   // Tiles in several views, including ones straddling the image border.
   std::vector<render::Renderer::RegionTile> tiles = {
       {0, 40, 40}, {3, 10, 60}, {7, 80, 0}, {19, 48, 30}, {12, 0, 0}};
   auto soup = soupOfWholeMesh(asset->mesh, tiles);
   render::RenderStats stats;
-  auto regions = renderer_->renderRegions(*id, *region_program, soup, samples, 5, resolution,
+  auto regions = renderer_->renderRegions(*id, programs->region, soup, samples, 5, resolution,
                                           tile, &stats);
   ASSERT_TRUE(regions) << regions.error().message;
   ASSERT_EQ(regions->count, int(tiles.size()) * 5);
@@ -413,22 +423,18 @@ TEST_F(RendererTest, RegionTilesBeyondTheLayerLimitAreDrawnInParts) {
   asset.source_path = "icosphere";
   auto id = renderer_->uploadAsset(asset);
   ASSERT_TRUE(id);
-  auto source = render::loadShaderPair(test::sourcePath("shaders/noise_phong"));
-  ASSERT_TRUE(source);
-  auto program = renderer_->compileProgram(*source);
-  auto region_program = renderer_->compileRegionProgram(*source);
-  ASSERT_TRUE(program && region_program)
-      << (program ? region_program.error().message : program.error().message);
+  auto programs = compileForRegions(*renderer_, "noise_phong");
+  ASSERT_TRUE(programs) << programs.error().message;
   const int resolution = 16, tile = 8;
   auto samples = render::domainSamples(core::computeBoundingSphere(asset.mesh), 4.0f);
-  auto full = renderer_->render(*id, *program, samples, {.resolution = resolution});
+  auto full = renderer_->render(*id, programs->plain, samples, {.resolution = resolution});
   ASSERT_TRUE(full);
   for (int tile_count : {300, 400, 500}) {
   SCOPED_TRACE(tile_count);
   std::vector<render::Renderer::RegionTile> tiles;
   for (int t = 0; t < tile_count; ++t) tiles.push_back({t % 20, 4 + t % 3, 4 + t % 5});
   render::RenderStats stats;
-  auto regions = renderer_->renderRegions(*id, *region_program, soupOfWholeMesh(asset.mesh, tiles),
+  auto regions = renderer_->renderRegions(*id, programs->region, soupOfWholeMesh(asset.mesh, tiles),
                                           samples, 5, resolution, tile, &stats);
   ASSERT_TRUE(regions) << regions.error().message;
   ASSERT_EQ(regions->count, tile_count * 5);
