@@ -158,15 +158,17 @@ PricingRecord pricingRecord(const Quadric& q, Vec3d p, Vec3d centre) {
           {float(2 * q.a01), float(2 * q.a02), float(2 * q.a12), 0}};
 }
 
-// The merged quadric of the edge a -> b at b, at a and at the midpoint, from the two records
+// The price of the edge a -> b at its cheapest fixed point (quadric.hpp's priceAtFixedPoints in
+// float): the merged quadric at b, at a and at the midpoint, from the two records
 // (d = a - b): Qa(b) = ea - 2 ga·d + dᵀAa d, Qb(a) = eb + 2 gb·d + dᵀAb d, Q(b) = Qa(b) + eb,
-// Q(a) = ea + Qb(a), Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4. Each dot product sums its
-// x, y, z terms as (x + y) + z, with SSE and without.
-struct FixedPointPrices {
-  float at_b, at_a, at_mid;
+// Q(a) = ea + Qb(a), Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4; an endpoint-only edge is
+// priced at b. Ties go to b, then a. Each dot product sums its x, y, z terms as (x + y) + z, with
+// SSE and without.
+struct PricedEdge {
+  float cost;
+  uint8_t at;  // kFixedAtB, kFixedAtA or kFixedAtMid
 };
-inline FixedPointPrices priceFixedPoints(const PricingRecord& a, const PricingRecord& b) {
-  float form_a, form_b, slope_a, slope_b;
+inline PricedEdge priceEdge(const PricingRecord& a, const PricingRecord& b, bool endpoint_only) {
 #if defined(__SSE2__)
   // Lane 3 holds ea - eb, which must not reach the products: squared it underflows to a
   // denormal when the quadrics' values are tiny (flat regions), and denormal arithmetic costs
@@ -183,10 +185,31 @@ inline FixedPointPrices priceFixedPoints(const PricingRecord& a, const PricingRe
   __m128 sa = _mm_mul_ps(_mm_load_ps(a.gradient), d);
   __m128 sb = _mm_mul_ps(_mm_load_ps(b.gradient), d);
   _MM_TRANSPOSE4_PS(fa, fb, sa, sb);  // rows: the x, y, z, w terms of the four dot products
-  const __m128 sums = _mm_add_ps(_mm_add_ps(fa, fb), sa);
-  alignas(16) float out[4];
-  _mm_store_ps(out, sums);
-  form_a = out[0], form_b = out[1], slope_a = out[2], slope_b = out[3];
+  const __m128 sums = _mm_add_ps(_mm_add_ps(fa, fb), sa);  // form_a, form_b, slope_a, slope_b
+  // The rest in scalar SSE with masks instead of branches: which fixed point is cheapest is a
+  // coin flip to the branch predictor (the branches cost ~20% of the pass pricing). The
+  // operations are those of the plain C++ below, in the same order (max_ss(0, x) is
+  // std::max(x, 0.0f), NaN and -0 included).
+  const __m128 form_a = sums;
+  const __m128 form_b = _mm_shuffle_ps(sums, sums, _MM_SHUFFLE(1, 1, 1, 1));
+  const __m128 slope_a = _mm_shuffle_ps(sums, sums, _MM_SHUFFLE(2, 2, 2, 2));
+  const __m128 slope_b = _mm_shuffle_ps(sums, sums, _MM_SHUFFLE(3, 3, 3, 3));
+  const __m128 zero = _mm_setzero_ps(), two = _mm_set_ss(2.0f);
+  const __m128 both = _mm_add_ss(_mm_load_ss(&a.position[3]), _mm_load_ss(&b.position[3]));
+  const __m128 at_b =
+      _mm_max_ss(zero, _mm_add_ss(_mm_sub_ss(both, _mm_mul_ss(two, slope_a)), form_a));
+  const __m128 at_a =
+      _mm_max_ss(zero, _mm_add_ss(_mm_add_ss(both, _mm_mul_ss(two, slope_b)), form_b));
+  const __m128 at_mid = _mm_sub_ss(_mm_mul_ss(_mm_set_ss(0.5f), _mm_add_ss(at_a, at_b)),
+                                   _mm_mul_ss(_mm_set_ss(0.25f), _mm_add_ss(form_a, form_b)));
+  const __m128 free_placement = _mm_castsi128_ps(_mm_set1_epi32(endpoint_only ? 0 : -1));
+  const __m128 take_a = _mm_and_ps(_mm_cmplt_ss(at_a, at_b), free_placement);
+  const __m128 cost_ab = _mm_or_ps(_mm_and_ps(take_a, at_a), _mm_andnot_ps(take_a, at_b));
+  const __m128 take_mid = _mm_and_ps(_mm_cmplt_ss(at_mid, cost_ab), free_placement);
+  const __m128 cost = _mm_or_ps(_mm_and_ps(take_mid, _mm_max_ss(zero, at_mid)),
+                                _mm_andnot_ps(take_mid, cost_ab));
+  const int a_bit = _mm_movemask_ps(take_a) & 1, mid_bit = _mm_movemask_ps(take_mid) & 1;
+  return {_mm_cvtss_f32(cost), uint8_t(mid_bit << 1 | (a_bit & ~mid_bit))};
 #else
   const float d[3] = {a.position[0] - b.position[0], a.position[1] - b.position[1],
                       a.position[2] - b.position[2]};
@@ -200,12 +223,18 @@ inline FixedPointPrices priceFixedPoints(const PricingRecord& a, const PricingRe
   auto slope = [&](const PricingRecord& r) {
     return (r.gradient[0] * d[0] + r.gradient[1] * d[1]) + r.gradient[2] * d[2];
   };
-  form_a = form(a), form_b = form(b), slope_a = slope(a), slope_b = slope(b);
-#endif
+  const float form_a = form(a), form_b = form(b), slope_a = slope(a), slope_b = slope(b);
   const float both = a.position[3] + b.position[3];
   const float at_b = std::max(both - 2 * slope_a + form_a, 0.0f);
   const float at_a = std::max(both + 2 * slope_b + form_b, 0.0f);
-  return {at_b, at_a, 0.5f * (at_a + at_b) - 0.25f * (form_a + form_b)};
+  const float at_mid = 0.5f * (at_a + at_b) - 0.25f * (form_a + form_b);
+  PricedEdge priced{at_b, kFixedAtB};
+  if (!endpoint_only) {
+    if (at_a < priced.cost) priced = {at_a, kFixedAtA};
+    if (at_mid < priced.cost) priced = {std::max(at_mid, 0.0f), kFixedAtMid};
+  }
+  return priced;
+#endif
 }
 
 class PositionSimplifier {
@@ -627,13 +656,7 @@ void PositionSimplifier::collectCandidates() {
   // Inlined into the edge walk (a call per edge costs ~15% of the pricing in saved registers).
   forEachCandidateEdge([&](uint32_t from, uint32_t to,
                            bool endpoint_only) __attribute__((always_inline)) {
-    const FixedPointPrices prices = priceFixedPoints(pricing[from], pricing[to]);
-    float cost = prices.at_b;
-    uint8_t at = kFixedAtB;
-    if (!endpoint_only) {  // ties to b, then a
-      if (prices.at_a < cost) cost = prices.at_a, at = kFixedAtA;
-      if (prices.at_mid < cost) cost = std::max(prices.at_mid, 0.0f), at = kFixedAtMid;
-    }
+    const auto [cost, at] = priceEdge(pricing[from], pricing[to], endpoint_only);
     if (!std::isfinite(cost)) return;
     if (has_error_target &&
         !(errorOf(cost, quadrics[from].weight + quadrics[to].weight) <= options_.target_error))
