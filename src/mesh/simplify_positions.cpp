@@ -902,11 +902,12 @@ void PositionSimplifier::runPasses(size_t pass_target) {
       const uint32_t limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
       const uint32_t* keys = pass_keys_.get();
       cheap_count = 0;
-      for (size_t i = 0; i < count; ++i) {
-        if (keys[i] <= limit)
-          cheap[cheap_count++] = candidates[i];
-        else
-          rest[rest_count++] = candidates[i];
+      for (size_t i = 0; i < count; ++i) {  // both stores, one kept: no branch to mispredict
+        const bool is_cheap = keys[i] <= limit;
+        cheap[cheap_count] = candidates[i];
+        rest[rest_count] = candidates[i];
+        cheap_count += is_cheap;
+        rest_count += !is_cheap;
       }
       order = sortByKey(cheap, candidates, cheap_count, histograms_.get());
     } else {
