@@ -89,21 +89,33 @@ inline uint32_t digitOf(uint32_t key, int level) {
   return (key >> (level * kDigitBits)) & (kDigits - 1);
 }
 
-// The key of rank `rank` (0-based) among keys[0, n): narrowed one digit at a time, most
-// significant first, by a histogram of the keys that agree with the digits found so far.
-uint32_t selectKey(const uint32_t* keys, size_t n, size_t rank, uint32_t* histogram) {
-  uint32_t prefix = 0;
-  for (int level = 2; level >= 0; --level) {
+// The key of rank `rank` (0-based) among keys[0, n), narrowed one digit at a time, most
+// significant first: a histogram of all keys' top digits finds the top digit, the keys that have
+// it are gathered into `scratch` (room for n; one sweep, no branch), and the two lower digits are
+// found among those alone.
+uint32_t selectKey(const uint32_t* keys, size_t n, size_t rank, uint32_t* histogram,
+                   uint32_t* scratch) {
+  auto narrow = [&](const uint32_t* values, size_t count, int level) {
     std::fill_n(histogram, kDigits, 0u);
-    const uint32_t high_shift = uint32_t(level + 1) * kDigitBits;
-    for (size_t i = 0; i < n; ++i)
-      if (level == 2 || (keys[i] >> high_shift) == (prefix >> high_shift))
-        ++histogram[digitOf(keys[i], level)];
+    for (size_t i = 0; i < count; ++i) ++histogram[digitOf(values[i], level)];
     uint32_t digit = 0;
     for (; digit + 1 < kDigits && rank >= histogram[digit]; ++digit) rank -= histogram[digit];
-    prefix |= digit << (level * kDigitBits);
+    return digit;
+  };
+  const uint32_t top = narrow(keys, n, 2);
+  size_t gathered = 0;
+  for (size_t i = 0; i < n; ++i) {
+    scratch[gathered] = keys[i];
+    gathered += digitOf(keys[i], 2) == top;
   }
-  return prefix;
+  const uint32_t middle = narrow(scratch, gathered, 1);
+  size_t kept = 0;
+  for (size_t i = 0; i < gathered; ++i) {
+    scratch[kept] = scratch[i];
+    kept += digitOf(scratch[i], 1) == middle;
+  }
+  const uint32_t low = narrow(scratch, kept, 0);
+  return top << (2 * kDigitBits) | middle << kDigitBits | low;
 }
 
 // Stable LSD radix sort of candidates by their order key (so equal costs keep their pricing
@@ -343,6 +355,7 @@ class PositionSimplifier {
   // input (the mesh only shrinks).
   std::unique_ptr<PassCandidate[]> pass_candidates_, pass_cheap_, pass_rest_;
   std::unique_ptr<uint32_t[]> pass_keys_;  // orderKey of each pass candidate
+  std::unique_ptr<uint32_t[]> pass_key_scratch_;
   std::unique_ptr<uint32_t[]> histograms_;  // 3 * kDigits
   size_t pass_candidate_count_ = 0;
   uint32_t edge_triangles_[2] = {kAbsent, kAbsent};
@@ -896,7 +909,8 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     const PassCandidate* order = nullptr;
     size_t cheap_count = count, rest_count = 0;
     if (goal > 0 && goal < count) {
-      const uint32_t goal_key = selectKey(pass_keys_.get(), count, goal, histograms_.get());
+      const uint32_t goal_key = selectKey(pass_keys_.get(), count, goal, histograms_.get(),
+                                               pass_key_scratch_.get());
       float goal_cost;
       std::memcpy(&goal_cost, &goal_key, 4);
       const uint32_t limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
@@ -975,6 +989,7 @@ SimplifyResult PositionSimplifier::run() {
   pass_cheap_.reset(new PassCandidate[edge_room]);
   pass_rest_.reset(new PassCandidate[edge_room]);
   pass_keys_.reset(new uint32_t[edge_room]);
+  pass_key_scratch_.reset(new uint32_t[edge_room]);
   histograms_.reset(new uint32_t[3 * kDigits]);
   from_fan_.reset(new uint32_t[indices_.size() * 2]);
   to_fan_.reset(new uint32_t[indices_.size() * 2]);
