@@ -928,8 +928,24 @@ void PositionSimplifier::runPasses(size_t pass_target) {
       order = sortByKey(candidates, cheap, count, histograms_.get());
     }
     size_t applied = 0;
+    constexpr ptrdiff_t kAhead = 8;
     auto apply_range = [&](const PassCandidate* begin, const PassCandidate* end) {
       for (const PassCandidate* c = begin; c != end && !reached(); ++c) {
+        if (end - c > kAhead) {
+          // The endpoints of a collapse a few places ahead are random vertices: their quadrics,
+          // positions and corner ranges are fetched while this one is checked.
+          const PassCandidate& next = c[kAhead];
+          const char* qf = reinterpret_cast<const char*>(&quadrics_[next.from]);
+          const char* qt = reinterpret_cast<const char*>(&quadrics_[next.to]);
+          __builtin_prefetch(qf);
+          __builtin_prefetch(qf + 64);
+          __builtin_prefetch(qt);
+          __builtin_prefetch(qt + 64);
+          __builtin_prefetch(&positions_[next.from]);
+          __builtin_prefetch(&positions_[next.to]);
+          __builtin_prefetch(&corner_start_[next.from]);
+          __builtin_prefetch(&corner_start_[next.to]);
+        }
         if (pass_lock_[c->from] == pass || pass_lock_[c->to] == pass) continue;
         if (tryCollapse<false>(*c, pass)) ++applied;
       }
