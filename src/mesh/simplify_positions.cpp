@@ -85,6 +85,8 @@ inline uint32_t orderKey(float cost) {
 // about every other branch (bunny 10%: 11% of the wall clock), while these are a few linear
 // sweeps over 11-bit digits (most significant: key >> 22, then bits 11-21, then 0-10).
 constexpr uint32_t kDigitBits = 11, kDigits = 1u << kDigitBits;
+// Below this many keys, comparison sorting is cheaper than three histograms of kDigits.
+constexpr size_t kRadixMinimum = 512;
 inline uint32_t digitOf(uint32_t key, int level) {
   return (key >> (level * kDigitBits)) & (kDigits - 1);
 }
@@ -95,6 +97,11 @@ inline uint32_t digitOf(uint32_t key, int level) {
 // found among those alone.
 uint32_t selectKey(const uint32_t* keys, size_t n, size_t rank, uint32_t* histogram,
                    uint32_t* scratch) {
+  if (n < kRadixMinimum) {  // clearing and scanning the histograms would cost more
+    std::copy_n(keys, n, scratch);
+    std::nth_element(scratch, scratch + rank, scratch + n);
+    return scratch[rank];
+  }
   auto narrow = [&](const uint32_t* values, size_t count, int level) {
     std::fill_n(histogram, kDigits, 0u);
     for (size_t i = 0; i < count; ++i) ++histogram[digitOf(values[i], level)];
@@ -123,6 +130,12 @@ uint32_t selectKey(const uint32_t* keys, size_t n, size_t rank, uint32_t* histog
 // skipped.
 template <class Record>
 Record* sortByKey(Record* data, Record* scratch, size_t n, uint32_t* histograms) {
+  if (n < kRadixMinimum) {
+    std::stable_sort(data, data + n, [](const Record& a, const Record& b) {
+      return orderKey(a.cost) < orderKey(b.cost);
+    });
+    return data;
+  }
   std::fill_n(histograms, 3 * kDigits, 0u);
   for (size_t i = 0; i < n; ++i) {
     const uint32_t key = orderKey(data[i].cost);
