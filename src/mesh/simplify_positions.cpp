@@ -958,6 +958,10 @@ void PositionSimplifier::runPasses(size_t pass_target) {
           __builtin_prefetch(&positions_[next.to]);
           __builtin_prefetch(&corner_start_[next.from]);
           __builtin_prefetch(&corner_start_[next.to]);
+          // Half as far ahead, their corner ranges (corner_start_ is fetched by now).
+          const PassCandidate& nearer = c[kAhead / 2];
+          __builtin_prefetch(&corners_[corner_start_[nearer.from]]);
+          __builtin_prefetch(&corners_[corner_start_[nearer.to]]);
         }
         if (pass_lock_[c->from] == pass || pass_lock_[c->to] == pass) continue;
         if (tryCollapse<false>(*c, pass)) ++applied;
