@@ -983,17 +983,50 @@ void PositionSimplifier::runPasses(size_t pass_target) {
 // retried until their neighbourhood changes; when the queue runs dry short of the target it is
 // filled again from all edges, at most EngineOptions::max_passes times.
 void PositionSimplifier::runGreedy() {
-  greedy_ = true;
-  version_.assign(vertex_count_, 0);
   auto reached = [&] {
     return options_.target_triangles > 0 && live_triangles_ <= options_.target_triangles;
   };
+  // When the tail needs few collapses for the mesh's size (at 50%: ~1000 of ~60k edges on
+  // bunny), its first fill is seeded with the edges cheapest at their fixed points (the passes'
+  // float prices), kGreedySeedsPerCollapse per collapse still needed, instead of solving every
+  // edge at its optimal placement. The survivors' edges are priced again after each collapse as
+  // before, and if the seeds run out short of the target the next fill takes every edge. Measured
+  // on bench/simplify: same output on every mesh and ratio there (bunny 50%: 13% less time);
+  // with 3 seeds per collapse, Hausdorff moved both ways (bunny 10% 0.90 -> 1.23, spot 50%
+  // 1.11 -> 0.98), so the seeds stay generous.
+  constexpr size_t kGreedySeedsPerCollapse = 8;
+  bool seeded = false;
+  uint32_t seed_limit = 0;
+  if (options_.target_triangles > 0 && !reached()) {
+    const size_t needed = (live_triangles_ - options_.target_triangles + 1) / 2;
+    const size_t seeds = needed * kGreedySeedsPerCollapse;
+    // A closed mesh has 1.5 edges per triangle; seeding pays when it skips most of them.
+    if (seeds <= live_triangles_ * 3 / 8) {
+      collectCandidates();  // the passes' pricing (greedy_ is not set yet)
+      if (seeds < pass_candidate_count_) {
+        seed_limit = selectKey(pass_keys_.get(), pass_candidate_count_, seeds, histograms_.get(),
+                               pass_key_scratch_.get());
+        seeded = true;
+      }
+    }
+  }
+  greedy_ = true;
+  version_.assign(vertex_count_, 0);
   for (int fill = 0; fill < EngineOptions{}.max_passes && !reached(); ++fill) {
     buildAdjacency();
     clearAbsorbed();
     heap_.clear();
     filling_ = true;
-    collectCandidates();
+    const bool from_seeds = seeded && fill == 0;
+    if (from_seeds) {
+      for (size_t i = 0; i < pass_candidate_count_; ++i)
+        if (pass_keys_[i] <= seed_limit) {
+          const PassCandidate& c = pass_candidates_[i];
+          pushCandidate(c.from, c.to, c.endpoint_only);
+        }
+    } else {
+      collectCandidates();
+    }
     filling_ = false;
     std::make_heap(heap_.begin(), heap_.end(), std::greater<>());
     const size_t rejected_before = stats_.rejected_topology + stats_.rejected_flip;
@@ -1008,7 +1041,7 @@ void PositionSimplifier::runGreedy() {
       if (tryCollapse<true>(c, 0)) emitAround(e.to);
     }
     compact();
-    if (stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
+    if (!from_seeds && stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
   }
 }
 
