@@ -37,8 +37,8 @@
 // triangle dedup) 31M; quadrics 26M; engine state and Morton order 19M; the greedy tail ~30M;
 // candidate collection, partition and sort ~40M. The layout was the limit (per-position corner
 // lists walked by gatherNeighbors, a neighbour gather per candidate), hence the fast path with
-// per-pass flat corner tables: same algorithm, nearly the same quality table, 1.3-1.7x meshopt
-// (see simplify_positions.cpp and bench/RESULTS.md, issue 3, for where its instructions go).
+// per-pass flat corner tables: same algorithm, nearly the same quality table, 1.1-2.0x meshopt's
+// wall clock (see simplify_positions.cpp and bench/RESULTS.md, issue 3, for where its time goes).
 // Lazy re-pricing in the greedy queue was tried earlier: 29% fewer pricings but 15% more
 // instructions (each stale entry needs a gather to be re-priced).
 #include "mesh/collapse_engine.hpp"

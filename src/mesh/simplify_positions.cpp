@@ -22,19 +22,20 @@
 //     chaining: a vertex's triangles are its own corners and those of the vertices it absorbed,
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
-// its meshes with attributes, materials or endpoint placement take the engine). Measured on
-// bench/simplify_callgrind.sh (bench/RESULTS.md, issue 3): 1.3-1.7x meshoptimizer 0.18's
-// instructions. Bunny 10% (236M): preparation 25M, quadrics and state 19M, classification ~13M,
-// corner tables and compaction 18M, pass pricing of 309k candidates with the edge walk 40M,
-// goal rank and sort 16M, 34k pass collapses 73M (fans and link condition ~30M, flip tests of
-// both fans ~21M, optimal placement 13M, bookkeeping 9M), greedy tail ~16M. Tried and not kept:
-// re-using prices between passes (only 16% of the edges keep both endpoints untouched, the cache
-// cost more than it saved), radix sort / radix select of the pass keys (more instructions than
-// std::sort / nth_element here), SSE2 in addQuadric itself (only setUp's loop gains), a greedy
-// tail of 1000 triangles (-2%, Hausdorff mixed) and no optimal placement in the passes (-4%,
-// Hausdorff and mean clearly worse). The rest of the gap is work meshopt 0.18 does not do (it
-// prices by one quadric at the other endpoint, has no link condition, tests one fan, places at
-// endpoints, has no greedy tail).
+// its meshes with attributes, materials or endpoint placement take the engine).
+// Speed (bench/RESULTS.md, issue 3): 1.1-2.0x meshoptimizer 0.18's wall clock
+// (bench/simplify_ab.sh), 1.5-1.8x its instructions (bench/simplify_callgrind.sh). The
+// wall clock is the measure: the pass pricing and the pass order are written without
+// data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
+// candidates ahead; each executes more instructions than the branchy code it replaced, and runs
+// faster. Bunny 10% by phase: set-up 25% (preparation, quadrics, classification, pricing records),
+// pass pricing 18%, order 4%, applying collapses 40% (the fan walks wait on memory), greedy tail
+// 8%. Tried and not kept: re-using prices between passes (only 16% of the edges keep both
+// endpoints untouched), a branch-free edge list before the pricing, corners that carry their
+// triangle's other vertices (3x the table: slower on bunny), a greedy tail of 1000 triangles (-2%,
+// Hausdorff mixed) and no optimal placement in the passes (-4%, Hausdorff and mean clearly worse).
+// The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
+// endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail).
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
