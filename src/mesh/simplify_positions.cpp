@@ -263,6 +263,15 @@ inline PricedEdge priceEdge(const PricingRecord& a, const PricingRecord& b, bool
 #endif
 }
 
+// What a fan walk reads of each neighbour, in half a cache line: its survivor (the remap), the
+// walk's mark, and (for the flip test) its position. Three arrays cost the apply loop three
+// cache misses per neighbour on meshes whose vertex ids are in no spatial order (bunny00).
+struct alignas(32) VertexState {
+  Vec3d position;  // normalized (bounding-box diagonal 1)
+  uint32_t remap;  // survivor of a vertex collapsed in this pass (itself if none)
+  uint32_t mark;   // the last round (nextRound) that marked it
+};
+
 class PositionSimplifier {
  public:
   PositionSimplifier(const PreparedMesh& prepared, const SimplifyOptions& options)
@@ -293,8 +302,9 @@ class PositionSimplifier {
   // The surviving vertex of v: one level within a pass, a chain (with path halving) in the greedy
   // tail.
   uint32_t resolve(uint32_t v) {
-    if (!greedy_) return remap_[v];
-    while (remap_[v] != v) v = remap_[v] = remap_[remap_[v]];
+    VertexState* s = vertices_.data();
+    if (!greedy_) return s[v].remap;
+    while (s[v].remap != v) v = s[v].remap = s[s[v].remap].remap;
     return v;
   }
   // Calls f(triangle, corner k of v in it) for each live triangle of v: its own corners and those
@@ -309,7 +319,7 @@ class PositionSimplifier {
   }
   uint32_t nextRound() {
     if (++round_ == 0) {
-      std::fill(mark_.begin(), mark_.end(), 0);
+      for (VertexState& s : vertices_) s.mark = 0;
       round_ = 1;
     }
     return round_;
@@ -325,15 +335,14 @@ class PositionSimplifier {
   Vec3d origin_;
   double scale_ = 1;
 
-  std::vector<Vec3d> positions_;             // normalized (bounding-box diagonal 1)
+  std::vector<VertexState> vertices_;
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
-  std::vector<PricingRecord> pricing_;  // quadrics_ around positions_, for the passes
-  Vec3d centre_;                        // of the bounding box, in positions_' frame
+  std::vector<PricingRecord> pricing_;  // quadrics_ around the positions, for the passes
+  Vec3d centre_;                        // of the bounding box, in the normalized frame
   std::vector<VertexKind> kinds_;
   std::vector<uint32_t> border_neighbors_;  // two per constrained vertex
   std::vector<uint32_t> constrained_;       // the constrained vertices
-  std::vector<uint32_t> remap_;             // survivor of a vertex collapsed in this pass
   std::vector<uint8_t> alive_;
   std::vector<uint32_t> pass_lock_;  // the pass that last touched a vertex
 
@@ -359,7 +368,6 @@ class PositionSimplifier {
   std::vector<QueuedCandidate> heap_;
   bool filling_ = false;  // appending to heap_ before one make_heap
 
-  std::vector<uint32_t> mark_;
   uint32_t round_ = 0;
   // The other two corners of each moving triangle of a collapse's endpoints (room for every
   // triangle, so they are filled without capacity checks).
@@ -399,19 +407,18 @@ void PositionSimplifier::setUp() {
                0.5 * size.z * inverse_scale};
   }
   asset_positions_ = m.positions;
-  positions_.resize(vertex_count_);
+  vertices_.resize(vertex_count_);
   for (uint32_t v = 0; v < vertex_count_; ++v) {
     const core::Vec3 a = m.positions[v];
-    positions_[v] = {(a.x - origin_.x) * inverse_scale, (a.y - origin_.y) * inverse_scale,
-                     (a.z - origin_.z) * inverse_scale};
+    vertices_[v] = {{(a.x - origin_.x) * inverse_scale, (a.y - origin_.y) * inverse_scale,
+                     (a.z - origin_.z) * inverse_scale},
+                    v,
+                    0};
   }
   indices_ = m.indices;
   live_triangles_ = indices_.size() / 3;
-  remap_.resize(vertex_count_);
-  for (uint32_t v = 0; v < vertex_count_; ++v) remap_[v] = v;
   alive_.assign(vertex_count_, 1);
   pass_lock_.assign(vertex_count_, 0);
-  mark_.assign(vertex_count_, 0);
   cursor_.resize(vertex_count_);
 
   // Area-weighted plane quadrics (Garland & Heckbert 1997 eq. 2).
@@ -419,7 +426,9 @@ void PositionSimplifier::setUp() {
   for (size_t t = 0; t < live_triangles_; ++t) {
     const uint32_t* v = &indices_[t * 3];
     Quadric plane;
-    if (!triangleQuadric(positions_[v[0]], positions_[v[1]], positions_[v[2]], plane)) continue;
+    if (!triangleQuadric(vertices_[v[0]].position, vertices_[v[1]].position,
+                         vertices_[v[2]].position, plane))
+      continue;
 #if defined(__SSE2__)
     // The plane's 11 members in registers, added two at a time to each corner's quadric (the
     // same sums as addQuadric; this loop runs three times per input triangle).
@@ -517,11 +526,11 @@ void PositionSimplifier::classify() {
       ++border_count;
       if (n < v) return;  // its penalty plane once, from the lower end
       const uint32_t t = corners_[begin + i] >> 2;
-      const Vec3d face_normal =
-          unitTriangleNormal(positions_[indices_[t * 3]], positions_[indices_[t * 3 + 1]],
-                             positions_[indices_[t * 3 + 2]]);
+      const Vec3d face_normal = unitTriangleNormal(vertices_[indices_[t * 3]].position,
+                                                   vertices_[indices_[t * 3 + 1]].position,
+                                                   vertices_[indices_[t * 3 + 2]].position);
       Quadric plane;
-      if (featureEdgeQuadric(positions_[v], positions_[n], face_normal, plane)) {
+      if (featureEdgeQuadric(vertices_[v].position, vertices_[n].position, face_normal, plane)) {
         addQuadric(quadrics_[v], plane);
         addQuadric(quadrics_[n], plane);
       }
@@ -542,7 +551,8 @@ void PositionSimplifier::classify() {
     if (border_count == 0) {
       kinds_[v] = VertexKind::kFree;
     } else if (border_count == 2 &&
-               !isLineCorner(positions_[line[0]], positions_[v], positions_[line[1]])) {
+               !isLineCorner(vertices_[line[0]].position, vertices_[v].position,
+                             vertices_[line[1]].position)) {
       kinds_[v] = VertexKind::kConstrained;
       border_neighbors_[v * 2] = line[0];
       border_neighbors_[v * 2 + 1] = line[1];
@@ -557,12 +567,12 @@ void PositionSimplifier::compact() {
   const size_t triangles = indices_.size() / 3;
   if (!greedy_) {  // a one-level remap, over raw pointers (the stores cannot alias the reads)
     uint32_t* indices = indices_.data();
-    const uint32_t* remap = remap_.data();
+    const VertexState* vertices = vertices_.data();
     const uint8_t* dead = dead_.data();
     for (size_t t = 0; t < triangles; ++t) {
       if (dead[t]) continue;
-      const uint32_t a = remap[indices[t * 3]], b = remap[indices[t * 3 + 1]],
-                     c = remap[indices[t * 3 + 2]];
+      const uint32_t a = vertices[indices[t * 3]].remap, b = vertices[indices[t * 3 + 1]].remap,
+                     c = vertices[indices[t * 3 + 2]].remap;
       indices[out] = a, indices[out + 1] = b, indices[out + 2] = c;
       out += 3;
     }
@@ -583,9 +593,9 @@ void PositionSimplifier::pushCandidate(uint32_t from, uint32_t to, bool endpoint
   addQuadric(q, quadrics_[to]);
   double cost = 0;
   if (endpoint_only)
-    cost = evaluateQuadric(q, positions_[to]);
+    cost = evaluateQuadric(q, vertices_[to].position);
   else
-    minimizeQuadric(q, positions_[from], positions_[to], &cost);
+    minimizeQuadric(q, vertices_[from].position, vertices_[to].position, &cost);
   if (!std::isfinite(cost) ||
       (std::isfinite(options_.target_error) && !(errorOf(cost, q.weight) <= options_.target_error)))
     return;
@@ -616,12 +626,12 @@ void PositionSimplifier::emitEdge(uint32_t a, uint32_t b) {
 // Greedy tail: after a collapse into v, the candidates of v's edges are priced again.
 void PositionSimplifier::emitAround(uint32_t v) {
   const uint32_t round = nextRound();
-  mark_[v] = round;
+  vertices_[v].mark = round;
   forEachTriangle(v, [&](uint32_t t, uint32_t k) {
     for (uint32_t corner : {kNext[k], kPrevious[k]}) {
       const uint32_t n = resolve(indices_[t * 3 + corner]);
-      if (mark_[n] == round) continue;
-      mark_[n] = round;
+      if (vertices_[n].mark == round) continue;
+      vertices_[n].mark = round;
       emitEdge(v, n);
     }
   });
@@ -699,7 +709,9 @@ __attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const ui
                                                                         uint32_t size, Vec3d corner,
                                                                         Vec3d moved) const {
   for (uint32_t i = 0; i < size; i += 2)
-    if (turnsOverOrFlattens(corner, positions_[fan[i]], positions_[fan[i + 1]], moved)) return true;
+    if (turnsOverOrFlattens(corner, vertices_[fan[i]].position, vertices_[fan[i + 1]].position,
+                            moved))
+      return true;
   return false;
 }
 
@@ -711,18 +723,17 @@ template <bool kGreedy>
 bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass) {
   const uint32_t from = candidate.from, to = candidate.to;
   // Raw pointers: the stores below (marks, fans) cannot alias them, so they stay in registers.
-  uint32_t* mark = mark_.data();
+  VertexState* vertices = vertices_.data();
   const uint32_t* indices = indices_.data();
   const uint32_t* corners = corners_.data();
   const uint32_t* corner_start = corner_start_.data();
   const uint32_t* absorbed_next = absorbed_next_.data();
   const uint8_t* dead = dead_.data();
-  const uint32_t* remap = remap_.data();
   auto survivor = [&](uint32_t v) {
     if constexpr (kGreedy)
       return resolve(v);
     else
-      return remap[v];
+      return vertices[v].remap;
   };
   auto for_each_triangle = [&](uint32_t v, auto&& f) {
     for (uint32_t u = v; u != kAbsent; u = kGreedy ? absorbed_next[u] : kAbsent)
@@ -741,7 +752,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   for_each_triangle(from, [&](uint32_t t, uint32_t k) {
     const uint32_t b = survivor(indices[t * 3 + kNext[k]]);
     const uint32_t d = survivor(indices[t * 3 + kPrevious[k]]);
-    mark[b] = mark[d] = near_round;
+    vertices[b].mark = vertices[d].mark = near_round;
     if (b == to || d == to) {
       if (edge_count < 2) {
         opposite[edge_count] = b == to ? d : b;
@@ -777,8 +788,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   for_each_triangle(to, [&](uint32_t t, uint32_t k) {
     const uint32_t x = survivor(indices[t * 3 + kNext[k]]);
     const uint32_t y = survivor(indices[t * 3 + kPrevious[k]]);
-    if (x != from && mark[x] == near_round) mark[x] = counted_round, ++common;
-    if (y != from && mark[y] == near_round) mark[y] = counted_round, ++common;
+    if (x != from && vertices[x].mark == near_round) vertices[x].mark = counted_round, ++common;
+    if (y != from && vertices[y].mark == near_round) vertices[y].mark = counted_round, ++common;
     if (x == from || y == from) return;
     if (from_has_opposite_pair &&
         ((x == opposite[0] && y == opposite[1]) || (x == opposite[1] && y == opposite[0])))
@@ -793,7 +804,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     return false;
   }
 
-  const Vec3d at_from = positions_[from], at_to = positions_[to];
+  const Vec3d at_from = vertices_[from].position, at_to = vertices_[to].position;
   auto flips = [&](Vec3d p) {
     const bool moves_to = p.x != at_to.x || p.y != at_to.y || p.z != at_to.z;
     // from's triangles keep their shape when the survivor sits where `from` was.
@@ -830,7 +841,7 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
                                        uint32_t pass) {
   for (uint32_t i = 0; i < edge_triangle_count_; ++i) dead_[edge_triangles_[i]] = 1;
   live_triangles_ -= edge_triangle_count_;
-  remap_[from] = to;
+  vertices_[from].remap = to;
   alive_[from] = 0;
   pass_lock_[from] = pass_lock_[to] = pass;
   if (greedy_) {  // `to` takes over from's triangles
@@ -839,9 +850,9 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
     ++version_[to];
   }
   addQuadric(quadrics_[to], quadrics_[from]);
-  const Vec3d at_to = positions_[to], at_from = positions_[from];
+  const Vec3d at_to = vertices_[to].position, at_from = vertices_[from].position;
   if (position.x != at_to.x || position.y != at_to.y || position.z != at_to.z) {
-    positions_[to] = position;
+    vertices_[to].position = position;
     if (position.x == at_from.x && position.y == at_from.y && position.z == at_from.z) {
       asset_positions_[to] = asset_positions_[from];
     } else {
@@ -849,7 +860,7 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
       asset_positions_[to] = {float(a.x), float(a.y), float(a.z)};
     }
   }
-  if (!greedy_) pricing_[to] = pricingRecord(quadrics_[to], positions_[to], centre_);
+  if (!greedy_) pricing_[to] = pricingRecord(quadrics_[to], vertices_[to].position, centre_);
   // A border collapse: from's other border neighbour now borders on `to`.
   if (kinds_[from] == VertexKind::kConstrained) {
     const uint32_t* line = &border_neighbors_[from * 2];
@@ -955,8 +966,8 @@ void PositionSimplifier::runPasses(size_t pass_target) {
           __builtin_prefetch(qf + 64);
           __builtin_prefetch(qt);
           __builtin_prefetch(qt + 64);
-          __builtin_prefetch(&positions_[next.from]);
-          __builtin_prefetch(&positions_[next.to]);
+          __builtin_prefetch(&vertices_[next.from]);
+          __builtin_prefetch(&vertices_[next.to]);
           __builtin_prefetch(&corner_start_[next.from]);
           __builtin_prefetch(&corner_start_[next.to]);
           // Half as far ahead, their corner ranges (corner_start_ is fetched by now).
@@ -1062,7 +1073,7 @@ SimplifyResult PositionSimplifier::run() {
   to_fan_.reset(new uint32_t[indices_.size() * 2]);
   pricing_.resize(vertex_count_);
   for (uint32_t v = 0; v < vertex_count_; ++v)
-    pricing_[v] = pricingRecord(quadrics_[v], positions_[v], centre_);
+    pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
   if (options_.record) {
     record_.base = base_;
     record_.values.positions = base_.positions;
