@@ -915,22 +915,22 @@ void PositionSimplifier::runGreedy() {
   auto reached = [&] {
     return options_.target_triangles > 0 && live_triangles_ <= options_.target_triangles;
   };
-  // When the tail needs few collapses for the mesh's size (at 50%: ~1000 of ~60k edges on
-  // bunny), its first fill is seeded with the edges cheapest at their fixed points (the passes'
-  // float prices), kGreedySeedsPerCollapse per collapse still needed, instead of solving every
-  // edge at its optimal placement. The survivors' edges are priced again after each collapse as
-  // before, and if the seeds run out short of the target the next fill takes every edge. Measured
-  // on bench/simplify: same output on every mesh and ratio there (bunny 50%: 13% less time);
-  // with 3 seeds per collapse, Hausdorff moved both ways (bunny 10% 0.90 -> 1.23, spot 50%
-  // 1.11 -> 0.98), so the seeds stay generous.
+  // The first fill is seeded with the edges cheapest at their fixed points (the passes' float
+  // prices), kGreedySeedsPerCollapse per collapse still needed, instead of solving every edge at
+  // its optimal placement (at 50% the tail needs ~1000 collapses out of ~60k edges on bunny). The
+  // survivors' edges are priced again after each collapse as before, and if the seeds run out
+  // short of the target the next fill takes every edge. Measured on bench/simplify: same output
+  // on every mesh and ratio there (bunny 50%: 13% less time); with 4 seeds per collapse,
+  // Hausdorff moved both ways (bunny 10% 0.90 -> 1.24, spot 50% 1.11 -> 0.98), so the seeds stay
+  // generous.
   constexpr size_t kGreedySeedsPerCollapse = 8;
   bool seeded = false;
   uint32_t seed_limit = 0;
   if (options_.target_triangles > 0 && !reached()) {
     const size_t needed = (live_triangles_ - options_.target_triangles + 1) / 2;
     const size_t seeds = needed * kGreedySeedsPerCollapse;
-    // A closed mesh has 1.5 edges per triangle; seeding pays when it skips most of them.
-    if (seeds <= live_triangles_ * 3 / 8) {
+    // A closed mesh has 1.5 edges per triangle: no pricing when the seeds would be all of them.
+    if (seeds < live_triangles_ * 3 / 2) {
       collectCandidates();  // the passes' pricing (greedy_ is not set yet)
       if (seeds < pass_candidate_count_) {
         seed_limit = selectKey(pass_keys_.get(), pass_candidate_count_, seeds, histograms_.get(),
