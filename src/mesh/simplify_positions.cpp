@@ -290,8 +290,9 @@ class PositionSimplifier {
   // triangle, so they are filled without capacity checks).
   std::unique_ptr<uint32_t[]> from_fan_, to_fan_;
   uint32_t from_fan_size_ = 0, to_fan_size_ = 0;
-  // Pass candidates and their order keys (cost bits << 32 | index): room for every edge of the
-  // input (the mesh only shrinks).
+  // Pass candidates, their order keys (orderKey of the cost), the cheap and the rest part of a
+  // pass, and the radix order's scratch (radix_order.hpp): room for every edge of the input (the
+  // mesh only shrinks).
   std::unique_ptr<PassCandidate[]> pass_candidates_, pass_cheap_, pass_rest_;
   std::unique_ptr<uint32_t[]> pass_keys_;  // orderKey of each pass candidate
   std::unique_ptr<uint32_t[]> pass_key_scratch_;
@@ -639,7 +640,8 @@ __attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const ui
 template <bool kGreedy>
 bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass) {
   const uint32_t from = candidate.from, to = candidate.to;
-  // Raw pointers: the stores below (marks, fans) cannot alias them, so they stay in registers.
+  // Raw pointers, so that the stores below (marks, fans) do not make the compiler reload the
+  // vectors' data pointers.
   VertexState* vertices = vertices_.data();
   const uint32_t* indices = indices_.data();
   const uint32_t* corners = corners_.data();
