@@ -853,8 +853,8 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     const PassCandidate* order = nullptr;
     size_t cheap_count = count, rest_count = 0;
     if (goal > 0 && goal < count) {
-      const uint32_t goal_key = selectKey(pass_keys_.get(), count, goal, histograms_.get(),
-                                               pass_key_scratch_.get());
+      const uint32_t goal_key =
+          selectKey(pass_keys_.get(), count, goal, histograms_.get(), pass_key_scratch_.get());
       float goal_cost;
       std::memcpy(&goal_cost, &goal_key, 4);
       const uint32_t limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
