@@ -185,6 +185,10 @@ struct SurfaceDistance {
   double hausdorff = 0;  // max of the two one-sided maxima
   double mean = 0;       // mean of the two one-sided means
   double rms = 0;        // root of the mean of the two one-sided mean squares
+  // The one-sided maxima (hausdorff is the larger): how far a point of `a` can be from `b`
+  // (with a the original, detail the simplification lost) and a point of `b` from `a` (the
+  // simplification left the surface).
+  double max_a_to_b = 0, max_b_to_a = 0;
 };
 // `samples_per_mesh` points are sampled (area-weighted, deterministic for a seed) on each mesh;
 // every vertex is measured too, for the maximum only. Distances are to the other surface (closest

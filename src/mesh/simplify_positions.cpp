@@ -3,7 +3,8 @@
 // Edelsbrunner et al. 1999, the flip test, borders sliding along themselves), the data layout is
 // built for it instead of for the general engine (attributes, seams, materials, lazy costs):
 //   - vertices are positions (prepareMesh welds a position-only mesh to one vertex per position),
-//     so there are no wedges, and vertex ids are the prepared mesh's;
+//     so there are no wedges; on large meshes they and the triangles are renumbered in a spatial
+//     order (orderSpatially), and only the record and the output see the prepared mesh's ids;
 //   - the index buffer is compacted at the start of every pass, and adjacency is rebuilt from it
 //     as a flat vertex -> corner table (a counting sort, no lists, no unlinking);
 //   - within a pass every vertex takes part in at most one collapse, so a collapse `from` -> `to`
@@ -197,6 +198,7 @@ class PositionSimplifier {
 
  private:
   void setUp();
+  void orderSpatially(const core::Mesh& m, double inverse_scale);
   void buildAdjacency();
   void clearAbsorbed();
   void classify();
@@ -252,6 +254,13 @@ class PositionSimplifier {
   Vec3d origin_;
   double scale_ = 1;
 
+  // The working order of the vertices and triangles (orderSpatially): input_id_[v] is the
+  // prepared mesh's id of working vertex v. Only the progressive record and the output order
+  // see input ids.
+  std::vector<uint32_t> input_id_;
+  // The input triangle of each triangle of indices_, kept through compaction; empty when the
+  // triangles keep their input order.
+  std::vector<uint32_t> triangle_input_id_;
   std::vector<VertexState> vertices_;
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
@@ -324,16 +333,7 @@ void PositionSimplifier::setUp() {
     centre_ = {0.5 * size.x * inverse_scale, 0.5 * size.y * inverse_scale,
                0.5 * size.z * inverse_scale};
   }
-  asset_positions_ = m.positions;
-  vertices_.resize(vertex_count_);
-  for (uint32_t v = 0; v < vertex_count_; ++v) {
-    const core::Vec3 a = m.positions[v];
-    vertices_[v] = {{(a.x - origin_.x) * inverse_scale, (a.y - origin_.y) * inverse_scale,
-                     (a.z - origin_.z) * inverse_scale},
-                    v,
-                    0};
-  }
-  indices_ = m.indices;
+  orderSpatially(m, inverse_scale);
   live_triangles_ = indices_.size() / 3;
   alive_.assign(vertex_count_, 1);
   pass_lock_.assign(vertex_count_, 0);
@@ -366,6 +366,88 @@ void PositionSimplifier::setUp() {
 #else
     for (int k = 0; k < 3; ++k) addQuadric(quadrics_[v[k]], plane);
 #endif
+  }
+}
+
+// Below this many vertices every per-vertex array of the simplifier (~230 bytes a vertex in all)
+// nearly fits in a core's L2 (1 MiB here), and sorting costs more than it saves (measured:
+// WaterBottle, spot and fandisk 5-15% slower sorted).
+constexpr uint32_t kSpatialOrderMinimum = 8192;
+
+// The working order: vertices in Morton order of their position, triangles by their lowest working
+// vertex. Every phase walks a vertex's neighbours (pricing reads two 64-byte records per edge, a
+// collapse walks two fans); on a mesh whose ids are in no spatial order (CGAL's bunny00: the median
+// triangle spans 15k ids) each of those reads misses the cache, in this order most of them hit
+// lines that a nearby vertex brought in (bench/RESULTS.md, issue 3, session 10). Both sorts are
+// stable counting sorts, so the order is a function of the input alone. Small meshes keep their
+// input order.
+void PositionSimplifier::orderSpatially(const core::Mesh& m, double inverse_scale) {
+  const uint32_t n = vertex_count_;
+  input_id_.resize(n);
+  for (uint32_t v = 0; v < n; ++v) input_id_[v] = v;
+  if (n >= kSpatialOrderMinimum) {
+    // 10 bits per axis of the normalized position (the bounding box's longest side is at most 1),
+    // interleaved into 30.
+    auto spread = [](uint32_t x) {
+      x = (x | x << 16) & 0x030000ff;
+      x = (x | x << 8) & 0x0300f00f;
+      x = (x | x << 4) & 0x030c30c3;
+      x = (x | x << 2) & 0x09249249;
+      return x;
+    };
+    auto cell = [&](float value, double origin) {
+      const double t = (double(value) - origin) * inverse_scale * 1023.0;
+      return uint32_t(t > 0 ? (t < 1023 ? t : 1023) : 0);
+    };
+    std::vector<uint32_t> code(n), scratch(n), histogram(1024);
+    for (uint32_t v = 0; v < n; ++v) {
+      const core::Vec3 a = m.positions[v];
+      code[v] = spread(cell(a.x, origin_.x)) | spread(cell(a.y, origin_.y)) << 1 |
+                spread(cell(a.z, origin_.z)) << 2;
+    }
+    for (int level = 0; level < 3; ++level) {  // LSD radix sort, three 10-bit digits
+      std::fill(histogram.begin(), histogram.end(), 0u);
+      for (uint32_t v : input_id_) ++histogram[(code[v] >> (10 * level)) & 1023];
+      uint32_t sum = 0;
+      for (uint32_t& h : histogram) sum += std::exchange(h, sum);
+      for (uint32_t v : input_id_) scratch[histogram[(code[v] >> (10 * level)) & 1023]++] = v;
+      input_id_.swap(scratch);
+    }
+  }
+
+  asset_positions_.resize(n);
+  vertices_.resize(n);
+  for (uint32_t w = 0; w < n; ++w) {
+    const core::Vec3 a = m.positions[input_id_[w]];
+    asset_positions_[w] = a;
+    vertices_[w] = {{(a.x - origin_.x) * inverse_scale, (a.y - origin_.y) * inverse_scale,
+                     (a.z - origin_.z) * inverse_scale},
+                    w,
+                    0};
+  }
+  if (n < kSpatialOrderMinimum) {
+    indices_ = m.indices;
+    return;
+  }
+  // Triangles by their lowest working vertex (a counting sort over the vertices).
+  std::vector<uint32_t> working_id(n);
+  for (uint32_t w = 0; w < n; ++w) working_id[input_id_[w]] = w;
+  const size_t triangles = m.indices.size() / 3;
+  std::vector<uint32_t> first_of(n + 1, 0), lowest(triangles);
+  for (size_t t = 0; t < triangles; ++t) {
+    const uint32_t* v = &m.indices[t * 3];
+    lowest[t] = std::min({working_id[v[0]], working_id[v[1]], working_id[v[2]]});
+    ++first_of[lowest[t] + 1];
+  }
+  for (uint32_t w = 0; w < n; ++w) first_of[w + 1] += first_of[w];
+  indices_.resize(m.indices.size());
+  triangle_input_id_.resize(triangles);
+  for (size_t t = 0; t < triangles; ++t) {
+    const uint32_t* v = &m.indices[t * 3];
+    const uint32_t slot = first_of[lowest[t]]++;
+    uint32_t* out = &indices_[size_t(slot) * 3];
+    out[0] = working_id[v[0]], out[1] = working_id[v[1]], out[2] = working_id[v[2]];
+    triangle_input_id_[slot] = uint32_t(t);
   }
 }
 
@@ -483,6 +565,7 @@ void PositionSimplifier::classify() {
 void PositionSimplifier::compact() {
   size_t out = 0;
   const size_t triangles = indices_.size() / 3;
+  uint32_t* input_ids = triangle_input_id_.empty() ? nullptr : triangle_input_id_.data();
   if (!greedy_) {  // a one-level remap, over raw pointers (the stores cannot alias the reads)
     uint32_t* indices = indices_.data();
     const VertexState* vertices = vertices_.data();
@@ -492,16 +575,19 @@ void PositionSimplifier::compact() {
       const uint32_t a = vertices[indices[t * 3]].remap, b = vertices[indices[t * 3 + 1]].remap,
                      c = vertices[indices[t * 3 + 2]].remap;
       indices[out] = a, indices[out + 1] = b, indices[out + 2] = c;
+      if (input_ids) input_ids[out / 3] = input_ids[t];
       out += 3;
     }
   } else {
     for (size_t t = 0; t < triangles; ++t) {
       if (dead_[t]) continue;
       for (int k = 0; k < 3; ++k) indices_[out + k] = resolve(indices_[t * 3 + k]);
+      if (input_ids) input_ids[out / 3] = input_ids[t];
       out += 3;
     }
   }
   indices_.resize(out);
+  if (input_ids) triangle_input_id_.resize(out / 3);
 }
 
 // Greedy tail: prices the candidate at its optimal placement (found again when it is applied) and
@@ -799,8 +885,8 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   ++stats_.collapses;
   if (options_.record) {
     CollapseStep step;
-    step.removed = from;
-    step.kept = to;
+    step.removed = input_id_[from];
+    step.kept = input_id_[to];
     step.kept_value = uint32_t(record_.values.positions.size());
     step.triangles_after = uint32_t(live_triangles_);
     step.error = float(error);
@@ -810,19 +896,33 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   }
 }
 
-// The compacted result: referenced vertices in id order, triangles in order.
+// The compacted result: referenced vertices and triangles in input order.
 SimplifyResult PositionSimplifier::finish() {
   SimplifyResult result;
   std::vector<uint32_t> compact_id(vertex_count_, kAbsent);
   for (uint32_t v : indices_) compact_id[v] = 0;
   core::Mesh& mesh = result.mesh;
-  for (uint32_t v = 0; v < vertex_count_; ++v) {
+  std::vector<uint32_t> working_id(vertex_count_);
+  for (uint32_t w = 0; w < vertex_count_; ++w) working_id[input_id_[w]] = w;
+  for (uint32_t input = 0; input < vertex_count_; ++input) {
+    const uint32_t v = working_id[input];
     if (compact_id[v] == kAbsent) continue;
     compact_id[v] = uint32_t(mesh.positions.size());
     mesh.positions.push_back(asset_positions_[v]);
   }
   mesh.indices.resize(indices_.size());
-  for (size_t i = 0; i < indices_.size(); ++i) mesh.indices[i] = compact_id[indices_[i]];
+  if (triangle_input_id_.empty()) {
+    for (size_t i = 0; i < indices_.size(); ++i) mesh.indices[i] = compact_id[indices_[i]];
+  } else {  // back in input triangle order (a counting sort over the input triangles)
+    std::vector<uint32_t> working_of(base_.indices.size() / 3, kAbsent);
+    for (size_t t = 0; t < triangle_input_id_.size(); ++t)
+      working_of[triangle_input_id_[t]] = uint32_t(t);
+    size_t out = 0;
+    for (uint32_t t : working_of) {
+      if (t == kAbsent) continue;
+      for (int k = 0; k < 3; ++k) mesh.indices[out++] = compact_id[indices_[size_t(t) * 3 + k]];
+    }
+  }
   const uint32_t material = base_.submeshes.empty() ? 0 : base_.submeshes[0].material;
   mesh.submeshes = {{0, uint32_t(mesh.indices.size()), material}};
   result.stats = stats_;

@@ -290,12 +290,14 @@ SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b, size_t
   if (bvh_a.empty() && bvh_b.empty()) return {};
   if (bvh_a.empty() || bvh_b.empty()) {
     const double inf = std::numeric_limits<double>::infinity();
-    return {inf, inf, inf};
+    return {inf, inf, inf, inf, inf};
   }
   OneSided ab = sampleDistances(a, bvh_b, samples_per_mesh, seed);
   OneSided ba = sampleDistances(b, bvh_a, samples_per_mesh, seed + 1);
   SurfaceDistance d;
   d.hausdorff = std::max(ab.max, ba.max);
+  d.max_a_to_b = ab.max;
+  d.max_b_to_a = ba.max;
   d.mean = 0.5 * (ab.mean + ba.mean);
   d.rms = std::sqrt(0.5 * (ab.mean_sq + ba.mean_sq));
   return d;
