@@ -50,6 +50,20 @@ TEST(SurfaceDistance, ShiftedSquareHasKnownMeanAndMaximum) {
   EXPECT_NEAR(d.rms, std::sqrt(0.125 / 3.0), 2e-3);  // ∫0^0.5 (0.5 - x)² dx = 1/24
 }
 
+// Half of a square against the whole: every point of the half lies on the whole (0), the whole's
+// far edge is 0.5 from the half.
+TEST(SurfaceDistance, OneSidedMaximaOfAHalfSquare) {
+  Mesh whole = test::gridMesh(4);
+  Mesh half = whole;
+  for (core::Vec3& p : half.positions) p.x *= 0.5f;
+  auto d = mesh::surfaceDistance(whole, half, 20000);
+  EXPECT_NEAR(d.max_a_to_b, 0.5, 1e-6);
+  EXPECT_NEAR(d.max_b_to_a, 0.0, 1e-6);
+  EXPECT_EQ(d.hausdorff, std::max(d.max_a_to_b, d.max_b_to_a));
+  auto swapped = mesh::surfaceDistance(half, whole, 20000);
+  EXPECT_NEAR(swapped.max_a_to_b, 0.0, 1e-6);
+  EXPECT_NEAR(swapped.max_b_to_a, 0.5, 1e-6);
+}
 TEST(SurfaceDistance, DeterministicPerSeed) {
   Mesh a = test::icosphere(3, 1.0f, test::lumps);
   Mesh b = test::icosphere(2, 1.0f);
