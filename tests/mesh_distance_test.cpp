@@ -64,6 +64,25 @@ TEST(SurfaceDistance, OneSidedMaximaOfAHalfSquare) {
   EXPECT_NEAR(swapped.max_a_to_b, 0.0, 1e-6);
   EXPECT_NEAR(swapped.max_b_to_a, 0.5, 1e-6);
 }
+// The farthest point of a right triangle from tiny patches at its corners is the middle of the
+// hypotenuse, sqrt(1/2) from every corner: one random sample would not find it, the dense grid on
+// the worst triangle does.
+TEST(SurfaceDistance, MaximumInsideATriangleIsFoundWithFewSamples) {
+  Mesh triangle;
+  triangle.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  triangle.indices = {0, 1, 2};
+  triangle.submeshes = {{0, 3, 0}};
+  Mesh corners;
+  const float e = 1e-4f;
+  for (core::Vec3 c : triangle.positions) {
+    const uint32_t first = uint32_t(corners.positions.size());
+    corners.positions.insert(corners.positions.end(), {c, {c.x + e, c.y, c.z}, {c.x, c.y + e, c.z}});
+    corners.indices.insert(corners.indices.end(), {first, first + 1, first + 2});
+  }
+  corners.submeshes = {{0, uint32_t(corners.indices.size()), 0}};
+  auto d = mesh::surfaceDistance(triangle, corners, 1);
+  EXPECT_NEAR(d.max_a_to_b, std::sqrt(0.5), 2e-4);
+}
 TEST(SurfaceDistance, DeterministicPerSeed) {
   Mesh a = test::icosphere(3, 1.0f, test::lumps);
   Mesh b = test::icosphere(2, 1.0f);

@@ -226,7 +226,9 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
   double previous_distance = std::numeric_limits<double>::infinity();
   P3 previous_point{0, 0, 0};
   size_t counted = 0;
-  auto measure = [&](P3 p, bool in_mean) {
+  // The largest distance measured on each triangle: the maximum is refined on the worst ones.
+  std::vector<double> triangle_max(n, 0.0);
+  auto measure = [&](P3 p, bool in_mean, size_t triangle) {
     double bound = std::numeric_limits<double>::infinity();
     if (std::isfinite(previous_distance)) {
       double r = previous_distance + std::sqrt(dot3(p - previous_point, p - previous_point));
@@ -237,6 +239,7 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
     previous_distance = d;
     previous_point = p;
     result.max = std::max(result.max, d);
+    triangle_max[triangle] = std::max(triangle_max[triangle], d);
     if (in_mean) {
       result.mean += d;
       result.mean_sq += d2;
@@ -262,7 +265,7 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
         // Uniform point in the triangle (Osada et al. 2002: sqrt warp).
         double r1 = std::sqrt(uniform(rng)), r2 = uniform(rng);
         P3 p = a * (1 - r1) + b * (r1 * (1 - r2)) + c * (r1 * r2);
-        measure(p, true);
+        measure(p, true, t);
         next += step;
       }
       cumulative = end;
@@ -273,8 +276,33 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
     for (int k = 0; k < 3; ++k) {
       uint32_t i = from.indices[t * 3 + k];
       if (i < from.positions.size() && core::isFinite(from.positions[i]) && area[t] > 0)
-        measure(toP3(from.positions[i]), false);
+        measure(toP3(from.positions[i]), false, t);
     }
+  // The maximum of the distance over a triangle lies anywhere in it, and a few random samples can
+  // miss it by much: on CGAL's bunny at 10%, 100k samples a side put the Hausdorff distance at
+  // 1.21 or 1.63 (1e-3 of the diagonal) depending only on the output's triangle order, 1M samples
+  // at 1.65-1.68. So the triangles with the largest measured distances are measured again on a
+  // dense barycentric grid (for the maximum only), where the maximum most likely is.
+  constexpr size_t kRefinedTriangles = 64;
+  constexpr int kGrid = 24;  // (kGrid + 1)(kGrid + 2)/2 = 325 points a triangle
+  std::vector<uint32_t> worst;
+  for (size_t t = 0; t < n; ++t)
+    if (area[t] > 0) worst.push_back(uint32_t(t));
+  const size_t refined = std::min(kRefinedTriangles, worst.size());
+  std::partial_sort(worst.begin(), worst.begin() + ptrdiff_t(refined), worst.end(),
+                    [&](uint32_t x, uint32_t y) {
+                      return triangle_max[x] != triangle_max[y] ? triangle_max[x] > triangle_max[y]
+                                                                : x < y;
+                    });
+  for (size_t w = 0; w < refined; ++w) {
+    const size_t t = worst[w];
+    P3 a = toP3(from.positions[from.indices[t * 3]]);
+    P3 b = toP3(from.positions[from.indices[t * 3 + 1]]);
+    P3 c = toP3(from.positions[from.indices[t * 3 + 2]]);
+    for (int i = 0; i <= kGrid; ++i)
+      for (int j = 0; i + j <= kGrid; ++j)
+        measure(a + (b - a) * (double(i) / kGrid) + (c - a) * (double(j) / kGrid), false, t);
+  }
   if (counted > 0) {
     result.mean /= double(counted);
     result.mean_sq /= double(counted);
