@@ -106,6 +106,25 @@ TEST(CliSimplify, NormalsTheFileLacksAreDerivedAfterNotSimplified) {
     ASSERT_NEAR(a.y, b.y, 1e-6f) << "index " << i;
     ASSERT_NEAR(a.z, b.z, 1e-6f) << "index " << i;
   }
+
+  // --simplify-generated-normals: the loader's normals, simplified as attributes.
+  const std::string kept = (dir / "spot_positions_10_normals.obj").string();
+  run = runCli({"simplify", in, kept, "--ratio", "0.1", "--simplify-generated-normals"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  auto with_normals = io::loadAsset(in);  // generated normals
+  ASSERT_TRUE(with_normals) << with_normals.error().message;
+  const mesh::SimplifyResult engine =
+      mesh::simplifyQuadric(with_normals->mesh, {.target_triangles = target, .record = false});
+  auto written_kept = io::loadAsset(kept, {.generate_normals = false});
+  ASSERT_TRUE(written_kept) << written_kept.error().message;
+  ASSERT_EQ(written_kept->mesh.indices.size(), engine.mesh.indices.size());
+  for (size_t i = 0; i < engine.mesh.indices.size(); ++i) {
+    const core::Vec3 a = written_kept->mesh.positions[written_kept->mesh.indices[i]];
+    const core::Vec3 b = engine.mesh.positions[engine.mesh.indices[i]];
+    ASSERT_NEAR(a.x, b.x, 1e-6f) << "index " << i;
+    ASSERT_NEAR(a.y, b.y, 1e-6f) << "index " << i;
+    ASSERT_NEAR(a.z, b.z, 1e-6f) << "index " << i;
+  }
 }
 
 // The headline case: Spot to 10% with the quadric mode writes a .glb that reloads with about 10%

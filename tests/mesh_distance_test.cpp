@@ -60,6 +60,7 @@ TEST(SurfaceDistance, OneSidedMaximaOfAHalfSquare) {
   EXPECT_NEAR(d.max_a_to_b, 0.5, 1e-6);
   EXPECT_NEAR(d.max_b_to_a, 0.0, 1e-6);
   EXPECT_EQ(d.hausdorff, std::max(d.max_a_to_b, d.max_b_to_a));
+  EXPECT_FLOAT_EQ(d.farthest_a_to_b.x, 1.0f);  // on the whole's far edge
   auto swapped = mesh::surfaceDistance(half, whole, 20000);
   EXPECT_NEAR(swapped.max_a_to_b, 0.0, 1e-6);
   EXPECT_NEAR(swapped.max_b_to_a, 0.5, 1e-6);
@@ -82,6 +83,8 @@ TEST(SurfaceDistance, MaximumInsideATriangleIsFoundWithFewSamples) {
   corners.submeshes = {{0, uint32_t(corners.indices.size()), 0}};
   auto d = mesh::surfaceDistance(triangle, corners, 1);
   EXPECT_NEAR(d.max_a_to_b, std::sqrt(0.5), 2e-4);
+  EXPECT_NEAR(d.farthest_a_to_b.x, 0.5f, 1e-6f);  // the middle of the hypotenuse
+  EXPECT_NEAR(d.farthest_a_to_b.y, 0.5f, 1e-6f);
 }
 TEST(SurfaceDistance, DeterministicPerSeed) {
   Mesh a = test::icosphere(3, 1.0f, test::lumps);

@@ -189,6 +189,8 @@ struct SurfaceDistance {
   // (with a the original, detail the simplification lost) and a point of `b` from `a` (the
   // simplification left the surface).
   double max_a_to_b = 0, max_b_to_a = 0;
+  // Where they were measured: the point of `a` farthest from `b`, and of `b` from `a`.
+  core::Vec3 farthest_a_to_b{}, farthest_b_to_a{};
 };
 // `samples_per_mesh` points are sampled (area-weighted, deterministic for a seed) on each mesh.
 // For the maximum only, every vertex is measured too, and so is a dense grid (325 points) on each

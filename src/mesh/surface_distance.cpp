@@ -190,6 +190,7 @@ class TriangleBvh {
 
 struct OneSided {
   double max = 0, mean = 0, mean_sq = 0;
+  P3 farthest{0, 0, 0};  // where max was measured
 };
 
 uint64_t nextRandom(uint64_t& state) {  // splitmix64
@@ -238,7 +239,7 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
     double d = std::sqrt(d2);
     previous_distance = d;
     previous_point = p;
-    result.max = std::max(result.max, d);
+    if (d > result.max) result.max = d, result.farthest = p;
     triangle_max[triangle] = std::max(triangle_max[triangle], d);
     if (in_mean) {
       result.mean += d;
@@ -318,7 +319,10 @@ SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b, size_t
   if (bvh_a.empty() && bvh_b.empty()) return {};
   if (bvh_a.empty() || bvh_b.empty()) {
     const double inf = std::numeric_limits<double>::infinity();
-    return {inf, inf, inf, inf, inf};
+    SurfaceDistance unbounded;
+    unbounded.hausdorff = unbounded.mean = unbounded.rms = inf;
+    unbounded.max_a_to_b = unbounded.max_b_to_a = inf;
+    return unbounded;
   }
   OneSided ab = sampleDistances(a, bvh_b, samples_per_mesh, seed);
   OneSided ba = sampleDistances(b, bvh_a, samples_per_mesh, seed + 1);
@@ -326,6 +330,8 @@ SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b, size_t
   d.hausdorff = std::max(ab.max, ba.max);
   d.max_a_to_b = ab.max;
   d.max_b_to_a = ba.max;
+  d.farthest_a_to_b = {float(ab.farthest.x), float(ab.farthest.y), float(ab.farthest.z)};
+  d.farthest_b_to_a = {float(ba.farthest.x), float(ba.farthest.y), float(ba.farthest.z)};
   d.mean = 0.5 * (ab.mean + ba.mean);
   d.rms = std::sqrt(0.5 * (ab.mean_sq + ba.mean_sq));
   return d;
