@@ -464,9 +464,17 @@ int runSimplify(SimplifyFlags& flags) {
     if (derived_normals) core::computeNormals(mesh);
     if (derived_tangents && !mesh.normals.empty() && !mesh.uv0.empty()) core::computeTangents(mesh);
   };
-  core::Asset shaded = *asset;  // what a renderer sees (the loader's defaults)
-  derive(shaded.mesh);
-  if (!positions_only) *asset = shaded;
+  // What a renderer sees (the loader's defaults): the asset itself, or for a file of positions
+  // only a copy with derived normals.
+  core::Asset derived_copy;
+  const core::Asset* shaded = &*asset;
+  if (positions_only) {
+    derived_copy = *asset;
+    derive(derived_copy.mesh);
+    shaded = &derived_copy;
+  } else {
+    derive(asset->mesh);
+  }
   const core::Mesh& input = asset->mesh;
   const size_t input_triangles = input.triangleCount();
   std::printf("load      %s: %zu triangles, %zu vertices, %.3f s\n", flags.in.c_str(),
@@ -517,7 +525,7 @@ int runSimplify(SimplifyFlags& flags) {
   } else {
     auto source = flags.shading.source();
     if (!source) return fail(source.error().message);
-    auto simplified = mesh::simplifyImage(*session.renderer, shaded, *source,
+    auto simplified = mesh::simplifyImage(*session.renderer, *shaded, *source,
                                           {.target_triangles = target_triangles,
                                            .target_error = target_error,
                                            .distance = distance,
@@ -555,13 +563,9 @@ int runSimplify(SimplifyFlags& flags) {
   // refuse to replace the input or the files beside it).
   core::Asset output = *asset;
   output.mesh = std::move(result.mesh);
-  if (flags.mode != "image" && positions_only) {
-    // The derived streams, derived again from the simplified surface (the image mode simplified
-    // them as attributes).
-    if (derived_normals) output.mesh.normals.clear();
-    if (derived_tangents) output.mesh.tangents.clear();
-    derive(output.mesh);
-  }
+  // Normals derived again from the simplified positions (the image mode simplified them as
+  // attributes).
+  if (flags.mode != "image" && positions_only) derive(output.mesh);
   start = std::chrono::steady_clock::now();
   core::Status written =
       flags.writesObj() ? io::writeObj(output, flags.out) : io::writeGltf(output, flags.out);
@@ -587,9 +591,9 @@ int runSimplify(SimplifyFlags& flags) {
   if (flags.wantsImageError()) {
     start = std::chrono::steady_clock::now();
     const int supersample = 4;
-    const core::Asset* approximations[] = {&output, &shaded};
+    const core::Asset* approximations[] = {&output, shaded};
     auto comparison =
-        compareRendered(session, shaded, approximations, distance, flags.shading, supersample);
+        compareRendered(session, *shaded, approximations, distance, flags.shading, supersample);
     if (!comparison) return fail(comparison.error().message);
     const metric::ImageError& simplified = comparison->errors[0];
     const metric::ImageError& original = comparison->errors[1];
