@@ -1,6 +1,6 @@
-// The quadric collapse cost: Garland & Heckbert 1997 plane quadrics (area-weighted), Hoppe 1999
-// attribute quadrics for normals, UVs and colours, penalty planes along feature lines, and the
-// optimal placement with a well-conditioned fallback. Private to src/mesh; simplifyQuadric
+// The quadric collapse cost: Garland & Heckbert 1997 plane quadrics (weighted by planeWeight),
+// Hoppe 1999 attribute quadrics for normals, UVs and colours, penalty planes along feature lines,
+// and the optimal placement with a well-conditioned fallback. Private to src/mesh; simplifyQuadric
 // (simplify_quadric.cpp) plugs it into the collapse engine.
 #pragma once
 
@@ -13,8 +13,8 @@
 
 namespace duolod::mesh {
 
-// A symmetric 4x4 quadric Q(p) = pᵀAp + 2bᵀp + c over positions, plus the area it was
-// accumulated over (for errors in distance units).
+// A symmetric 4x4 quadric Q(p) = pᵀAp + 2bᵀp + c over positions, plus the summed weight of the
+// face planes it was accumulated from (planeWeight; errors in distance units divide by it).
 struct Quadric {
   double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;
   double b0 = 0, b1 = 0, b2 = 0;
@@ -46,22 +46,49 @@ inline double evaluateQuadric(const Quadric& q, Vec3d p) {
   return std::max(value, 0.0);
 }
 
-// The area-weighted plane quadric of a triangle (Garland & Heckbert 1997 eq. 2, weighted by its
+// The weight of a face's plane, from its area: area^(1/4). Garland & Heckbert 1997 weight planes
+// by area (a collapse is priced by how much surface it displaces; Garland's thesis §4.5 weighs
+// this against unweighted planes, area^0). Real meshes spend small triangles where the shape has
+// detail (scans, adaptively decimated and modelled assets), and full area weighting makes those
+// details cheap to flatten: a thin horn costs its small area times its height². Between the two,
+// area^α keeps large flat regions weighty and lets dense detail count. Measured with
+// bench/simplify (Hausdorff ratio to meshopt_simplify 0.18, median over 5 input orders;
+// bench/RESULTS.md, issue 3, session 11): on the position-only rows, cells worse than meshopt were
+// 4/21 at α = 1 (ChineseDragon-10kv 1% 1.37, armadillo 1% 1.19, spot 50% 1.16, bunny 10% 1.07),
+// 1-4 at α = 0.85, 0.75, 0.7, 0.6, 0.5, 0.35 and 0, none at 0.25 and 0.15 (α = 0: fandisk 1%
+// 1.12, its CAD fillets of tiny triangles outweigh whole flat faces). The count is sensitive to α
+// (armadillo 1% swings 0.73-1.53 between neighbouring values); the geometric mean of the Hausdorff
+// ratios falls steadily, 0.71 at α = 1 to 0.60 at 0.25. The mean distance stays below meshopt's
+// in every cell. Scale-free in effect: every plane of a mesh (feature planes too,
+// featureEdgeQuadric) goes through the same power, and errors divide by the summed weights
+// (Quadric::weight).
+// Meshes with attributes keep area weighting (`area_weighted`): their attribute quadrics (Hoppe
+// 1999) share the face's weight and their attribute weights (quadric.cpp) were set against area;
+// with area^(1/4) there, spot.obj at 10% rendered worse (duolod simplify --pixels 256: eq. 6's ε
+// 679.6 -> 789.8) and two attribute rows' Hausdorff went above meshopt's (WaterBottle 10% 1.06,
+// Avocado 10% 1.17), while one (spot 50%) came below.
+inline double planeWeight(double area, bool area_weighted = false) {
+  return area_weighted ? area : std::sqrt(std::sqrt(area));
+}
+
+// The plane quadric of a triangle (Garland & Heckbert 1997 eq. 2, weighted by planeWeight of its
 // area); false (q untouched) for a zero-area or non-finite triangle. Inline: once per triangle.
-inline bool triangleQuadric(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, Quadric& q) {
+inline bool triangleQuadric(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, Quadric& q,
+                            bool area_weighted = false) {
   const Vec3d cross_product = cross(p1 - p0, p2 - p0);
   const double double_area = std::sqrt(dot(cross_product, cross_product));
   if (!(double_area > 0) || !std::isfinite(double_area)) return false;
-  const double area = 0.5 * double_area;
+  const double weight = planeWeight(0.5 * double_area, area_weighted);
   const Vec3d n = cross_product * (1.0 / double_area);
-  q = planeQuadric(n, -dot(n, p0), area, area);
+  q = planeQuadric(n, -dot(n, p0), weight, weight);
   return true;
 }
 // The penalty plane through the feature edge [a, b], perpendicular to the surface
 // (`face_normal`: the sum of the unit normals of the edge's triangles; Garland & Heckbert 1997
 // §6.1): sliding a border vertex off its line costs, sliding along it does not. False (q
 // untouched) when the plane is undefined.
-bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q);
+bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q,
+                        bool area_weighted = false);
 // The unit normal of a triangle, or zero.
 Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2);
 

@@ -340,7 +340,7 @@ void PositionSimplifier::setUp() {
   pass_lock_.assign(vertex_count_, 0);
   cursor_.resize(vertex_count_);
 
-  // Area-weighted plane quadrics (Garland & Heckbert 1997 eq. 2).
+  // Plane quadrics (Garland & Heckbert 1997 eq. 2), weighted by planeWeight (quadric.hpp).
   quadrics_.assign(vertex_count_, Quadric{});
   for (size_t t = 0; t < live_triangles_; ++t) {
     const uint32_t* v = &indices_[t * 3];
