@@ -65,14 +65,15 @@ Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2) {
   return normalized(cross(p1 - p0, p2 - p0));
 }
 
-bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q, bool area_weighted) {
+bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q,
+                        bool with_attributes) {
   const Vec3d e = b - a;
   const Vec3d n = normalized(cross(e, face_normal));
   if (dot(n, n) == 0 || !std::isfinite(n.x)) return false;
-  // kFeatureWeight |e|² under area weighting, i.e. 2 kFeatureWeight times the weight of a face
-  // of area |e|² / 2 (a right triangle on e); the same under planeWeight.
-  q = planeQuadric(n, -dot(n, a), 2 * kFeatureWeight * planeWeight(0.5 * dot(e, e), area_weighted),
-                   0.0);
+  // 2 kFeatureWeight times the weight of a face of area |e|² / 2 (a right triangle on e), which
+  // is kFeatureWeight |e|² under plain area weighting.
+  const double weight = 2 * kFeatureWeight * planeWeight(0.5 * dot(e, e), with_attributes);
+  q = planeQuadric(n, -dot(n, a), weight, 0.0);
   return true;
 }
 
@@ -241,7 +242,7 @@ void QuadricModel::begin(const EngineState& state) {
     if (!finite) continue;
     const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0];
     Quadric plane;
-    if (!triangleQuadric(p[0], p[1], p[2], plane, /*area_weighted=*/dims_ > 0)) continue;
+    if (!triangleQuadric(p[0], p[1], p[2], plane, /*with_attributes=*/dims_ > 0)) continue;
     const double area = plane.weight;  // planeWeight of the area, which the attributes share
     for (int k = 0; k < 3; ++k) addInto(geometric_[position[k]], plane);
 
@@ -294,7 +295,7 @@ void QuadricModel::begin(const EngineState& state) {
     }
     Quadric plane;
     if (!featureEdgeQuadric(state.positions[edge.a], state.positions[edge.b], face_normal, plane,
-                            /*area_weighted=*/dims_ > 0))
+                            /*with_attributes=*/dims_ > 0))
       continue;
     addInto(geometric_[edge.a], plane);
     addInto(geometric_[edge.b], plane);
@@ -381,11 +382,12 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
       cand.position = minimizeOnEdge(total, a, b, &value);
     }
     // The cost is the weighted quadric itself (Garland & Heckbert's Q(v)): squared distance
-    // times the weight (planeWeight of the area) it applies to, so a collapse that moves a large region a little and one that
-    // moves a small region a lot are compared by how much surface they displace. (Dividing by the
-    // area, i.e. ordering by mean squared distance, was measured worse: bench/simplify's mean
-    // distance 10-40% higher, Hausdorff worse on 6 of 21 cells instead of 3.) The reported error
-    // is the root (weighted) mean squared distance in asset units.
+    // times the weight (planeWeight of the area) it applies to, so a collapse that moves a large
+    // region a little and one that moves a small region a lot are compared by how much surface
+    // they displace. (Dividing by the weight, i.e. ordering by mean squared distance, was
+    // measured worse: bench/simplify's mean distance 10-40% higher, Hausdorff worse on 6 of 21
+    // cells instead of 3.) The reported error is the root (weighted) mean squared distance in
+    // asset units.
     cand.cost = value;
     const double area = geometric.weight > 0 ? geometric.weight : 1.0;
     const double geometric_value = dims_ == 0 ? value : quadricValue(geometric, cand.position);
