@@ -243,12 +243,12 @@ void QuadricModel::begin(const EngineState& state) {
     const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0];
     Quadric plane;
     if (!triangleQuadric(p[0], p[1], p[2], plane, /*with_attributes=*/dims_ > 0)) continue;
-    const double area = plane.weight;  // planeWeight of the area, which the attributes share
+    const double weight = plane.weight;  // planeWeight of the area; the attributes share it
     for (int k = 0; k < 3; ++k) addInto(geometric_[position[k]], plane);
 
     if (dims_ == 0) continue;
     // Hoppe 1999 §4: per attribute j the linear function g_j·p + d_j that interpolates the three
-    // corner values in the triangle's plane; the quadric is area * Σ_j (g_j·p + d_j - s_j)².
+    // corner values in the triangle's plane; the quadric is weight * Σ_j (g_j·p + d_j - s_j)².
     const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
     const double gram = g11 * g22 - g12 * g12;
     const bool solvable = gram > 1e-30 * g11 * g22;
@@ -256,7 +256,7 @@ void QuadricModel::begin(const EngineState& state) {
     double* q = triangle_quadric.data();
     double* column = q + 11;
     double* bs = q + 11 + 3 * dims_;
-    q[10] = area;
+    q[10] = weight;
     for (uint32_t j = 0; j < dims_; ++j) {
       double s[3];
       for (int k = 0; k < 3; ++k) {
@@ -270,12 +270,12 @@ void QuadricModel::begin(const EngineState& state) {
         g = e1 * alpha + e2 * beta;
       }
       double d = solvable ? s[0] - dot(g, p[0]) : (s[0] + s[1] + s[2]) / 3.0;
-      q[0] += area * g.x * g.x, q[1] += area * g.x * g.y, q[2] += area * g.x * g.z;
-      q[3] += area * g.y * g.y, q[4] += area * g.y * g.z, q[5] += area * g.z * g.z;
-      q[6] += area * d * g.x, q[7] += area * d * g.y, q[8] += area * d * g.z;
-      q[9] += area * d * d;
-      column[3 * j] = -area * g.x, column[3 * j + 1] = -area * g.y, column[3 * j + 2] = -area * g.z;
-      bs[j] = -area * d;
+      q[0] += weight * g.x * g.x, q[1] += weight * g.x * g.y, q[2] += weight * g.x * g.z;
+      q[3] += weight * g.y * g.y, q[4] += weight * g.y * g.z, q[5] += weight * g.z * g.z;
+      q[6] += weight * d * g.x, q[7] += weight * d * g.y, q[8] += weight * d * g.z;
+      q[9] += weight * d * d;
+      column[3 * j] = -weight * g.x, column[3 * j + 1] = -weight * g.y, column[3 * j + 2] = -weight * g.z;
+      bs[j] = -weight * d;
     }
     for (int k = 0; k < 3; ++k) {
       double* target = attribute_.data() + size_t(wedge[k]) * attribute_stride_;

@@ -51,24 +51,18 @@ inline double evaluateQuadric(const Quadric& q, Vec3d p) {
 // this against unweighted planes, area^0). Real meshes spend small triangles where the shape has
 // detail (scans, adaptively decimated and modelled assets), and full area weighting makes those
 // details cheap to flatten: a thin horn costs its small area times its height². Between the two,
-// area^α keeps large flat regions weighty and lets dense detail count. Measured with
-// bench/simplify (Hausdorff ratio to meshopt_simplify 0.18, median over 5 input orders;
-// bench/RESULTS.md, issue 3, session 11): on the position-only rows, cells worse than meshopt were
-// 4/21 at α = 1 (ChineseDragon-10kv 1% 1.37, armadillo 1% 1.19, spot 50% 1.16, bunny 10% 1.07),
-// 1-4 at α = 0.85, 0.75, 0.7, 0.6, 0.5, 0.35 and 0, none at 0.25 and 0.15 (α = 0: fandisk 1%
-// 1.12, its CAD fillets of tiny triangles outweigh whole flat faces). The count is sensitive to α
-// (armadillo 1% swings 0.73-1.53 between neighbouring values); the geometric mean of the Hausdorff
-// ratios falls steadily, 0.71 at α = 1 to 0.60 at 0.25. The mean distance stays below meshopt's
-// in every cell. Scale-free in effect: every plane of a mesh (feature planes too,
-// featureEdgeQuadric) goes through the same power, and errors divide by the summed weights
-// (Quadric::weight).
+// area^α keeps large flat regions weighty and lets dense detail count. Every plane of a mesh
+// (feature planes too, featureEdgeQuadric) goes through the same power, and errors divide by the
+// summed weights (Quadric::weight). Measured (bench/simplify, Hausdorff ratio to meshopt_simplify
+// 0.18, median over 5 input orders; the sweep in bench/RESULTS.md, issue 3, session 11): on the
+// position-only rows, 4 of 21 cells were worse than meshopt at α = 1, none at 1/4; the count is
+// sensitive to α (1-4 cells at 0.85 down to 0.35, and at 0), the geometric mean of the ratios
+// falls steadily (0.71 at α = 1, 0.60 at 1/4), the mean distance stays below meshopt's.
 // Meshes with attributes use area^0.9 (`with_attributes`): their attribute quadrics (Hoppe 1999)
 // share the face's weight, and their attribute weights (quadric.cpp) were set against area. There,
-// area^(1/4) rendered spot.obj at 10% worse (duolod simplify --pixels 256: eq. 6's ε 679.6 ->
-// 789.8) and put two attribute rows' Hausdorff above meshopt's (WaterBottle 10% 1.06, Avocado 10%
-// 1.17); area^0.9 brings the last one (spot 50%, 1.15 under area weighting) to 0.80 with no
-// attribute row above 1 (0.75: also none), for a rendered ε 0.5-6% higher (spot 10% 679.6 ->
-// 722.4, 50% 96.87 -> 97.34; WaterBottle 10% 111.7 -> 113.3, 50% 25.01 -> 25.36).
+// 1/4 rendered spot.obj at 10% worse (eq. 6's ε 679.6 -> 789.8) and put two attribute rows above
+// meshopt; 0.9 leaves none above (spot 50%: 1.15 under area weighting, 0.80), for a rendered ε
+// 0.5-6% higher than under area weighting (spot 10% 679.6 -> 722.4).
 inline double planeWeight(double area, bool with_attributes = false) {
   return with_attributes ? std::pow(area, 0.9) : std::sqrt(std::sqrt(area));
 }
