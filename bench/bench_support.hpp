@@ -28,4 +28,27 @@ double medianSeconds(int repeats, F&& run) {
   return median(times);
 }
 
+// Two workloads timed alternately (a, b, a, b, ...) so that both see the same machine drift: on a
+// shared VM the speed moves by 10-30% over seconds, and timing all of a's repeats before all of
+// b's put that drift into the ratio. Returns the medians of a's and b's times and the median of
+// the per-pair ratios a / b.
+struct PairedTimes {
+  double a_seconds = 0, b_seconds = 0, ratio = 0;
+};
+template <class A, class B>
+PairedTimes pairedMedianSeconds(int repeats, A&& run_a, B&& run_b) {
+  auto time = [](auto&& run) {
+    const auto start = std::chrono::steady_clock::now();
+    run();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  std::vector<double> a, b, ratios;
+  for (int r = 0; r < repeats; ++r) {
+    a.push_back(time(run_a));
+    b.push_back(time(run_b));
+    ratios.push_back(b.back() > 0 ? a.back() / b.back() : 0);
+  }
+  return {median(a), median(b), median(ratios)};
+}
+
 }  // namespace duolod::bench
