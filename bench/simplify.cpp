@@ -172,6 +172,7 @@ int main(int argc, char** argv) {
   float attribute_weight = 1.0f;
   std::string gltfpack = "/usr/bin/gltfpack";
   int orders = 0;
+  bool digest = false;
   app.add_option("meshes", meshes,
                  "mesh files (.off .obj .ply .gltf .glb); default: CGAL + shared");
   app.add_option("--data-dir", data_dir, "folder given to scripts/fetch-bench-data.sh")
@@ -198,6 +199,9 @@ int main(int argc, char** argv) {
                  "orders")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  app.add_flag("--digest", digest,
+               "print a hash of duolod's output mesh per cell to stderr (to check that a speed "
+               "change keeps the output bit for bit)");
   CLI11_PARSE(app, argc, argv);
 
   if (!gltfpack.empty() && access(gltfpack.c_str(), X_OK) != 0) {
@@ -341,6 +345,15 @@ int main(int argc, char** argv) {
                                              1.0f, 0, &meshopt_error);
             });
         const double ours_s = times.a_seconds, meshopt_s = times.b_seconds;
+        if (digest) {
+          const uint64_t h = core::hashBytes(ours.mesh.indices.data(),
+                                             ours.mesh.indices.size() * sizeof(uint32_t),
+                                             core::hashBytes(ours.mesh.positions.data(),
+                                                             ours.mesh.positions.size() *
+                                                                 sizeof(core::Vec3)));
+          std::fprintf(stderr, "digest %s %zu %016llx\n", variant.label.c_str(), target,
+                       static_cast<unsigned long long>(h));
+        }
         core::Mesh theirs;
         theirs.positions = input.positions;
         theirs.indices.assign(destination.begin(), destination.begin() + index_count);
