@@ -654,8 +654,20 @@ void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
   const size_t triangles = indices_.size() / 3;
   const VertexKind* kinds = kinds_.data();
   const uint32_t* indices = indices_.data();
+  // (Only where the records outgrow the L2 cache, as for the spatial order.)
+  const PricingRecord* pricing =
+      greedy_ || vertex_count_ < kSpatialOrderMinimum ? nullptr : pricing_.data();
+  constexpr size_t kAhead = 8;
   for (size_t t = 0; t < triangles; ++t) {
     const uint32_t* v = indices + t * 3;
+    if (pricing && t + kAhead < triangles) {
+      // The pass pricing reads the records of each triangle's corners: they are spread over
+      // megabytes, so a few triangles ahead they are fetched while this one is priced.
+      const uint32_t* ahead = v + 3 * kAhead;
+      __builtin_prefetch(&pricing[ahead[0]]);
+      __builtin_prefetch(&pricing[ahead[1]]);
+      __builtin_prefetch(&pricing[ahead[2]]);
+    }
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t a = v[k], b = v[kNext[k]];
       if (a > b) continue;
@@ -710,14 +722,65 @@ void PositionSimplifier::collectCandidates() {
   pass_candidate_count_ = count;
 }
 
+// turnsOverOrFlattens (collapse_engine.hpp) for each triangle (corner, fan[i], fan[i + 1]) of a
+// fan, two triangles per step in SSE2 doubles: the same operations in the same order, so the
+// same answers bit for bit, in about half the instructions (the scalar test was ~10% of the
+// instructions on bunny 10%).
 __attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const uint32_t* fan,
                                                                         uint32_t size, Vec3d corner,
                                                                         Vec3d moved) const {
+#if defined(__SSE2__)
+  const VertexState* vertices = vertices_.data();
+  const __m128d cx = _mm_set1_pd(corner.x), cy = _mm_set1_pd(corner.y), cz = _mm_set1_pd(corner.z);
+  const __m128d mx = _mm_set1_pd(moved.x), my = _mm_set1_pd(moved.y), mz = _mm_set1_pd(moved.z);
+  const __m128d zero = _mm_setzero_pd(), tiny = _mm_set1_pd(1e-24);
+  for (uint32_t i = 0; i < size; i += 4) {
+    // A lone last triangle fills both lanes.
+    const uint32_t j = i + 2 < size ? i + 2 : i;
+    const Vec3d& b0 = vertices[fan[i]].position;
+    const Vec3d& d0 = vertices[fan[i + 1]].position;
+    const Vec3d& b1 = vertices[fan[j]].position;
+    const Vec3d& d1 = vertices[fan[j + 1]].position;
+    const __m128d bx = _mm_set_pd(b1.x, b0.x), by = _mm_set_pd(b1.y, b0.y),
+                  bz = _mm_set_pd(b1.z, b0.z);
+    const __m128d dx = _mm_set_pd(d1.x, d0.x), dy = _mm_set_pd(d1.y, d0.y),
+                  dz = _mm_set_pd(d1.z, d0.z);
+    // n_old = cross(b - corner, d - corner)
+    const __m128d ux = _mm_sub_pd(bx, cx), uy = _mm_sub_pd(by, cy), uz = _mm_sub_pd(bz, cz);
+    const __m128d vx = _mm_sub_pd(dx, cx), vy = _mm_sub_pd(dy, cy), vz = _mm_sub_pd(dz, cz);
+    const __m128d ox = _mm_sub_pd(_mm_mul_pd(uy, vz), _mm_mul_pd(uz, vy));
+    const __m128d oy = _mm_sub_pd(_mm_mul_pd(uz, vx), _mm_mul_pd(ux, vz));
+    const __m128d oz = _mm_sub_pd(_mm_mul_pd(ux, vy), _mm_mul_pd(uy, vx));
+    // n_new = cross(b - moved, d - moved)
+    const __m128d px = _mm_sub_pd(bx, mx), py = _mm_sub_pd(by, my), pz = _mm_sub_pd(bz, mz);
+    const __m128d qx = _mm_sub_pd(dx, mx), qy = _mm_sub_pd(dy, my), qz = _mm_sub_pd(dz, mz);
+    const __m128d nx = _mm_sub_pd(_mm_mul_pd(py, qz), _mm_mul_pd(pz, qy));
+    const __m128d ny = _mm_sub_pd(_mm_mul_pd(pz, qx), _mm_mul_pd(px, qz));
+    const __m128d nz = _mm_sub_pd(_mm_mul_pd(px, qy), _mm_mul_pd(py, qx));
+    auto dot = [](__m128d ax, __m128d ay, __m128d az, __m128d bx_, __m128d by_, __m128d bz_) {
+      return _mm_add_pd(_mm_add_pd(_mm_mul_pd(ax, bx_), _mm_mul_pd(ay, by_)), _mm_mul_pd(az, bz_));
+    };
+    const __m128d old_sq = dot(ox, oy, oz, ox, oy, oz), new_sq = dot(nx, ny, nz, nx, ny, nz);
+    const __m128d to_b_sq = dot(px, py, pz, px, py, pz), to_d_sq = dot(qx, qy, qz, qx, qy, qz);
+    // std::max(to_b_sq, to_d_sq): maxpd returns its second operand on ties and NaN, as std::max
+    // returns its first.
+    const __m128d edge_scale = _mm_max_pd(to_d_sq, to_b_sq);
+    const __m128d flattens =
+        _mm_or_pd(_mm_cmple_pd(new_sq, _mm_mul_pd(_mm_mul_pd(tiny, edge_scale), edge_scale)),
+                  _mm_cmpngt_pd(new_sq, zero));
+    const __m128d turns = _mm_cmple_pd(dot(ox, oy, oz, nx, ny, nz), zero);
+    // A triangle that was already degenerate (old_sq <= 0) never counts.
+    const __m128d flips = _mm_and_pd(_mm_cmpnle_pd(old_sq, zero), _mm_or_pd(flattens, turns));
+    if (_mm_movemask_pd(flips)) return true;
+  }
+  return false;
+#else
   for (uint32_t i = 0; i < size; i += 2)
     if (turnsOverOrFlattens(corner, vertices_[fan[i]].position, vertices_[fan[i + 1]].position,
                             moved))
       return true;
   return false;
+#endif
 }
 
 // The collapse of one priced candidate, checked against the current topology (its endpoints are
