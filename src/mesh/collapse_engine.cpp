@@ -1323,16 +1323,16 @@ PreparedMesh prepareMeshWithPositions(const core::Mesh& mesh) {
   bool groups_valid = false;
   std::vector<uint32_t> groups = triangleGroups(mesh, groups_valid);
   const size_t triangles = mesh.indices.size() / 3;
-  // Written through raw pointers into room for every triangle (no push_back per index), cut to
-  // size after the loop.
+  // First the proper triangles (in range, three distinct positions), each with its position
+  // triple rotated so that the lowest id comes first (same orientation); written through raw
+  // pointers into room for every triangle and cut to size afterwards.
   std::vector<uint32_t> kept_indices(triangles * 3);
-  std::vector<uint32_t> kept_keys(triangles * 3);  // rotated position triples of kept triangles
+  std::vector<uint32_t> kept_keys(triangles * 3);
   std::vector<uint32_t> kept_groups(triangles);
   uint32_t* const kept_index_out = kept_indices.data();
   uint32_t* const keys = kept_keys.data();
   const uint32_t* const in = mesh.indices.data();
-  uint32_t kept = 0;
-  IndexTable triangle_table(triangles);
+  uint32_t proper = 0;
   for (size_t t = 0; t < triangles; ++t) {
     uint32_t v[3], p[3];
     bool in_range = true;
@@ -1344,18 +1344,43 @@ PreparedMesh prepareMeshWithPositions(const core::Mesh& mesh) {
     }
     if (!in_range || p[0] == p[1] || p[1] == p[2] || p[0] == p[2]) continue;
     int first = p[0] < p[1] ? (p[0] < p[2] ? 0 : 2) : (p[1] < p[2] ? 1 : 2);
-    uint32_t* key = keys + size_t(kept) * 3;  // overwritten by the next one if a duplicate
+    uint32_t* key = keys + size_t(proper) * 3;
     key[0] = p[first], key[1] = p[(first + 1) % 3], key[2] = p[(first + 2) % 3];
-    // One mixing round over the three ids (the triangles are many; hashWords would mix three
-    // times).
-    const uint64_t hash =
-        mixHash((uint64_t(key[0]) << 32 | key[1]) ^ (uint64_t(key[2]) * 0x9e3779b97f4a7c15ull));
-    uint32_t found = triangle_table.findOrInsert(kept, hash, [&](uint32_t other) {
-      return std::memcmp(key, keys + size_t(other) * 3, 12) == 0;
-    });
-    if (found != kept) continue;  // duplicate of an earlier triangle
-    for (int k = 0; k < 3; ++k) kept_index_out[size_t(kept) * 3 + k] = v[k];
-    kept_groups[kept] = groups[t];
+    for (int k = 0; k < 3; ++k) kept_index_out[size_t(proper) * 3 + k] = v[k];
+    kept_groups[proper] = groups[t];
+    ++proper;
+  }
+  // Duplicates share their lowest position id: bucket the triangles by it (a counting sort, stable,
+  // so each bucket lists its triangles in input order) and compare within buckets, a few
+  // triangles each. This replaced a hash table of the keys, whose probes missed the cache on
+  // every triangle of a large mesh.
+  std::vector<uint8_t> duplicate(proper, 0);
+  {
+    std::vector<uint32_t> bucket_start(size_t(input_position_count) + 1, 0);
+    for (uint32_t t = 0; t < proper; ++t) ++bucket_start[keys[size_t(t) * 3] + 1];
+    for (uint32_t i = 0; i < input_position_count; ++i) bucket_start[i + 1] += bucket_start[i];
+    std::vector<uint32_t> members(proper), cursor(bucket_start.begin(), bucket_start.end() - 1);
+    for (uint32_t t = 0; t < proper; ++t) members[cursor[keys[size_t(t) * 3]]++] = t;
+    for (uint32_t b = 0; b < input_position_count; ++b)
+      for (uint32_t i = bucket_start[b] + 1; i < bucket_start[b + 1]; ++i) {
+        const uint32_t* key = keys + size_t(members[i]) * 3;
+        for (uint32_t j = bucket_start[b]; j < i; ++j) {
+          const uint32_t* earlier = keys + size_t(members[j]) * 3;
+          if (!duplicate[members[j]] && key[1] == earlier[1] && key[2] == earlier[2]) {
+            duplicate[members[i]] = 1;
+            break;
+          }
+        }
+      }
+  }
+  uint32_t kept = 0;
+  for (uint32_t t = 0; t < proper; ++t) {
+    if (duplicate[t]) continue;
+    if (kept != t) {
+      for (int k = 0; k < 3; ++k)
+        kept_index_out[size_t(kept) * 3 + k] = kept_index_out[size_t(t) * 3 + k];
+      kept_groups[kept] = kept_groups[t];
+    }
     ++kept;
   }
   kept_indices.resize(size_t(kept) * 3);
