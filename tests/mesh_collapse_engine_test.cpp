@@ -200,4 +200,25 @@ TEST(CollapseEngine, PassesAndGreedyBothReachTheTarget) {
 }
 
 }  // namespace
+// prepareMesh drops a triangle that repeats an earlier one's positions in the same orientation
+// (rotated, or through another vertex at the same position) and keeps the first; the reversed
+// triangle is a different face and stays. Order is kept.
+TEST(PrepareMesh, DropsDuplicateTrianglesKeepsTheFirstAndTheReversed) {
+  core::Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 1, 0}};
+  m.indices = {0, 1, 2,   // A
+               1, 2, 0,   // A rotated: dropped
+               0, 2, 1,   // A reversed: kept
+               3, 1, 2,   // A through vertex 3 (at vertex 0's position): dropped
+               1, 4, 2,   // B
+               2, 1, 4,   // B rotated: dropped
+               0, 1, 2};  // A again: dropped
+  m.submeshes = {{0, uint32_t(m.indices.size()), 0}};
+  const core::Mesh out = mesh::prepareMesh(m);
+  EXPECT_EQ(out.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 1, 1, 3, 2}));
+  ASSERT_EQ(out.positions.size(), 4u);  // vertex 3 welded into 0; 4 renumbered 3
+  EXPECT_EQ(out.positions[3].x, 1.0f);
+  EXPECT_EQ(out.positions[3].y, 1.0f);
+}
+
 }  // namespace duolod
