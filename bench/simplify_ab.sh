@@ -2,7 +2,8 @@
 # Wall-clock A/B of two bench_simplify binaries (e.g. before and after a change to the quadric
 # mode), alternating them so that both see the same machine drift (bench/RESULTS.md, issue 3).
 # Each run prints, per mesh and ratio, duolod's time over meshopt_simplify 0.18's in the same
-# process; the table gives the median of those ratios over the runs, and the median of duolod's ms.
+# process (their runs alternate; the ratio is the median of the per-pair ratios); the table gives
+# the median of those ratios over the runs, and the median of duolod's ms.
 # Usage: bench/simplify_ab.sh RUNS BINARY_A BINARY_B [bench_simplify arguments...]
 #   e.g. bench/simplify_ab.sh 7 /tmp/old/bench_simplify build/bench/bench_simplify
 # Each run is `BINARY --gltfpack "" --repeats $REPEATS (default 9) --samples 0 --no-progressive
