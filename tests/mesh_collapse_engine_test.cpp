@@ -199,7 +199,6 @@ TEST(CollapseEngine, PassesAndGreedyBothReachTheTarget) {
   }
 }
 
-}  // namespace
 // prepareMesh drops a triangle that repeats an earlier one's positions in the same orientation
 // (rotated, or through another vertex at the same position) and keeps the first; the reversed
 // triangle is a different face and stays. Order is kept.
@@ -221,4 +220,5 @@ TEST(PrepareMesh, DropsDuplicateTrianglesKeepsTheFirstAndTheReversed) {
   EXPECT_EQ(out.positions[3].y, 1.0f);
 }
 
+}  // namespace
 }  // namespace duolod

@@ -1366,7 +1366,7 @@ PreparedMesh prepareMeshWithPositions(const core::Mesh& mesh) {
         const uint32_t* key = keys + size_t(members[i]) * 3;
         for (uint32_t j = bucket_start[b]; j < i; ++j) {
           const uint32_t* earlier = keys + size_t(members[j]) * 3;
-          if (!duplicate[members[j]] && key[1] == earlier[1] && key[2] == earlier[2]) {
+          if (key[1] == earlier[1] && key[2] == earlier[2]) {
             duplicate[members[i]] = 1;
             break;
           }
