@@ -11,6 +11,7 @@
 #include <set>
 
 #include "duolod/mesh.hpp"
+#include "mesh/collapse_engine.hpp"
 #include "mesh_test_meshes.hpp"
 
 namespace duolod {
@@ -206,6 +207,68 @@ TEST(SimplifyQuadric, PositionFastPathKeepsTheGuaranteesDeepDown) {
   Mesh replayed = mesh::extractMesh(result.record, result.record.steps.size());
   EXPECT_EQ(replayed.indices, out.indices);
   EXPECT_EQ(replayed.positions, out.positions);
+}
+
+// What prepareMesh cleans, built into a clean mesh: vertices split into copies (one of them at
+// -0 where the original is at +0), a duplicate triangle (rotated) and a reversed one, a
+// degenerate one, one out of range; optionally an unused vertex far away (the used vertices'
+// box is then smaller than the input's) or a used triangle far away (the whole sphere then falls
+// into a few Morton cells: the weld's crowded-cell path).
+enum class Far { kNothing, kUnusedVertex, kUsedTriangle };
+Mesh messyCopy(const Mesh& clean, Far far) {
+  Mesh m = clean;
+  const uint32_t n = uint32_t(m.positions.size());
+  for (size_t i = 0; i < 150; ++i) {
+    const uint32_t original = m.indices[i];
+    Vec3 copy = m.positions[original];
+    if (copy.x == 0) copy.x = -0.0f;
+    m.positions.push_back(copy);
+    m.indices[i] = uint32_t(m.positions.size() - 1);
+  }
+  const uint32_t* t3 = &clean.indices[9];
+  const uint32_t* t4 = &clean.indices[12];
+  m.indices.insert(m.indices.end(), {t3[1], t3[2], t3[0], t4[0], t4[2], t4[1], 5, 5, 7, 1, 2,
+                                     n + 1000000});
+  if (far == Far::kUnusedVertex) m.positions.push_back({500, -300, 200});
+  if (far == Far::kUsedTriangle) {
+    const uint32_t f = uint32_t(m.positions.size());
+    m.positions.insert(m.positions.end(), {{1e4f, 0, 0}, {1e4f, 1, 0}, {1e4f, 0, 1}});
+    m.indices.insert(m.indices.end(), {f, f + 1, f + 2});
+  }
+  m.submeshes = {{0, uint32_t(m.indices.size()), 3}};
+  return m;
+}
+
+// The position-only fast path welds and cleans its input itself (simplify_positions.cpp,
+// prepareWorkingMesh) instead of through prepareMesh: on a messy mesh it must give, id for id,
+// what it gives on the mesh prepareMesh cleaned, and its record must start from that prepared
+// mesh. Small meshes keep the input order, large ones (>= 8192 vertices) are put in Morton order.
+TEST(SimplifyQuadric, PositionFastPathCleansItsInputAsPrepareMeshDoes) {
+  for (int subdivisions : {3, 6})
+    for (Far far : {Far::kNothing, Far::kUnusedVertex, Far::kUsedTriangle}) {
+      SCOPED_TRACE(testing::Message() << "subdivisions " << subdivisions << ", far "
+                                      << int(far));
+      const Mesh messy = messyCopy(test::icosphere(subdivisions, 1.0f, test::lumps), far);
+      const Mesh prepared = mesh::prepareMesh(messy);
+      ASSERT_LT(prepared.vertexCount(), messy.vertexCount());
+      ASSERT_LT(prepared.triangleCount(), messy.triangleCount());
+      const SimplifyOptions options{.target_triangles = prepared.triangleCount() / 10,
+                                    .record = true};
+      const auto from_messy = mesh::simplifyQuadric(messy, options);
+      const auto from_prepared = mesh::simplifyQuadric(prepared, options);
+      EXPECT_EQ(from_messy.mesh.indices, from_prepared.mesh.indices);
+      EXPECT_EQ(from_messy.mesh.positions, from_prepared.mesh.positions);
+      ASSERT_EQ(from_messy.mesh.submeshes.size(), 1u);
+      EXPECT_EQ(from_messy.mesh.submeshes[0].material, 3u);
+      EXPECT_EQ(from_messy.record.base.positions, prepared.positions);
+      EXPECT_EQ(from_messy.record.base.indices, prepared.indices);
+      ASSERT_EQ(from_messy.record.base.submeshes.size(), 1u);
+      EXPECT_EQ(from_messy.record.base.submeshes[0].index_count, prepared.indices.size());
+      EXPECT_EQ(from_messy.record.steps.size(), from_prepared.record.steps.size());
+      const Mesh replayed = mesh::extractMesh(from_messy.record, from_messy.record.steps.size());
+      EXPECT_EQ(replayed.indices, from_messy.mesh.indices);
+      EXPECT_EQ(replayed.positions, from_messy.mesh.positions);
+    }
 }
 
 TEST(SimplifyQuadric, EndpointPlacementOnlyUsesInputPositions) {

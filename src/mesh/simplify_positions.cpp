@@ -2,9 +2,10 @@
 // (collapse_engine.hpp, kPasses; Garland & Heckbert 1997 quadrics, the link condition of Dey,
 // Edelsbrunner et al. 1999, the flip test, borders sliding along themselves), the data layout is
 // built for it instead of for the general engine (attributes, seams, materials, lazy costs):
-//   - vertices are positions (prepareMesh welds a position-only mesh to one vertex per position),
-//     so there are no wedges; on large meshes they and the triangles are renumbered in a spatial
-//     order (orderSpatially), and only the record and the output see the prepared mesh's ids;
+//   - vertices are positions (prepareWorkingMesh welds and cleans the input as prepareMesh would,
+//     in one go with the spatial sort), so there are no wedges; on large meshes they and the
+//     triangles are renumbered in a spatial order, and only the record and the output see the
+//     prepared mesh's ids;
 //   - the index buffer is compacted at the start of every pass, and adjacency is rebuilt from it
 //     as a flat vertex -> corner table (a counting sort, no lists, no unlinking);
 //   - within a pass every vertex takes part in at most one collapse, so a collapse `from` -> `to`
@@ -193,13 +194,14 @@ struct alignas(32) VertexState {
 
 class PositionSimplifier {
  public:
-  PositionSimplifier(const PreparedMesh& prepared, const SimplifyOptions& options)
-      : base_(prepared.mesh), options_(options) {}
+  PositionSimplifier(const core::Mesh& input, const SimplifyOptions& options)
+      : input_(input), options_(options) {}
   SimplifyResult run();
 
  private:
   void setUp();
-  void orderSpatially(const core::Mesh& m, double inverse_scale);
+  void prepareWorkingMesh();
+  uint32_t material() const { return input_.submeshes.empty() ? 0 : input_.submeshes[0].material; }
   void buildAdjacency();
   void clearAbsorbed();
   void classify();
@@ -249,19 +251,20 @@ class PositionSimplifier {
     return std::sqrt(std::max(cost, 0.0) / (weight > 0 ? weight : 1.0)) * scale_;
   }
 
-  const core::Mesh& base_;
+  const core::Mesh& input_;
   SimplifyOptions options_;
   uint32_t vertex_count_ = 0;
   Vec3d origin_;
   double scale_ = 1;
 
-  // The working order of the vertices and triangles (orderSpatially): input_id_[v] is the
+  // The working order of the vertices and triangles (prepareWorkingMesh): input_id_[v] is the
   // prepared mesh's id of working vertex v. Only the progressive record and the output order
   // see input ids.
   std::vector<uint32_t> input_id_;
   // The input triangle of each triangle of indices_, kept through compaction; empty when the
   // triangles keep their input order.
   std::vector<uint32_t> triangle_input_id_;
+  uint32_t prepared_triangle_count_ = 0;
   std::vector<VertexState> vertices_;
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
@@ -317,24 +320,7 @@ class PositionSimplifier {
 };
 
 void PositionSimplifier::setUp() {
-  const core::Mesh& m = base_;
-  vertex_count_ = uint32_t(m.vertexCount());
-  core::Bounds bounds;
-  for (core::Vec3 p : m.positions) bounds.extend(p);
-  if (!bounds.empty()) {  // the engine's frame: origin at the box minimum, diagonal 1
-    origin_ = {bounds.min.x, bounds.min.y, bounds.min.z};
-    const core::Vec3 size = bounds.size();
-    const double diagonal =
-        std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
-    scale_ = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
-  }
-  const double inverse_scale = 1.0 / scale_;
-  if (!bounds.empty()) {
-    const core::Vec3 size = bounds.size();
-    centre_ = {0.5 * size.x * inverse_scale, 0.5 * size.y * inverse_scale,
-               0.5 * size.z * inverse_scale};
-  }
-  orderSpatially(m, inverse_scale);
+  prepareWorkingMesh();
   live_triangles_ = indices_.size() / 3;
   alive_.assign(vertex_count_, 1);
   pass_lock_.assign(vertex_count_, 0);
@@ -375,20 +361,12 @@ void PositionSimplifier::setUp() {
 // mesh sorted: fandisk and WaterBottle 9-50% slower, Avocado and spot within 6%).
 constexpr uint32_t kSpatialOrderMinimum = 8192;
 
-// The working order: vertices in Morton order of their position, triangles by their lowest working
-// vertex. Every phase walks a vertex's neighbours (pricing reads two 64-byte records per edge, a
-// collapse walks two fans); on a mesh whose ids are in no spatial order (CGAL's bunny00: the median
-// triangle spans 15k ids) each of those reads misses the cache, in this order most of them hit
-// lines that a nearby vertex brought in (bench/RESULTS.md, issue 3, session 10). Both sorts are
-// stable counting sorts, so the order is a function of the input alone. Small meshes keep their
-// input order.
-void PositionSimplifier::orderSpatially(const core::Mesh& m, double inverse_scale) {
-  const uint32_t n = vertex_count_;
-  input_id_.resize(n);
-  for (uint32_t v = 0; v < n; ++v) input_id_[v] = v;
-  if (n >= kSpatialOrderMinimum) {
-    // 10 bits per axis of the normalized position (the bounding box's longest side is at most 1),
-    // interleaved into 30.
+// The Morton code of a position: 10 bits per axis of its place in the frame (origin, scale: the
+// bounding box's longest side maps to at most 1), interleaved into 30.
+struct MortonFrame {
+  Vec3d origin;
+  double inverse_scale = 1;
+  uint32_t code(core::Vec3 p) const {
     auto spread = [](uint32_t x) {
       x = (x | x << 16) & 0x030000ff;
       x = (x | x << 8) & 0x0300f00f;
@@ -396,59 +374,252 @@ void PositionSimplifier::orderSpatially(const core::Mesh& m, double inverse_scal
       x = (x | x << 2) & 0x09249249;
       return x;
     };
-    auto cell = [&](float value, double origin) {
-      const double t = (double(value) - origin) * inverse_scale * 1023.0;
+    auto cell = [&](float value, double o) {
+      const double t = (double(value) - o) * inverse_scale * 1023.0;
       return uint32_t(t > 0 ? (t < 1023 ? t : 1023) : 0);
     };
-    std::vector<uint32_t> code(n), scratch(n), histogram(1024);
-    for (uint32_t v = 0; v < n; ++v) {
-      const core::Vec3 a = m.positions[v];
-      code[v] = spread(cell(a.x, origin_.x)) | spread(cell(a.y, origin_.y)) << 1 |
-                spread(cell(a.z, origin_.z)) << 2;
+    return spread(cell(p.x, origin.x)) | spread(cell(p.y, origin.y)) << 1 |
+           spread(cell(p.z, origin.z)) << 2;
+  }
+};
+
+// The engine's frame of a bounding box: origin at its minimum, diagonal 1.
+void frameOf(const core::Bounds& bounds, Vec3d& origin, double& scale) {
+  if (bounds.empty()) return;
+  origin = {bounds.min.x, bounds.min.y, bounds.min.z};
+  const core::Vec3 size = bounds.size();
+  const double diagonal =
+      std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
+  scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
+}
+
+// Sorts `ids` stably by code[id] (LSD radix, three 10-bit digits).
+void sortByCode(std::vector<uint32_t>& ids, const std::vector<uint32_t>& code) {
+  std::vector<uint32_t> scratch(ids.size());
+  uint32_t histogram[1024];
+  for (int level = 0; level < 3; ++level) {
+    std::fill_n(histogram, 1024, 0u);
+    for (uint32_t v : ids) ++histogram[(code[v] >> (10 * level)) & 1023];
+    uint32_t sum = 0;
+    for (uint32_t& h : histogram) sum += std::exchange(h, sum);
+    for (uint32_t v : ids) scratch[histogram[(code[v] >> (10 * level)) & 1023]++] = v;
+    ids.swap(scratch);
+  }
+}
+
+bool samePosition(core::Vec3 a, core::Vec3 b) {  // finite: bitwise equal with ±0 folded
+  return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+// The working mesh, straight from the input: what prepareMeshWithPositions and then a spatial
+// sort did in two steps (eleven sweeps, a hash table, a copy of the mesh), in one. The result is
+// the same, id for id:
+//   - welding: equal positions (bitwise, ±0 folded) are one vertex, represented by the first of
+//     them in input order. Equal positions have equal Morton codes, so after a stable sort by code
+//     they are neighbours: no hash table;
+//   - cleaning: triangles out of range or with two corners on one vertex are dropped, and of
+//     duplicate triangles (the same three vertices in the same turning sense) the first is kept;
+//     vertices no kept triangle uses are dropped. The kept ones, in input order, are the prepared
+//     mesh (its ids are what the progressive record and the output order see: input_id_);
+//   - order: on large meshes the vertices in Morton order of their position and the triangles by
+//     their lowest working vertex; small meshes keep the input order. Every phase walks a
+//     vertex's neighbours (pricing reads two 64-byte records per edge, a collapse walks two
+//     fans); on a mesh whose ids are in no spatial order (CGAL's bunny00: the median triangle
+//     spans 15k ids) each of those reads misses the cache, in this order most of them hit lines
+//     that a nearby vertex brought in (bench/RESULTS.md, issue 3, session 10).
+// Both sorts are stable counting sorts, so the order is a function of the input alone.
+void PositionSimplifier::prepareWorkingMesh() {
+  const core::Mesh& m = input_;
+  const uint32_t n = uint32_t(m.vertexCount());
+  const size_t triangles = m.indices.size() / 3;
+
+  // Weld, in Morton order over the box of all vertices.
+  auto extend = [](core::Bounds& b, core::Vec3 p) {  // Bounds::extend, inline
+    b.min = {std::min(b.min.x, p.x), std::min(b.min.y, p.y), std::min(b.min.z, p.z)};
+    b.max = {std::max(b.max.x, p.x), std::max(b.max.y, p.y), std::max(b.max.z, p.z)};
+  };
+  core::Bounds all;
+  for (core::Vec3 p : m.positions) extend(all, p);
+  MortonFrame frame;
+  double all_scale = 1;
+  frameOf(all, frame.origin, all_scale);
+  frame.inverse_scale = 1.0 / all_scale;
+  std::vector<uint32_t> code(n), sorted(n);
+  for (uint32_t v = 0; v < n; ++v) code[v] = frame.code(m.positions[v]), sorted[v] = v;
+  sortByCode(sorted, code);
+  std::vector<uint32_t> representative(n);
+  for (uint32_t begin = 0, end = 0; begin < n; begin = end) {
+    for (end = begin + 1; end < n && code[sorted[end]] == code[sorted[begin]]; ++end) {
     }
-    for (int level = 0; level < 3; ++level) {  // LSD radix sort, three 10-bit digits
-      std::fill(histogram.begin(), histogram.end(), 0u);
-      for (uint32_t v : input_id_) ++histogram[(code[v] >> (10 * level)) & 1023];
-      uint32_t sum = 0;
-      for (uint32_t& h : histogram) sum += std::exchange(h, sum);
-      for (uint32_t v : input_id_) scratch[histogram[(code[v] >> (10 * level)) & 1023]++] = v;
-      input_id_.swap(scratch);
+    if (end - begin <= 16) {  // a cell holds a few vertices: compare each with those before it
+      for (uint32_t i = begin; i < end; ++i) {
+        const uint32_t v = sorted[i];
+        representative[v] = v;
+        for (uint32_t j = begin; j < i; ++j)
+          if (samePosition(m.positions[sorted[j]], m.positions[v])) {
+            representative[v] = representative[sorted[j]];
+            break;
+          }
+      }
+    } else {  // a crowded cell (a far outlier squeezes the box): sort it by position, then index
+      std::vector<uint32_t> cell(sorted.begin() + begin, sorted.begin() + end);
+      std::sort(cell.begin(), cell.end(), [&](uint32_t a, uint32_t b) {
+        const core::Vec3 p = m.positions[a], q = m.positions[b];
+        if (p.x != q.x) return p.x < q.x;
+        if (p.y != q.y) return p.y < q.y;
+        if (p.z != q.z) return p.z < q.z;
+        return a < b;
+      });
+      for (size_t i = 0; i < cell.size(); ++i)
+        representative[cell[i]] = i > 0 && samePosition(m.positions[cell[i - 1]],
+                                                         m.positions[cell[i]])
+                                      ? representative[cell[i - 1]]
+                                      : cell[i];
     }
   }
 
-  asset_positions_.resize(n);
-  vertices_.resize(n);
-  for (uint32_t w = 0; w < n; ++w) {
-    const core::Vec3 a = m.positions[input_id_[w]];
+  // Proper triangles (in range, three distinct vertices) and the vertices they use.
+  std::vector<uint32_t> corners(triangles * 3);
+  std::vector<uint8_t> proper(triangles, 0), used(n, 0);
+  for (size_t t = 0; t < triangles; ++t) {
+    uint32_t r[3];
+    bool in_range = true;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t index = m.indices[t * 3 + k];
+      in_range &= index < n;
+      r[k] = in_range ? representative[index] : 0;
+    }
+    if (!in_range || r[0] == r[1] || r[1] == r[2] || r[0] == r[2]) continue;
+    proper[t] = 1;
+    for (int k = 0; k < 3; ++k) corners[t * 3 + k] = r[k], used[r[k]] = 1;
+  }
+  // The prepared ids (the used vertices in input order) and the frame of their box.
+  std::vector<uint32_t> prepared_id(n, kAbsent);
+  core::Bounds bounds;
+  uint32_t count = 0;
+  for (uint32_t v = 0; v < n; ++v)
+    if (used[v]) prepared_id[v] = count++, extend(bounds, m.positions[v]);
+  vertex_count_ = count;
+  frameOf(bounds, origin_, scale_);
+  const double inverse_scale = 1.0 / scale_;
+  if (!bounds.empty()) {
+    const core::Vec3 size = bounds.size();
+    centre_ = {0.5 * size.x * inverse_scale, 0.5 * size.y * inverse_scale,
+               0.5 * size.z * inverse_scale};
+  }
+
+  // Working ids: Morton order in the used vertices' frame on large meshes (the weld's order when
+  // the two boxes agree, as they do when every vertex is used), else the prepared order.
+  const bool spatial = count >= kSpatialOrderMinimum;
+  std::vector<uint32_t> working_id(n, kAbsent);
+  input_id_.resize(count);
+  std::vector<uint32_t> source(count);  // input vertex of each working vertex
+  if (spatial) {
+    if (std::memcmp(&bounds, &all, sizeof bounds) != 0) {
+      frame = {origin_, inverse_scale};
+      for (uint32_t v = 0; v < n; ++v)
+        if (used[v]) code[v] = frame.code(m.positions[v]);
+      sorted.clear();
+      for (uint32_t v = 0; v < n; ++v)
+        if (used[v]) sorted.push_back(v);
+      sortByCode(sorted, code);
+    }
+    uint32_t w = 0;
+    for (uint32_t v : sorted)
+      if (used[v]) working_id[v] = w, source[w] = v, input_id_[w] = prepared_id[v], ++w;
+  } else {
+    for (uint32_t v = 0; v < n; ++v)
+      if (used[v]) working_id[v] = prepared_id[v], source[prepared_id[v]] = v;
+    for (uint32_t w = 0; w < count; ++w) input_id_[w] = w;
+  }
+  asset_positions_.resize(count);
+  vertices_.resize(count);
+  for (uint32_t w = 0; w < count; ++w) {
+    const core::Vec3 a = m.positions[source[w]];
     asset_positions_[w] = a;
     vertices_[w] = {{(a.x - origin_.x) * inverse_scale, (a.y - origin_.y) * inverse_scale,
                      (a.z - origin_.z) * inverse_scale},
                     w,
                     0};
   }
-  if (n < kSpatialOrderMinimum) {
-    indices_ = m.indices;
-    return;
-  }
-  // Triangles by their lowest working vertex (a counting sort over the vertices).
-  std::vector<uint32_t> working_id(n);
-  for (uint32_t w = 0; w < n; ++w) working_id[input_id_[w]] = w;
-  const size_t triangles = m.indices.size() / 3;
-  std::vector<uint32_t> first_of(n + 1, 0), lowest(triangles);
+
+  // Duplicate triangles share their lowest working vertex: bucket the proper triangles by it (a
+  // counting sort, stable, so each bucket lists its triangles in input order) and compare within
+  // buckets the two corners that follow the lowest (the same turning sense). Each triangle goes
+  // to its bucket with its corners and that key, so the comparison and the output read in order.
+  std::vector<uint32_t> bucket_start(size_t(count) + 1, 0);
+  std::vector<uint64_t> key(triangles);
+  uint32_t proper_count = 0;
   for (size_t t = 0; t < triangles; ++t) {
-    const uint32_t* v = &m.indices[t * 3];
-    lowest[t] = std::min({working_id[v[0]], working_id[v[1]], working_id[v[2]]});
-    ++first_of[lowest[t] + 1];
+    if (!proper[t]) continue;
+    uint32_t* c = &corners[t * 3];
+    c[0] = working_id[c[0]], c[1] = working_id[c[1]], c[2] = working_id[c[2]];
+    const int first = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
+    key[t] = uint64_t(c[kNext[first]]) << 32 | c[kPrevious[first]];
+    ++bucket_start[c[first] + 1];
+    ++proper_count;
   }
-  for (uint32_t w = 0; w < n; ++w) first_of[w + 1] += first_of[w];
-  indices_.resize(m.indices.size());
-  triangle_input_id_.resize(triangles);
-  for (size_t t = 0; t < triangles; ++t) {
-    const uint32_t* v = &m.indices[t * 3];
-    const uint32_t slot = first_of[lowest[t]]++;
-    uint32_t* out = &indices_[size_t(slot) * 3];
-    out[0] = working_id[v[0]], out[1] = working_id[v[1]], out[2] = working_id[v[2]];
-    triangle_input_id_[slot] = uint32_t(t);
+  for (uint32_t w = 0; w < count; ++w) bucket_start[w + 1] += bucket_start[w];
+  struct Bucketed {
+    uint64_t key;
+    uint32_t triangle;
+    uint32_t corners[3];
+  };
+  std::vector<Bucketed> bucketed(proper_count);
+  {
+    std::vector<uint32_t> cursor(bucket_start.begin(), bucket_start.end() - 1);
+    for (size_t t = 0; t < triangles; ++t)
+      if (proper[t]) {
+        const uint32_t* c = &corners[t * 3];
+        bucketed[cursor[std::min({c[0], c[1], c[2]})]++] = {key[t], uint32_t(t), {c[0], c[1], c[2]}};
+      }
+  }
+  for (uint32_t b = 0; b < count; ++b)
+    for (uint32_t i = bucket_start[b] + 1; i < bucket_start[b + 1]; ++i)
+      for (uint32_t j = bucket_start[b]; j < i; ++j)
+        if (bucketed[i].key == bucketed[j].key) {
+          proper[bucketed[i].triangle] = 0;  // a later copy
+          break;
+        }
+
+  // The kept triangles: prepared ids in input order, working order by lowest vertex (large
+  // meshes) or input order.
+  std::vector<uint32_t> prepared_triangle(spatial ? triangles : 0);
+  uint32_t kept = 0;
+  for (size_t t = 0; t < triangles; ++t)
+    if (proper[t]) {
+      if (spatial) prepared_triangle[t] = kept;
+      ++kept;
+    }
+  prepared_triangle_count_ = kept;
+  indices_.resize(size_t(kept) * 3);
+  uint32_t* out = indices_.data();
+  if (spatial) {
+    triangle_input_id_.resize(kept);
+    uint32_t slot = 0;
+    for (const Bucketed& b : bucketed)
+      if (proper[b.triangle]) {
+        std::copy_n(b.corners, 3, out + size_t(slot) * 3);
+        triangle_input_id_[slot++] = prepared_triangle[b.triangle];
+      }
+  } else {
+    for (size_t t = 0; t < triangles; ++t)
+      if (proper[t]) out = std::copy_n(&corners[t * 3], 3, out);
+  }
+
+  // The record starts from the prepared mesh (prepareMeshWithPositions' result).
+  if (options_.record) {
+    core::Mesh& base = record_.base;
+    base.positions.resize(count);
+    for (uint32_t v = 0; v < n; ++v)
+      if (used[v]) base.positions[prepared_id[v]] = m.positions[v];
+    base.indices.resize(size_t(kept) * 3);
+    uint32_t* base_out = base.indices.data();
+    for (size_t t = 0; t < triangles; ++t)
+      if (proper[t])
+        for (int k = 0; k < 3; ++k) *base_out++ = input_id_[corners[t * 3 + k]];
+    base.submeshes = {{0, uint32_t(base.indices.size()), material()}};
+    record_.values.positions = base.positions;
   }
 }
 
@@ -978,7 +1149,7 @@ SimplifyResult PositionSimplifier::finish() {
   if (triangle_input_id_.empty()) {
     for (size_t i = 0; i < indices_.size(); ++i) mesh.indices[i] = compact_id[indices_[i]];
   } else {  // back in input triangle order (a counting sort over the input triangles)
-    std::vector<uint32_t> working_of(base_.indices.size() / 3, kAbsent);
+    std::vector<uint32_t> working_of(prepared_triangle_count_, kAbsent);
     for (size_t t = 0; t < triangle_input_id_.size(); ++t)
       working_of[triangle_input_id_[t]] = uint32_t(t);
     size_t out = 0;
@@ -987,8 +1158,7 @@ SimplifyResult PositionSimplifier::finish() {
       for (int k = 0; k < 3; ++k) mesh.indices[out++] = compact_id[indices_[size_t(t) * 3 + k]];
     }
   }
-  const uint32_t material = base_.submeshes.empty() ? 0 : base_.submeshes[0].material;
-  mesh.submeshes = {{0, uint32_t(mesh.indices.size()), material}};
+  mesh.submeshes = {{0, uint32_t(mesh.indices.size()), material()}};
   result.stats = stats_;
   result.error = max_error_;
   if (options_.record) result.record = std::move(record_);
@@ -1157,10 +1327,6 @@ SimplifyResult PositionSimplifier::run() {
   pricing_.resize(vertex_count_);
   for (uint32_t v = 0; v < vertex_count_; ++v)
     pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
-  if (options_.record) {
-    record_.base = base_;
-    record_.values.positions = base_.positions;
-  }
   const size_t tail = std::min(EngineOptions{}.greedy_tail_triangles, live_triangles_ / 16);
   const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
   runPasses(pass_target);
@@ -1170,19 +1336,29 @@ SimplifyResult PositionSimplifier::run() {
 
 }  // namespace
 
-bool positionFastPathApplies(const PreparedMesh& prepared, const SimplifyOptions& options) {
-  const core::Mesh& m = prepared.mesh;
+bool positionFastPathApplies(const core::Mesh& m, const SimplifyOptions& options) {
   if (options.placement != Placement::kOptimal || attributeLayout(m).stride != 0 ||
-      m.submeshes.size() != 1 || m.vertexCount() >= kAbsent / 2 ||
+      m.vertexCount() >= kAbsent / 2 ||
       m.indices.size() / 3 >= (size_t(1) << 30))  // corners_ holds triangle << 2
     return false;
+  // One submesh, or submeshes that do not tile the index buffer in order (prepareMesh then
+  // makes them one): the passes know no material borders.
+  if (m.submeshes.size() > 1) {
+    size_t covered = 0;
+    bool tile = true;
+    for (const core::Submesh& sub : m.submeshes) {
+      tile &= sub.first_index == covered && sub.index_count % 3 == 0;
+      covered += sub.index_count;
+    }
+    if (tile && covered == m.indices.size() / 3 * 3) return false;
+  }
   for (core::Vec3 p : m.positions)
     if (!core::isFinite(p)) return false;
   return true;
 }
 
-SimplifyResult simplifyPositions(const PreparedMesh& prepared, const SimplifyOptions& options) {
-  PositionSimplifier simplifier(prepared, options);
+SimplifyResult simplifyPositions(const core::Mesh& mesh, const SimplifyOptions& options) {
+  PositionSimplifier simplifier(mesh, options);
   return simplifier.run();
 }
 

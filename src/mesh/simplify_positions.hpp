@@ -8,15 +8,17 @@
 
 namespace duolod::mesh {
 
-// Whether simplifyPositions handles this prepared mesh: positions only (no attribute streams),
-// one submesh, every position finite, optimal placement. Otherwise simplifyQuadric runs the
-// general engine.
-bool positionFastPathApplies(const PreparedMesh& prepared, const SimplifyOptions& options);
+// Whether simplifyPositions handles this mesh: positions only (no attribute streams), one
+// submesh (or submeshes that prepareMesh would make one), every position finite, optimal
+// placement. Otherwise simplifyQuadric prepares the mesh (prepareMeshWithPositions, which drops
+// unused vertices, non-finite ones among them) and asks again, else runs the general engine.
+bool positionFastPathApplies(const core::Mesh& mesh, const SimplifyOptions& options);
 
-// Quadric simplification of a mesh positionFastPathApplies accepts: passes over compact
-// per-pass adjacency down to the greedy tail, then the general engine's greedy queue for the
-// tail (EngineOptions::greedy_tail_triangles), continuing with the same quadrics, frame and
-// locked vertices. Same guarantees and result (record included) as runCollapseEngine.
-SimplifyResult simplifyPositions(const PreparedMesh& prepared, const SimplifyOptions& options);
+// Quadric simplification of a mesh positionFastPathApplies accepts, straight from the input (it
+// welds and cleans as prepareMeshWithPositions does, id for id): passes over compact per-pass
+// adjacency down to the greedy tail, then a greedy queue for the tail
+// (EngineOptions::greedy_tail_triangles). Same guarantees as runCollapseEngine; the record's base
+// is the prepared mesh.
+SimplifyResult simplifyPositions(const core::Mesh& mesh, const SimplifyOptions& options);
 
 }  // namespace duolod::mesh

@@ -15,13 +15,15 @@ namespace duolod::mesh {
 
 SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& options) {
   auto start = std::chrono::steady_clock::now();
-  PreparedMesh prepared = prepareMeshWithPositions(mesh);
-  if (positionFastPathApplies(prepared, options)) {
-    SimplifyResult result = simplifyPositions(prepared, options);
+  auto fast = [&](const core::Mesh& m) {
+    SimplifyResult result = simplifyPositions(m, options);
     result.stats.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
-  }
+  };
+  if (positionFastPathApplies(mesh, options)) return fast(mesh);
+  PreparedMesh prepared = prepareMeshWithPositions(mesh);
+  if (positionFastPathApplies(prepared.mesh, options)) return fast(prepared.mesh);
   QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
                       .price_at_fixed_points = true,
                       .attribute_weight = options.attribute_weight});
