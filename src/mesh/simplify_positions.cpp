@@ -393,16 +393,19 @@ void frameOf(const core::Bounds& bounds, Vec3d& origin, double& scale) {
   scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
 }
 
-// Sorts `ids` stably by code[id] (LSD radix, three 10-bit digits).
-void sortByCode(std::vector<uint32_t>& ids, const std::vector<uint32_t>& code) {
+// Sorts `ids` stably by code[id] (LSD radix, `digits` digits of `digit_bits` bits).
+void sortByCode(std::vector<uint32_t>& ids, const std::vector<uint32_t>& code, int digit_bits,
+                int digits) {
   std::vector<uint32_t> scratch(ids.size());
+  const uint32_t buckets = 1u << digit_bits, mask = buckets - 1;
   uint32_t histogram[1024];
-  for (int level = 0; level < 3; ++level) {
-    std::fill_n(histogram, 1024, 0u);
-    for (uint32_t v : ids) ++histogram[(code[v] >> (10 * level)) & 1023];
+  for (int level = 0; level < digits; ++level) {
+    const int shift = digit_bits * level;
+    std::fill_n(histogram, buckets, 0u);
+    for (uint32_t v : ids) ++histogram[(code[v] >> shift) & mask];
     uint32_t sum = 0;
-    for (uint32_t& h : histogram) sum += std::exchange(h, sum);
-    for (uint32_t v : ids) scratch[histogram[(code[v] >> (10 * level)) & 1023]++] = v;
+    for (uint32_t b = 0; b < buckets; ++b) sum += std::exchange(histogram[b], sum);
+    for (uint32_t v : ids) scratch[histogram[(code[v] >> shift) & mask]++] = v;
     ids.swap(scratch);
   }
 }
@@ -433,20 +436,40 @@ void PositionSimplifier::prepareWorkingMesh() {
   const uint32_t n = uint32_t(m.vertexCount());
   const size_t triangles = m.indices.size() / 3;
 
-  // Weld, in Morton order over the box of all vertices.
+  // Weld: equal positions get equal codes, so after a stable sort by code they are neighbours.
+  // Large meshes sort by Morton code over the box of all vertices (that order is the working
+  // order too, below); small ones by a 16-bit hash of the position, two byte-digit passes
+  // instead of three 10-bit ones (the Morton sort cost small meshes more than the hash table it
+  // replaced).
   auto extend = [](core::Bounds& b, core::Vec3 p) {  // Bounds::extend, inline
     b.min = {std::min(b.min.x, p.x), std::min(b.min.y, p.y), std::min(b.min.z, p.z)};
     b.max = {std::max(b.max.x, p.x), std::max(b.max.y, p.y), std::max(b.max.z, p.z)};
   };
+  const bool morton_weld = n >= kSpatialOrderMinimum;
   core::Bounds all;
-  for (core::Vec3 p : m.positions) extend(all, p);
   MortonFrame frame;
-  double all_scale = 1;
-  frameOf(all, frame.origin, all_scale);
-  frame.inverse_scale = 1.0 / all_scale;
   std::vector<uint32_t> code(n), sorted(n);
-  for (uint32_t v = 0; v < n; ++v) code[v] = frame.code(m.positions[v]), sorted[v] = v;
-  sortByCode(sorted, code);
+  if (morton_weld) {
+    for (core::Vec3 p : m.positions) extend(all, p);
+    double all_scale = 1;
+    frameOf(all, frame.origin, all_scale);
+    frame.inverse_scale = 1.0 / all_scale;
+    for (uint32_t v = 0; v < n; ++v) code[v] = frame.code(m.positions[v]), sorted[v] = v;
+    sortByCode(sorted, code, 10, 3);
+  } else {
+    for (uint32_t v = 0; v < n; ++v) {
+      uint32_t bits[3];
+      for (int k = 0; k < 3; ++k) {
+        const float value = m.positions[v][k] == 0 ? 0.0f : m.positions[v][k];  // ±0 folded
+        std::memcpy(&bits[k], &value, 4);
+      }
+      const uint64_t h = (uint64_t(bits[0]) << 32 | bits[1]) * 0x9e3779b97f4a7c15ull ^
+                         uint64_t(bits[2]) * 0xc2b2ae3d27d4eb4full;
+      code[v] = uint32_t(h >> 48);
+      sorted[v] = v;
+    }
+    sortByCode(sorted, code, 8, 2);
+  }
   std::vector<uint32_t> representative(n);
   for (uint32_t begin = 0, end = 0; begin < n; begin = end) {
     for (end = begin + 1; end < n && code[sorted[end]] == code[sorted[begin]]; ++end) {
@@ -461,7 +484,7 @@ void PositionSimplifier::prepareWorkingMesh() {
             break;
           }
       }
-    } else {  // a crowded cell (a far outlier squeezes the box): sort it by position, then index
+    } else {  // a crowded cell (a far outlier squeezes the box) or hash: by position, then index
       std::vector<uint32_t> cell(sorted.begin() + begin, sorted.begin() + end);
       std::sort(cell.begin(), cell.end(), [&](uint32_t a, uint32_t b) {
         const core::Vec3 p = m.positions[a], q = m.positions[b];
@@ -522,7 +545,7 @@ void PositionSimplifier::prepareWorkingMesh() {
       sorted.clear();
       for (uint32_t v = 0; v < n; ++v)
         if (used[v]) sorted.push_back(v);
-      sortByCode(sorted, code);
+      sortByCode(sorted, code, 10, 3);
     }
     uint32_t w = 0;
     for (uint32_t v : sorted)
