@@ -25,7 +25,7 @@
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
-// Speed (bench/RESULTS.md, issue 3): 1.08-1.61x meshoptimizer 0.18's wall clock (paired timing,
+// Speed (bench/RESULTS.md, issue 3): 1.12-1.48x meshoptimizer 0.18's wall clock (paired timing,
 // bench/simplify_ab.sh), 1.5-1.8x its instructions (bench/simplify_callgrind.sh). The
 // wall clock is the measure: the pass pricing and the pass order are written without
 // data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
@@ -36,7 +36,10 @@
 // endpoints untouched), a branch-free edge list before the pricing, corners that carry their
 // triangle's other vertices (3x the table: slower on bunny; as 8-byte fan entries without dead
 // flags: same speed), a greedy tail of 1000 triangles (-2%,
-// Hausdorff mixed) and no optimal placement in the passes (-4%, Hausdorff and mean clearly worse).
+// Hausdorff mixed), no optimal placement in the passes (-4%, Hausdorff and mean clearly worse),
+// meshopt's coarse cost order (-4%, Hausdorff worse than meshopt in 1-2 cells), no greedy tail
+// (-10%, armadillo 1% Hausdorff 1.27x meshopt's) and choosing in cost order but applying in
+// vertex order (+5%: failed collapses then hold their locks, passes yield less).
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
 // endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail).
 #include "mesh/simplify_positions.hpp"
