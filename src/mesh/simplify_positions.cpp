@@ -418,11 +418,11 @@ bool samePosition(core::Vec3 a, core::Vec3 b) {  // finite: bitwise equal with Â
 }
 
 // The working mesh, straight from the input: what prepareMeshWithPositions and then a spatial
-// sort did in two steps (eleven sweeps, a hash table, a copy of the mesh), in one. The result is
+// sort did in two steps (a hash table, a copy of the mesh and more sweeps), in one. The result is
 // the same, id for id:
 //   - welding: equal positions (bitwise, Â±0 folded) are one vertex, represented by the first of
-//     them in input order. Equal positions have equal Morton codes, so after a stable sort by code
-//     they are neighbours: no hash table;
+//     them in input order. Equal positions have equal codes (Morton codes on large meshes, a
+//     position hash on small ones), so after a stable sort by code they are neighbours;
 //   - cleaning: triangles out of range or with two corners on one vertex are dropped, and of
 //     duplicate triangles (the same three vertices in the same turning sense) the first is kept;
 //     vertices no kept triangle uses are dropped. The kept ones, in input order, are the prepared
@@ -487,7 +487,7 @@ void PositionSimplifier::prepareWorkingMesh() {
             break;
           }
       }
-    } else {  // a crowded cell (a far outlier squeezes the box) or hash: by position, then index
+    } else {  // a crowded cell (a far outlier squeezes the box): by position, then index
       std::vector<uint32_t> cell(sorted.begin() + begin, sorted.begin() + end);
       std::sort(cell.begin(), cell.end(), [&](uint32_t a, uint32_t b) {
         const core::Vec3 p = m.positions[a], q = m.positions[b];
@@ -597,7 +597,8 @@ void PositionSimplifier::prepareWorkingMesh() {
     for (size_t t = 0; t < triangles; ++t)
       if (proper[t]) {
         const uint32_t* c = &corners[t * 3];
-        bucketed[cursor[std::min({c[0], c[1], c[2]})]++] = {key[t], uint32_t(t), {c[0], c[1], c[2]}};
+        bucketed[cursor[std::min({c[0], c[1], c[2]})]++] = {key[t], uint32_t(t),
+                                                            {c[0], c[1], c[2]}};
       }
   }
   for (uint32_t b = 0; b < count; ++b)
