@@ -202,6 +202,26 @@ TEST(CollapseEngine, PassesAndGreedyBothReachTheTarget) {
 // prepareMesh drops a triangle that repeats an earlier one's positions in the same orientation
 // (rotated, or through another vertex at the same position) and keeps the first; the reversed
 // triangle is a different face and stays. Order is kept.
+// The passes hand the last collapses to the greedy queue only at the coarse end: 2000 triangles
+// or 1/16 of the input, when the target is at most 4 times that.
+TEST(GreedyTail, OnlyAtTheCoarseEnd) {
+  mesh::EngineOptions options;
+  options.target_triangles = 7541;  // bunny at 10%
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 75408), 2000u);
+  options.target_triangles = 8000;
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 75408), 2000u);
+  options.target_triangles = 8001;
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 75408), 0u);
+  options.target_triangles = 37704;  // bunny at 50%
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 75408), 0u);
+  options.target_triangles = 1124;  // a 4510-triangle mesh: 4510 / 16 = 281, 4 * 281 = 1124
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 4510), 281u);
+  options.target_triangles = 1125;
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 4510), 0u);
+  options.target_triangles = 0;  // an error target only: the passes run to it
+  EXPECT_EQ(mesh::greedyTailTriangles(options, 4510), 281u);
+}
+
 TEST(PrepareMesh, DropsDuplicateTrianglesKeepsTheFirstAndTheReversed) {
   core::Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 1, 0}};

@@ -1162,8 +1162,8 @@ bool Engine::tryPassCollapse(const CandidateCollapse& priced) {
 void Engine::runPasses() {
   EngineState& s = state_;
   pass_lock_.assign(s.positions.size(), 0);
-  // The passes stop greedy_tail_triangles short of the target; the greedy queue does the rest.
-  const size_t tail = std::min(options_.greedy_tail_triangles, s.live_triangles / 16);
+  // The passes stop short of the target at the coarse end; the greedy queue does the rest.
+  const size_t tail = greedyTailTriangles(options_, s.live_triangles);
   const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
   auto reached = [&] { return s.live_triangles <= pass_target; };
   model_.setPassPricing(true);

@@ -233,9 +233,23 @@ struct EngineOptions {
   // kPasses: the last collapses, from this many triangles above the target (at most 1/16 of the
   // input) down to it, use the greedy queue: the coarsest levels, where each collapse moves the
   // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
-  // distance), and the queue over a mesh that small is cheap.
+  // distance), and the queue over a mesh that small is cheap. See greedyTailTriangles.
   size_t greedy_tail_triangles = 2000;
 };
+
+// kPasses: how many triangles above `target` the passes stop, for the greedy queue to do the
+// rest: greedy_tail_triangles, at most 1/16 of the `input` triangles, and none when the target is
+// more than kGreedyTailReach times that. The tail is for the coarse end: where the result is not
+// much larger than the tail, ordering its last collapses exactly is what keeps the Hausdorff
+// distance down (armadillo at 1%: 1.27x meshopt's without it, 0.68x with it); for a finer target
+// the tail is a thin slice of the result, its order changed the error little (bench/simplify at
+// 50%, 25% and 15%, median over 5 input orders: every Hausdorff ratio to meshopt stayed below
+// 0.95) and it took 5-21% of the time at 50% (bench/RESULTS.md, issue 3, session 13).
+constexpr size_t kGreedyTailReach = 4;
+inline size_t greedyTailTriangles(const EngineOptions& options, size_t input) {
+  const size_t tail = std::min(options.greedy_tail_triangles, input / 16);
+  return options.target_triangles <= kGreedyTailReach * tail ? tail : 0;
+}
 
 // A feature line turning by more than 60° at a vertex makes it a corner (locked): the corner of a
 // border, a UV chart or a material region is a feature point, so it is locked rather than left to

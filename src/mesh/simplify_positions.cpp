@@ -18,8 +18,8 @@
 //     the best of the endpoints and the midpoint from each endpoint's quadric expanded around its
 //     own position, in float with SSE (PricingRecord), and the optimal placement is solved (in
 //     double) only for the collapses applied (as CostModel::refinePlacement does);
-//   - the last collapses (EngineOptions::greedy_tail_triangles, at most 1/16 of the input) use a
-//     greedy queue as the engine's kGreedy does (cheapest first, priced at the optimal placement,
+//   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
+//     the input) use a greedy queue as the engine's kGreedy does (cheapest first, priced at the optimal placement,
 //     the survivor's edges priced again after each collapse); the corner table then grows by
 //     chaining: a vertex's triangles are its own corners and those of the vertices it absorbed,
 //     and the remap becomes a union-find.
@@ -38,8 +38,9 @@
 // flags: same speed), a greedy tail of 1000 triangles (-2%,
 // Hausdorff mixed), no optimal placement in the passes (-4%, Hausdorff and mean clearly worse),
 // meshopt's coarse cost order (-4%, Hausdorff worse than meshopt in 1-2 cells), no greedy tail
-// (-10%, armadillo 1% Hausdorff 1.27x meshopt's) and choosing in cost order but applying in
-// vertex order (+5%: failed collapses then hold their locks, passes yield less).
+// at any target (-10%, armadillo 1% Hausdorff 1.27x meshopt's: it now runs at the coarse end
+// only) and choosing in cost order but applying in vertex order (+5%: failed collapses then hold
+// their locks, passes yield less).
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
 // endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail).
 #include "mesh/simplify_positions.hpp"
@@ -1354,7 +1355,9 @@ SimplifyResult PositionSimplifier::run() {
   pricing_.resize(vertex_count_);
   for (uint32_t v = 0; v < vertex_count_; ++v)
     pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
-  const size_t tail = std::min(EngineOptions{}.greedy_tail_triangles, live_triangles_ / 16);
+  EngineOptions tail_options;
+  tail_options.target_triangles = options_.target_triangles;
+  const size_t tail = greedyTailTriangles(tail_options, live_triangles_);
   const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
   runPasses(pass_target);
   runGreedy();
