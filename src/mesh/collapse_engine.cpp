@@ -91,14 +91,6 @@ class IndexTable {
   std::vector<uint32_t> slots_;
 };
 
-// Bit pattern of a position with -0 folded into +0, so that the two weld.
-void positionBits(core::Vec3 p, uint32_t out[3]) {
-  for (int i = 0; i < 3; ++i) {
-    float v = p[i] == 0 ? 0.0f : p[i];
-    std::memcpy(&out[i], &v, 4);
-  }
-}
-
 // Position ids: equal (bitwise, ±0 folded) positions share an id. Returns the id count.
 uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint32_t>& ids) {
   const size_t n = positions.size();
@@ -127,17 +119,7 @@ uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint3
 std::vector<uint32_t> triangleGroups(const core::Mesh& mesh, bool& valid) {
   const size_t triangles = mesh.indices.size() / 3;
   std::vector<uint32_t> groups(triangles, 0);
-  valid = !mesh.submeshes.empty();
-  size_t covered = 0;
-  for (const core::Submesh& sub : mesh.submeshes) {
-    if (sub.first_index != covered || sub.index_count % 3 != 0 ||
-        size_t(sub.first_index) + sub.index_count > triangles * 3) {
-      valid = false;
-      break;
-    }
-    covered += sub.index_count;
-  }
-  if (covered != triangles * 3) valid = false;
+  valid = submeshesTile(mesh);
   if (!valid) return groups;
   for (uint32_t s = 0; s < mesh.submeshes.size(); ++s) {
     const core::Submesh& sub = mesh.submeshes[s];
@@ -1286,6 +1268,25 @@ SimplifyResult Engine::run() {
 }
 
 }  // namespace
+
+void positionBits(core::Vec3 p, uint32_t out[3]) {
+  for (int i = 0; i < 3; ++i) {
+    float v = p[i] == 0 ? 0.0f : p[i];
+    std::memcpy(&out[i], &v, 4);
+  }
+}
+
+bool submeshesTile(const core::Mesh& mesh) {
+  const size_t triangles = mesh.indices.size() / 3;
+  size_t covered = 0;
+  for (const core::Submesh& sub : mesh.submeshes) {
+    if (sub.first_index != covered || sub.index_count % 3 != 0 ||
+        size_t(sub.first_index) + sub.index_count > triangles * 3)
+      return false;
+    covered += sub.index_count;
+  }
+  return !mesh.submeshes.empty() && covered == triangles * 3;
+}
 
 core::Mesh prepareMesh(const core::Mesh& mesh) { return prepareMeshWithPositions(mesh).mesh; }
 

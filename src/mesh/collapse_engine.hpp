@@ -275,6 +275,11 @@ inline bool turnsOverOrFlattens(Vec3d corner, Vec3d b, Vec3d d, Vec3d moved) {
   return dot(n_old, n_new) <= 0;
 }
 
+// Bit pattern of a position with -0 folded into +0: equal patterns are what prepareMesh welds.
+void positionBits(core::Vec3 p, uint32_t out[3]);
+// Whether the submeshes tile the index buffer in order (otherwise prepareMesh makes them one).
+bool submeshesTile(const core::Mesh& mesh);
+
 // Welds wedges (equal position and attributes), drops unreferenced vertices, triangles with an
 // out-of-range index, repeated position or duplicate position triple (same orientation). Vertex
 // and triangle order are kept, so a clean mesh comes back unchanged. Submeshes that do not tile

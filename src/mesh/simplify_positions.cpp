@@ -463,10 +463,7 @@ void PositionSimplifier::prepareWorkingMesh() {
   } else {
     for (uint32_t v = 0; v < n; ++v) {
       uint32_t bits[3];
-      for (int k = 0; k < 3; ++k) {
-        const float value = m.positions[v][k] == 0 ? 0.0f : m.positions[v][k];  // ±0 folded
-        std::memcpy(&bits[k], &value, 4);
-      }
+      positionBits(m.positions[v], bits);
       const uint64_t h = (uint64_t(bits[0]) << 32 | bits[1]) * 0x9e3779b97f4a7c15ull ^
                          uint64_t(bits[2]) * 0xc2b2ae3d27d4eb4full;
       code[v] = uint32_t(h >> 48);
@@ -575,15 +572,12 @@ void PositionSimplifier::prepareWorkingMesh() {
   // buckets the two corners that follow the lowest (the same turning sense). Each triangle goes
   // to its bucket with its corners and that key, so the comparison and the output read in order.
   std::vector<uint32_t> bucket_start(size_t(count) + 1, 0);
-  std::vector<uint64_t> key(triangles);
   uint32_t proper_count = 0;
   for (size_t t = 0; t < triangles; ++t) {
     if (!proper[t]) continue;
     uint32_t* c = &corners[t * 3];
     c[0] = working_id[c[0]], c[1] = working_id[c[1]], c[2] = working_id[c[2]];
-    const int first = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
-    key[t] = uint64_t(c[kNext[first]]) << 32 | c[kPrevious[first]];
-    ++bucket_start[c[first] + 1];
+    ++bucket_start[std::min({c[0], c[1], c[2]}) + 1];
     ++proper_count;
   }
   for (uint32_t w = 0; w < count; ++w) bucket_start[w + 1] += bucket_start[w];
@@ -598,8 +592,9 @@ void PositionSimplifier::prepareWorkingMesh() {
     for (size_t t = 0; t < triangles; ++t)
       if (proper[t]) {
         const uint32_t* c = &corners[t * 3];
-        bucketed[cursor[std::min({c[0], c[1], c[2]})]++] = {key[t], uint32_t(t),
-                                                            {c[0], c[1], c[2]}};
+        const int first = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
+        const uint64_t key = uint64_t(c[kNext[first]]) << 32 | c[kPrevious[first]];
+        bucketed[cursor[c[first]]++] = {key, uint32_t(t), {c[0], c[1], c[2]}};
       }
   }
   for (uint32_t b = 0; b < count; ++b)
@@ -1371,17 +1366,8 @@ bool positionFastPathApplies(const core::Mesh& m, const SimplifyOptions& options
       m.vertexCount() >= kAbsent / 2 ||
       m.indices.size() / 3 >= (size_t(1) << 30))  // corners_ holds triangle << 2
     return false;
-  // One submesh, or submeshes that do not tile the index buffer in order (prepareMesh then
-  // makes them one): the passes know no material borders.
-  if (m.submeshes.size() > 1) {
-    size_t covered = 0;
-    bool tile = true;
-    for (const core::Submesh& sub : m.submeshes) {
-      tile &= sub.first_index == covered && sub.index_count % 3 == 0;
-      covered += sub.index_count;
-    }
-    if (tile && covered == m.indices.size() / 3 * 3) return false;
-  }
+  // One submesh, or submeshes that prepareMesh makes one: the passes know no material borders.
+  if (m.submeshes.size() > 1 && submeshesTile(m)) return false;
   for (core::Vec3 p : m.positions)
     if (!core::isFinite(p)) return false;
   return true;
