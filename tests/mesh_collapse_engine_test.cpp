@@ -222,6 +222,20 @@ TEST(GreedyTail, OnlyAtTheCoarseEnd) {
   EXPECT_EQ(mesh::greedyTailTriangles(options, 4510), 281u);
 }
 
+TEST(PassEnds, FinishingAndStalling) {
+  // Finishing: at most a seventh of the goal left undone by the cheap part.
+  EXPECT_TRUE(mesh::passFinishes(100, 700));
+  EXPECT_FALSE(mesh::passFinishes(101, 700));
+  EXPECT_FALSE(mesh::passFinishes(0, 700));  // nothing left: the pass is done
+  // Stalling: a quarter of the goal or less applied, within the greedy tail's reach.
+  mesh::EngineOptions options;  // greedy_tail_triangles = 2000
+  EXPECT_TRUE(mesh::passStalls(25, 100, 500, options));
+  EXPECT_FALSE(mesh::passStalls(26, 100, 500, options));
+  EXPECT_TRUE(mesh::passStalls(0, 100, 2000, options));
+  EXPECT_FALSE(mesh::passStalls(0, 100, 2001, options));  // too much left for the queue
+  EXPECT_FALSE(mesh::passStalls(0, 100, 0, options));     // at the pass target already
+}
+
 TEST(PrepareMesh, DropsDuplicateTrianglesKeepsTheFirstAndTheReversed) {
   core::Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 1, 0}};

@@ -69,6 +69,7 @@ struct SimplifyStats {
   size_t rejected_topology = 0;  // link condition / non-manifold
   size_t rejected_flip = 0;      // normal flip
   size_t rejected_border = 0;    // locked border, material border, seam rules
+  size_t passes = 0;             // passes over all edges (quadric mode; 0 when greedy only)
   double seconds = 0;
 };
 

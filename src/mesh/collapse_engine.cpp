@@ -1167,6 +1167,7 @@ void Engine::runPasses() {
       pass_order_.push_back(uint64_t(cost_bits(c.cost)) << 32 | i);
     }
     if (pass_order_.empty()) break;
+    ++stats_.passes;
     // Goal: the collapses still needed (each removes about two triangles). Edges up to
     // pass_cost_slack times the goal-rank cost are taken in order; the rest wait for the next pass,
     // unless none of the taken ones could be applied.
@@ -1195,11 +1196,21 @@ void Engine::runPasses() {
       }
     };
     apply_range(pass_order_.begin(), first_rest);
+    const size_t left = reached() ? 0 : (s.live_triangles - pass_target + 1) / 2;
     if (applied == 0 && first_rest != pass_order_.end()) {
       std::sort(first_rest, pass_order_.end());
       apply_range(first_rest, pass_order_.end());
+    } else if (passFinishes(left, goal) && first_rest != pass_order_.end()) {
+      // The rest's edges between endpoints this pass left untouched, cheapest first.
+      const auto open_end = std::partition(first_rest, pass_order_.end(), [&](uint64_t key) {
+        const CandidateCollapse& c = batch_[uint32_t(key)];
+        return pass_lock_[c.from] != pass && pass_lock_[c.to] != pass;
+      });
+      std::sort(first_rest, open_end);
+      apply_range(first_rest, open_end);
     }
     if (applied == 0) break;
+    if (passStalls(applied, goal, reached() ? 0 : s.live_triangles - pass_target, options_)) break;
   }
   batch_.clear();
 }

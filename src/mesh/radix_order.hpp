@@ -22,8 +22,10 @@ inline uint32_t orderKey(float cost) {
 
 // Digits, most significant first: key >> 22, then bits 11-21, then bits 0-10.
 constexpr uint32_t kDigitBits = 11, kDigits = 1u << kDigitBits;
-// Below this many keys, comparison sorting is cheaper than three histograms of kDigits.
-constexpr size_t kRadixMinimum = 512;
+// Below this many keys, comparison sorting is cheaper than three histograms of kDigits. (At 512,
+// the small meshes' passes paid for std::stable_sort's buffer: 128 made Avocado's 10% and 1%
+// cells ~5% faster, 32 changed nothing more; bench/RESULTS.md, issue 3, session 14.)
+constexpr size_t kRadixMinimum = 128;
 inline uint32_t digitOf(uint32_t key, int level) {
   return (key >> (level * kDigitBits)) & (kDigits - 1);
 }

@@ -272,7 +272,9 @@ class PositionSimplifier {
   std::vector<VertexState> vertices_;
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
-  std::vector<PricingRecord> pricing_;  // quadrics_ around the positions, for the passes
+  // quadrics_ around the positions, for the passes (every record is written before it is read:
+  // no value-initialization of megabytes)
+  std::unique_ptr<PricingRecord[]> pricing_;
   Vec3d centre_;                        // of the bounding box, in the normalized frame
   std::vector<VertexKind> kinds_;
   std::vector<uint32_t> border_neighbors_;  // two per constrained vertex
@@ -570,7 +572,8 @@ void PositionSimplifier::prepareWorkingMesh() {
   // Duplicate triangles share their lowest working vertex: bucket the proper triangles by it (a
   // counting sort, stable, so each bucket lists its triangles in input order) and compare within
   // buckets the two corners that follow the lowest (the same turning sense). Each triangle goes
-  // to its bucket with its corners and that key, so the comparison and the output read in order.
+  // to its bucket as its corners from the lowest on, with which corner that was, and is compared
+  // as it arrives with the triangles before it there (about two: no second sweep).
   std::vector<uint32_t> bucket_start(size_t(count) + 1, 0);
   uint32_t proper_count = 0;
   for (size_t t = 0; t < triangles; ++t) {
@@ -582,28 +585,26 @@ void PositionSimplifier::prepareWorkingMesh() {
   }
   for (uint32_t w = 0; w < count; ++w) bucket_start[w + 1] += bucket_start[w];
   struct Bucketed {
-    uint64_t key;
-    uint32_t triangle;
-    uint32_t corners[3];
+    uint32_t triangle;    // input triangle << 2 | its corner that is the lowest
+    uint32_t corners[3];  // from the lowest on
   };
-  std::vector<Bucketed> bucketed(proper_count);
+  std::unique_ptr<Bucketed[]> bucketed(new Bucketed[proper_count]);
   {
     std::vector<uint32_t> cursor(bucket_start.begin(), bucket_start.end() - 1);
-    for (size_t t = 0; t < triangles; ++t)
-      if (proper[t]) {
-        const uint32_t* c = &corners[t * 3];
-        const int first = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
-        const uint64_t key = uint64_t(c[kNext[first]]) << 32 | c[kPrevious[first]];
-        bucketed[cursor[c[first]]++] = {key, uint32_t(t), {c[0], c[1], c[2]}};
-      }
-  }
-  for (uint32_t b = 0; b < count; ++b)
-    for (uint32_t i = bucket_start[b] + 1; i < bucket_start[b + 1]; ++i)
-      for (uint32_t j = bucket_start[b]; j < i; ++j)
-        if (bucketed[i].key == bucketed[j].key) {
-          proper[bucketed[i].triangle] = 0;  // a later copy
+    for (size_t t = 0; t < triangles; ++t) {
+      if (!proper[t]) continue;
+      const uint32_t* c = &corners[t * 3];
+      const uint32_t first = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
+      const uint32_t lowest = c[first], next = c[kNext[first]], previous = c[kPrevious[first]];
+      uint32_t& end = cursor[lowest];
+      for (uint32_t j = bucket_start[lowest]; j < end; ++j)
+        if (bucketed[j].corners[1] == next && bucketed[j].corners[2] == previous) {
+          proper[t] = 0;  // a later copy
           break;
         }
+      bucketed[end++] = {uint32_t(t) << 2 | first, {lowest, next, previous}};
+    }
+  }
 
   // The kept triangles: prepared ids in input order, working order by lowest vertex (large
   // meshes) or input order.
@@ -620,11 +621,14 @@ void PositionSimplifier::prepareWorkingMesh() {
   if (spatial) {
     triangle_input_id_.resize(kept);
     uint32_t slot = 0;
-    for (const Bucketed& b : bucketed)
-      if (proper[b.triangle]) {
-        std::copy_n(b.corners, 3, out + size_t(slot) * 3);
-        triangle_input_id_[slot++] = prepared_triangle[b.triangle];
-      }
+    for (uint32_t i = 0; i < proper_count; ++i) {
+      const Bucketed& b = bucketed[i];
+      const uint32_t t = b.triangle >> 2, first = b.triangle & 3;
+      if (!proper[t]) continue;
+      uint32_t* o = out + size_t(slot) * 3;
+      o[first] = b.corners[0], o[kNext[first]] = b.corners[1], o[kPrevious[first]] = b.corners[2];
+      triangle_input_id_[slot++] = prepared_triangle[t];
+    }
   } else {
     for (size_t t = 0; t < triangles; ++t)
       if (proper[t]) out = std::copy_n(&corners[t * 3], 3, out);
@@ -850,7 +854,7 @@ void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
   const uint32_t* indices = indices_.data();
   // (Only where the records outgrow the L2 cache, as for the spatial order.)
   const PricingRecord* pricing =
-      greedy_ || vertex_count_ < kSpatialOrderMinimum ? nullptr : pricing_.data();
+      greedy_ || vertex_count_ < kSpatialOrderMinimum ? nullptr : pricing_.get();
   constexpr size_t kAhead = 8;
   for (size_t t = 0; t < triangles; ++t) {
     const uint32_t* v = indices + t * 3;
@@ -896,7 +900,7 @@ void PositionSimplifier::collectCandidates() {
   // b, then a): Qa(b) = ea - 2 ga·d + dᵀAa d, Qb(a) = eb + 2 gb·d + dᵀAb d,
   // Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4.
   const Quadric* quadrics = quadrics_.data();
-  const PricingRecord* pricing = pricing_.data();
+  const PricingRecord* pricing = pricing_.get();
   PassCandidate* out = pass_candidates_.get();
   uint32_t* keys = pass_keys_.get();
   size_t count = 0;
@@ -1198,6 +1202,7 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     }
     collectCandidates();
     if (pass_candidate_count_ == 0) break;
+    ++stats_.passes;
     // As the engine's runPasses: the collapses still needed (about two triangles each) set the
     // goal rank; edges up to pass_cost_slack times its cost are applied in order, the rest wait
     // for the next pass unless none of the cheap ones could be applied. Both parts keep the
@@ -1256,11 +1261,21 @@ void PositionSimplifier::runPasses(size_t pass_target) {
       }
     };
     apply_range(order, order + cheap_count);
+    const size_t left = reached() ? 0 : (live_triangles_ - pass_target + 1) / 2;
     if (applied == 0 && rest_count > 0) {  // the cheap part is spent: its buffers are scratch
       order = sortByKey(rest, cheap, rest_count, histograms_.get());
       apply_range(order, order + rest_count);
+    } else if (passFinishes(left, goal) && rest_count > 0) {  // collapse_engine.hpp
+      size_t open = 0;
+      for (size_t i = 0; i < rest_count; ++i) {  // both stores, one kept
+        rest[open] = rest[i];
+        open += (pass_lock_[rest[i].from] != pass) & (pass_lock_[rest[i].to] != pass);
+      }
+      order = sortByKey(rest, cheap, open, histograms_.get());
+      apply_range(order, order + open);
     }
     if (applied == 0) break;
+    if (passStalls(applied, goal, reached() ? 0 : live_triangles_ - pass_target, defaults)) break;
   }
   compact();
 }
@@ -1347,7 +1362,7 @@ SimplifyResult PositionSimplifier::run() {
   histograms_.reset(new uint32_t[3 * kDigits]);
   from_fan_.reset(new uint32_t[indices_.size() * 2]);
   to_fan_.reset(new uint32_t[indices_.size() * 2]);
-  pricing_.resize(vertex_count_);
+  pricing_.reset(new PricingRecord[vertex_count_]);
   for (uint32_t v = 0; v < vertex_count_; ++v)
     pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
   EngineOptions tail_options;
