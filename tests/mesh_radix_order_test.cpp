@@ -1,6 +1,7 @@
 // The quadric fast path's pass order (src/mesh/radix_order.hpp): the radix select must find the
 // same key as std::nth_element and the radix sort must give std::stable_sort's order, for every
-// size (both sides of the comparison-sort cutoff), rank and pattern of ties.
+// size (both sides of the comparison-sort cutoff and of the 8-bit/11-bit digit cutoff), rank and
+// pattern of ties.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -74,7 +75,7 @@ TEST(RadixOrder, SelectsTheRankedKeyOfAHandCheckableList) {
 
 TEST(RadixOrder, SelectAgreesWithNthElementOnBothSidesOfTheCutoff) {
   for (size_t n : {size_t(1), size_t(7), mesh::kRadixMinimum - 1, mesh::kRadixMinimum, size_t(5000),
-                   size_t(100000)}) {
+                   mesh::kWideDigitsMinimum - 1, mesh::kWideDigitsMinimum, size_t(100000)}) {
     const std::vector<uint32_t> keys = keysOf(costs(n, uint32_t(n)));
     for (size_t rank : {size_t(0), n / 3, n / 2, n - 1}) {
       std::vector<uint32_t> expected = keys;
@@ -85,20 +86,25 @@ TEST(RadixOrder, SelectAgreesWithNthElementOnBothSidesOfTheCutoff) {
 }
 
 TEST(RadixOrder, SelectHandlesKeysThatShareTheirTopDigits) {
-  // All within one top digit (and one middle digit): the lower digits decide.
-  std::vector<uint32_t> keys(3000);
-  for (size_t i = 0; i < keys.size(); ++i) keys[i] = mesh::orderKey(1.0f) + uint32_t(i * 7 % 2000);
-  for (size_t rank : {size_t(0), size_t(1234), size_t(2999)}) {
-    std::vector<uint32_t> expected = keys;
-    std::nth_element(expected.begin(), expected.begin() + rank, expected.end());
-    EXPECT_EQ(select(keys, rank), expected[rank]);
+  // All within one top digit (and one middle digit): the lower digits decide. With 8-bit
+  // digits (3000 keys) and 11-bit ones (12000).
+  for (size_t n : {size_t(3000), size_t(12000)}) {
+    ASSERT_EQ(n < mesh::kWideDigitsMinimum, n == 3000);
+    std::vector<uint32_t> keys(n);
+    for (size_t i = 0; i < n; ++i) keys[i] = mesh::orderKey(1.0f) + uint32_t(i * 7 % 2000);
+    for (size_t rank : {size_t(0), size_t(1234), n - 1}) {
+      std::vector<uint32_t> expected = keys;
+      std::nth_element(expected.begin(), expected.begin() + rank, expected.end());
+      EXPECT_EQ(select(keys, rank), expected[rank]) << "n " << n;
+    }
   }
   EXPECT_EQ(select(std::vector<uint32_t>(1000, 42), 999), 42u);  // all equal
 }
 
 TEST(RadixOrder, SortIsStableSortOnBothSidesOfTheCutoff) {
   for (size_t n :
-       {size_t(0), size_t(1), size_t(100), mesh::kRadixMinimum, size_t(4097), size_t(60000)}) {
+       {size_t(0), size_t(1), size_t(100), mesh::kRadixMinimum, size_t(4097),
+        mesh::kWideDigitsMinimum - 1, mesh::kWideDigitsMinimum, size_t(60000)}) {
     const std::vector<float> c = costs(n, uint32_t(n) + 1);
     std::vector<Record> records(n);
     for (size_t i = 0; i < n; ++i) records[i] = {c[i], uint32_t(i)};

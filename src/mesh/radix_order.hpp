@@ -20,20 +20,87 @@ inline uint32_t orderKey(float cost) {
   return bits & 0x7fffffffu;
 }
 
-// Digits, most significant first: key >> 22, then bits 11-21, then bits 0-10.
+// Keys have 31 bits. Digits, most significant first: 11-bit digits (three levels) for many
+// keys; 8-bit digits (four levels) below kWideDigitsMinimum keys, where clearing and scanning
+// the wide digits' histograms (2048 counters a level) cost more than the extra sweep.
 constexpr uint32_t kDigitBits = 11, kDigits = 1u << kDigitBits;
-// Below this many keys, comparison sorting is cheaper than three histograms of kDigits. (At 512,
-// the small meshes' passes paid for std::stable_sort's buffer: 128 made Avocado's 10% and 1%
-// cells ~5% faster, 32 changed nothing more; bench/RESULTS.md, issue 3, session 14.)
+constexpr size_t kWideDigitsMinimum = 8192;
+// Below this many keys, comparison sorting is cheaper than the histograms. (At 512, the small
+// meshes' passes paid for std::stable_sort's buffer: 128 made Avocado's 10% and 1% cells ~5%
+// faster, 32 changed nothing more; bench/RESULTS.md, issue 3, session 14.)
 constexpr size_t kRadixMinimum = 128;
 inline uint32_t digitOf(uint32_t key, int level) {
   return (key >> (level * kDigitBits)) & (kDigits - 1);
 }
 
+namespace radix_detail {
+
+template <uint32_t kBits>
+struct Digits {
+  static constexpr uint32_t kCount = 1u << kBits;
+  static constexpr int kLevels = int((31 + kBits - 1) / kBits);
+  static uint32_t of(uint32_t key, int level) { return (key >> (level * kBits)) & (kCount - 1); }
+};
+
+// selectKey with digits of kBits, most significant first: a histogram of the keys' top digits
+// finds the top digit of the ranked key, the keys that have it are gathered into `scratch` (one
+// sweep, no branch), and the lower digits are found among those alone.
+template <uint32_t kBits>
+uint32_t selectKeyWith(const uint32_t* keys, size_t n, size_t rank, uint32_t* histogram,
+                       uint32_t* scratch) {
+  using D = Digits<kBits>;
+  const uint32_t* values = keys;
+  size_t count = n;
+  uint32_t key = 0;
+  for (int level = D::kLevels - 1; level >= 0; --level) {
+    std::fill_n(histogram, D::kCount, 0u);
+    for (size_t i = 0; i < count; ++i) ++histogram[D::of(values[i], level)];
+    uint32_t digit = 0;
+    for (; digit + 1 < D::kCount && rank >= histogram[digit]; ++digit) rank -= histogram[digit];
+    key |= digit << (level * kBits);
+    if (level == 0) break;
+    size_t kept = 0;
+    for (size_t i = 0; i < count; ++i) {  // in place once values is scratch: kept <= i
+      const uint32_t value = values[i];
+      scratch[kept] = value;
+      kept += D::of(value, level) == digit;
+    }
+    values = scratch;
+    count = kept;
+  }
+  return key;
+}
+
+// sortByKey with digits of kBits: a stable LSD radix sort, one histogram sweep for all levels.
+template <uint32_t kBits, class Record>
+Record* sortByKeyWith(Record* data, Record* scratch, size_t n, uint32_t* histograms) {
+  using D = Digits<kBits>;
+  std::fill_n(histograms, D::kLevels * D::kCount, 0u);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t key = orderKey(data[i].cost);
+    for (int level = 0; level < D::kLevels; ++level)
+      ++histograms[level * D::kCount + D::of(key, level)];
+  }
+  for (int level = 0; level < D::kLevels; ++level) {
+    uint32_t* histogram = histograms + level * D::kCount;
+    if (n == 0 || histogram[D::of(orderKey(data[0].cost), level)] == n) continue;
+    uint32_t sum = 0;
+    for (uint32_t d = 0; d < D::kCount; ++d) {
+      const uint32_t count = histogram[d];
+      histogram[d] = sum;
+      sum += count;
+    }
+    for (size_t i = 0; i < n; ++i)
+      scratch[histogram[D::of(orderKey(data[i].cost), level)]++] = data[i];
+    std::swap(data, scratch);
+  }
+  return data;  // the caller's data or scratch buffer, after an even or odd number of scatters
+}
+
+}  // namespace radix_detail
+
 // The key of rank `rank` (0-based, < n) among keys[0, n), as std::nth_element would find it,
-// narrowed one digit at a time, most significant first: a histogram of all keys' top digits finds
-// the top digit, the keys that have it are gathered into `scratch` (one sweep, no branch), and the
-// two lower digits are found among those alone. `histogram` has room for kDigits, `scratch` for n.
+// narrowed one digit at a time. `histogram` has room for kDigits, `scratch` for n.
 inline uint32_t selectKey(const uint32_t* keys, size_t n, size_t rank, uint32_t* histogram,
                           uint32_t* scratch) {
   if (n < kRadixMinimum) {  // clearing and scanning the histograms would cost more
@@ -41,30 +108,12 @@ inline uint32_t selectKey(const uint32_t* keys, size_t n, size_t rank, uint32_t*
     std::nth_element(scratch, scratch + rank, scratch + n);
     return scratch[rank];
   }
-  auto narrow = [&](const uint32_t* values, size_t count, int level) {
-    std::fill_n(histogram, kDigits, 0u);
-    for (size_t i = 0; i < count; ++i) ++histogram[digitOf(values[i], level)];
-    uint32_t digit = 0;
-    for (; digit + 1 < kDigits && rank >= histogram[digit]; ++digit) rank -= histogram[digit];
-    return digit;
-  };
-  const uint32_t top = narrow(keys, n, 2);
-  size_t gathered = 0;
-  for (size_t i = 0; i < n; ++i) {
-    scratch[gathered] = keys[i];
-    gathered += digitOf(keys[i], 2) == top;
-  }
-  const uint32_t middle = narrow(scratch, gathered, 1);
-  size_t kept = 0;
-  for (size_t i = 0; i < gathered; ++i) {
-    scratch[kept] = scratch[i];
-    kept += digitOf(scratch[i], 1) == middle;
-  }
-  const uint32_t low = narrow(scratch, kept, 0);
-  return top << (2 * kDigitBits) | middle << kDigitBits | low;
+  return n < kWideDigitsMinimum
+             ? radix_detail::selectKeyWith<8>(keys, n, rank, histogram, scratch)
+             : radix_detail::selectKeyWith<kDigitBits>(keys, n, rank, histogram, scratch);
 }
 
-// Stable LSD radix sort of records by orderKey(record.cost), so that equal costs keep their order
+// Stable radix sort of records by orderKey(record.cost), so that equal costs keep their order
 // (the pass candidates' pricing order). A digit every key shares is skipped. `scratch` has room
 // for n and `histograms` for 3 * kDigits; returns where the sorted records are: `data` or
 // `scratch`.
@@ -76,25 +125,9 @@ Record* sortByKey(Record* data, Record* scratch, size_t n, uint32_t* histograms)
     });
     return data;
   }
-  std::fill_n(histograms, 3 * kDigits, 0u);
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t key = orderKey(data[i].cost);
-    for (int level = 0; level < 3; ++level) ++histograms[level * kDigits + digitOf(key, level)];
-  }
-  for (int level = 0; level < 3; ++level) {
-    uint32_t* histogram = histograms + level * kDigits;
-    if (n == 0 || histogram[digitOf(orderKey(data[0].cost), level)] == n) continue;
-    uint32_t sum = 0;
-    for (uint32_t d = 0; d < kDigits; ++d) {
-      const uint32_t count = histogram[d];
-      histogram[d] = sum;
-      sum += count;
-    }
-    for (size_t i = 0; i < n; ++i)
-      scratch[histogram[digitOf(orderKey(data[i].cost), level)]++] = data[i];
-    std::swap(data, scratch);
-  }
-  return data;  // the caller's data or scratch buffer, after an even or odd number of scatters
+  return n < kWideDigitsMinimum
+             ? radix_detail::sortByKeyWith<8>(data, scratch, n, histograms)
+             : radix_detail::sortByKeyWith<kDigitBits>(data, scratch, n, histograms);
 }
 
 }  // namespace duolod::mesh
