@@ -1084,7 +1084,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     Quadric q = quadrics_[from];
     addQuadric(q, quadrics_[to]);
     priced = minimizeQuadric(q, at_from, at_to);
-  } else if (!candidate.endpoint_only) {
+  } else if (!candidate.endpoint_only && candidate.cost > 0) {
+    // (At a price of 0 nothing is better: minimizeQuadric's values are >= 0. Flat regions.)
     Quadric q = quadrics_[from];
     addQuadric(q, quadrics_[to]);
     double value = 0;
