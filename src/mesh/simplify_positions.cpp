@@ -718,6 +718,22 @@ void PositionSimplifier::classify() {
       else
         as_previous[p] = i;
     }
+    if (!locked) {
+      // Most vertices are interior: their fan is one cycle through all their corners, across
+      // v -> n edges, and then no edge is a border edge (every next is some corner's previous).
+      // Walked first, so that the border sweep below runs only for the others.
+      uint32_t i = 0, steps = 0;
+      do {
+        i = as_previous[nexts[i]];
+        ++steps;
+      } while (i != kAbsent && i != 0 && steps <= degree);
+      if (i == 0 && steps == degree) {
+        for (uint32_t j = 0; j < degree; ++j)
+          as_next[nexts[j]] = as_previous[previouses[j]] = kAbsent;
+        kinds_[v] = VertexKind::kFree;
+        continue;
+      }
+    }
     uint32_t border_count = 0, fan_start = 0;
     uint32_t line[2] = {kAbsent, kAbsent};
     auto border_edge = [&](uint32_t n, uint32_t i) {
@@ -1165,6 +1181,7 @@ SimplifyResult PositionSimplifier::finish() {
   std::vector<uint32_t> compact_id(vertex_count_, kAbsent);
   for (uint32_t v : indices_) compact_id[v] = 0;
   core::Mesh& mesh = result.mesh;
+  mesh.positions.reserve(std::min<size_t>(vertex_count_, indices_.size()));
   std::vector<uint32_t> working_id(vertex_count_);
   for (uint32_t w = 0; w < vertex_count_; ++w) working_id[input_id_[w]] = w;
   for (uint32_t input = 0; input < vertex_count_; ++input) {
