@@ -87,9 +87,9 @@ TEST(RadixOrder, SelectAgreesWithNthElementOnBothSidesOfTheCutoff) {
 
 TEST(RadixOrder, SelectHandlesKeysThatShareTheirTopDigits) {
   // All within one top digit (and one middle digit): the lower digits decide. With 8-bit
-  // digits (3000 keys) and 11-bit ones (12000).
-  for (size_t n : {size_t(3000), size_t(12000)}) {
-    ASSERT_EQ(n < mesh::kWideDigitsMinimum, n == 3000);
+  // digits (1500 keys) and 11-bit ones (12000).
+  for (size_t n : {size_t(1500), size_t(12000)}) {
+    ASSERT_EQ(n < mesh::kWideDigitsMinimum, n == 1500);
     std::vector<uint32_t> keys(n);
     for (size_t i = 0; i < n; ++i) keys[i] = mesh::orderKey(1.0f) + uint32_t(i * 7 % 2000);
     for (size_t rank : {size_t(0), size_t(1234), n - 1}) {

@@ -22,9 +22,11 @@ inline uint32_t orderKey(float cost) {
 
 // Keys have 31 bits. Digits, most significant first: 11-bit digits (three levels) for many
 // keys; 8-bit digits (four levels) below kWideDigitsMinimum keys, where clearing and scanning
-// the wide digits' histograms (2048 counters a level) cost more than the extra sweep.
+// the wide digits' histograms (2048 counters a level) cost more than the extra sweep (Avocado's
+// passes: 5-9% of its time). Above a few thousand keys the extra sweep costs more: float costs
+// share their top 8 bits, so the 8-bit select gathers nearly all keys twice.
 constexpr uint32_t kDigitBits = 11, kDigits = 1u << kDigitBits;
-constexpr size_t kWideDigitsMinimum = 8192;
+constexpr size_t kWideDigitsMinimum = 2048;
 // Below this many keys, comparison sorting is cheaper than the histograms. (At 512, the small
 // meshes' passes paid for std::stable_sort's buffer: 128 made Avocado's 10% and 1% cells ~5%
 // faster, 32 changed nothing more; bench/RESULTS.md, issue 3, session 14.)
