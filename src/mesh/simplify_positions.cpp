@@ -1232,25 +1232,37 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     PassCandidate* const rest = pass_rest_.get();
     const PassCandidate* order = nullptr;
     size_t cheap_count = count, rest_count = 0;
+    const uint32_t* keys = pass_keys_.get();
+    uint32_t limit = ~0u;  // the cheap part's largest key
     if (goal > 0 && goal < count) {
       const uint32_t goal_key =
-          selectKey(pass_keys_.get(), count, goal, histograms_.get(), pass_key_scratch_.get());
+          selectKey(keys, count, goal, histograms_.get(), pass_key_scratch_.get());
       float goal_cost;
       std::memcpy(&goal_cost, &goal_key, 4);
-      const uint32_t limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
-      const uint32_t* keys = pass_keys_.get();
+      limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
       cheap_count = 0;
-      for (size_t i = 0; i < count; ++i) {  // both stores, one kept: no branch to mispredict
-        const bool is_cheap = keys[i] <= limit;
+      for (size_t i = 0; i < count; ++i) {  // the store always, the count when kept: no branch
         cheap[cheap_count] = candidates[i];
-        rest[rest_count] = candidates[i];
-        cheap_count += is_cheap;
-        rest_count += !is_cheap;
+        cheap_count += keys[i] <= limit;
       }
-      order = sortByKey(cheap, candidates, cheap_count, histograms_.get());
+      rest_count = count - cheap_count;
+      // Ordered with the rest's buffer as scratch: the candidates stay as priced, for the rest.
+      order = sortByKey(cheap, rest, cheap_count, histograms_.get());
     } else {
       order = sortByKey(candidates, cheap, count, histograms_.get());
     }
+    // The rest (in pricing order), gathered only when it is needed (rarely); `open_only`: only
+    // the edges whose endpoints this pass left untouched.
+    auto gather_rest = [&](bool open_only) {
+      size_t gathered = 0;
+      for (size_t i = 0; i < count; ++i) {  // the store always, the count when kept
+        const PassCandidate& c = candidates[i];
+        rest[gathered] = c;
+        const bool open = pass_lock_[c.from] != pass && pass_lock_[c.to] != pass;
+        gathered += keys[i] > limit && (open || !open_only);
+      }
+      return gathered;
+    };
     size_t applied = 0;
     constexpr ptrdiff_t kAhead = 8;
     auto apply_range = [&](const PassCandidate* begin, const PassCandidate* end) {
@@ -1281,14 +1293,11 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     apply_range(order, order + cheap_count);
     const size_t left = reached() ? 0 : (live_triangles_ - pass_target + 1) / 2;
     if (applied == 0 && rest_count > 0) {  // the cheap part is spent: its buffers are scratch
-      order = sortByKey(rest, cheap, rest_count, histograms_.get());
-      apply_range(order, order + rest_count);
+      const size_t gathered = gather_rest(false);
+      order = sortByKey(rest, cheap, gathered, histograms_.get());
+      apply_range(order, order + gathered);
     } else if (passFinishes(left, goal) && rest_count > 0) {  // collapse_engine.hpp
-      size_t open = 0;
-      for (size_t i = 0; i < rest_count; ++i) {  // both stores, one kept
-        rest[open] = rest[i];
-        open += (pass_lock_[rest[i].from] != pass) & (pass_lock_[rest[i].to] != pass);
-      }
+      const size_t open = gather_rest(true);
       order = sortByKey(rest, cheap, open, histograms_.get());
       apply_range(order, order + open);
     }
