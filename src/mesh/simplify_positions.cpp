@@ -25,7 +25,7 @@
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
-// Speed (bench/RESULTS.md, issue 3): 0.98-1.48x meshoptimizer 0.18's wall clock (paired timing,
+// Speed (bench/RESULTS.md, issue 3): 0.94-1.40x meshoptimizer 0.18's wall clock (paired timing,
 // bench/simplify_ab.sh), 1.5-1.8x its instructions (bench/simplify_callgrind.sh). The
 // wall clock is the measure: the pass pricing and the pass order are written without
 // data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
@@ -39,8 +39,11 @@
 // Hausdorff mixed), no optimal placement in the passes (-4%, Hausdorff and mean clearly worse),
 // meshopt's coarse cost order (-4%, Hausdorff worse than meshopt in 1-2 cells), no greedy tail
 // at any target (-10%, armadillo 1% Hausdorff 1.27x meshopt's: it now runs at the coarse end
-// only) and choosing in cost order but applying in vertex order (+5%: failed collapses then hold
-// their locks, passes yield less).
+// only), choosing in cost order but applying in vertex order (+5%: failed collapses then hold
+// their locks, passes yield less), fine passes instead of the greedy tail (Hausdorff above
+// meshopt's at armadillo 10% and 1%) and a lazily priced greedy tail (no faster: its fan walks and
+// queue cost, not its solves). Set-up alone (a run to 100%) is 1.2-1.45x meshopt's; the passes
+// at 50% are faster than meshopt's.
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
 // endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail).
 #include "mesh/simplify_positions.hpp"
