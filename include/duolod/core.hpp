@@ -2,6 +2,7 @@
 // images, errors as values, and logging/progress. Every later stage builds on these types.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -104,7 +105,10 @@ Mat4 perspective(float fov_y_radians, float aspect, float z_near, float z_far);
 struct Bounds {
   Vec3 min{INFINITY, INFINITY, INFINITY};
   Vec3 max{-INFINITY, -INFINITY, -INFINITY};
-  void extend(Vec3 p);
+  void extend(Vec3 p) {  // inline: it runs per vertex in hot set-up loops
+    min = {std::min(min.x, p.x), std::min(min.y, p.y), std::min(min.z, p.z)};
+    max = {std::max(max.x, p.x), std::max(max.y, p.y), std::max(max.z, p.z)};
+  }
   bool empty() const { return min.x > max.x; }
   Vec3 center() const { return (min + max) * 0.5f; }
   Vec3 size() const { return max - min; }

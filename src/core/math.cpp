@@ -124,11 +124,6 @@ Mat4 perspective(float fov_y_radians, float aspect, float z_near, float z_far) {
   return r;
 }
 
-void Bounds::extend(Vec3 p) {
-  min = {std::min(min.x, p.x), std::min(min.y, p.y), std::min(min.z, p.z)};
-  max = {std::max(max.x, p.x), std::max(max.y, p.y), std::max(max.z, p.z)};
-}
-
 uint64_t hashBytes(const void* data, size_t size, uint64_t seed) {
   const auto* bytes = static_cast<const uint8_t*>(data);
   uint64_t h = seed;

@@ -31,9 +31,6 @@ constexpr size_t kWideDigitsMinimum = 2048;
 // meshes' passes paid for std::stable_sort's buffer: 128 made Avocado's 10% and 1% cells ~5%
 // faster, 32 changed nothing more; bench/RESULTS.md, issue 3, session 14.)
 constexpr size_t kRadixMinimum = 128;
-inline uint32_t digitOf(uint32_t key, int level) {
-  return (key >> (level * kDigitBits)) & (kDigits - 1);
-}
 
 namespace radix_detail {
 

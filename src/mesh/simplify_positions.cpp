@@ -19,10 +19,10 @@
 //     own position, in float with SSE (PricingRecord), and the optimal placement is solved (in
 //     double) only for the collapses applied (as CostModel::refinePlacement does);
 //   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
-//     the input) use a greedy queue as the engine's kGreedy does (cheapest first, priced at the optimal placement,
-//     the survivor's edges priced again after each collapse); the corner table then grows by
-//     chaining: a vertex's triangles are its own corners and those of the vertices it absorbed,
-//     and the remap becomes a union-find.
+//     the input) use a greedy queue as the engine's kGreedy does (cheapest first, priced at the
+//     optimal placement, the survivor's edges priced again after each collapse); the corner table
+//     then grows by chaining: a vertex's triangles are its own corners and those of the vertices
+//     it absorbed, and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
 // Speed (bench/RESULTS.md, issue 3): 0.94-1.40x meshoptimizer 0.18's wall clock (paired timing,
@@ -450,16 +450,12 @@ void PositionSimplifier::prepareWorkingMesh() {
   // order too, below); small ones by a 16-bit hash of the position, two byte-digit passes
   // instead of three 10-bit ones (the Morton sort cost small meshes more than the hash table it
   // replaced).
-  auto extend = [](core::Bounds& b, core::Vec3 p) {  // Bounds::extend, inline
-    b.min = {std::min(b.min.x, p.x), std::min(b.min.y, p.y), std::min(b.min.z, p.z)};
-    b.max = {std::max(b.max.x, p.x), std::max(b.max.y, p.y), std::max(b.max.z, p.z)};
-  };
   const bool morton_weld = n >= kSpatialOrderMinimum;
   core::Bounds all;
   MortonFrame frame;
   std::vector<uint32_t> code(n), sorted(n);
   if (morton_weld) {
-    for (core::Vec3 p : m.positions) extend(all, p);
+    for (core::Vec3 p : m.positions) all.extend(p);
     double all_scale = 1;
     frameOf(all, frame.origin, all_scale);
     frame.inverse_scale = 1.0 / all_scale;
@@ -527,7 +523,7 @@ void PositionSimplifier::prepareWorkingMesh() {
   core::Bounds bounds;
   uint32_t count = 0;
   for (uint32_t v = 0; v < n; ++v)
-    if (used[v]) prepared_id[v] = count++, extend(bounds, m.positions[v]);
+    if (used[v]) prepared_id[v] = count++, bounds.extend(m.positions[v]);
   vertex_count_ = count;
   frameOf(bounds, origin_, scale_);
   const double inverse_scale = 1.0 / scale_;
