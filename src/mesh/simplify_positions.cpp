@@ -50,6 +50,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -216,6 +218,7 @@ class PositionSimplifier {
   void pushCandidate(uint32_t from, uint32_t to, bool endpoint_only);
   void emitEdge(uint32_t a, uint32_t b);
   void collectCandidates();
+  void allocatePassArrays();
   void runPasses(size_t pass_target);
   void runGreedy();
   void emitAround(uint32_t v);
@@ -277,7 +280,7 @@ class PositionSimplifier {
   std::vector<Quadric> quadrics_;
   // quadrics_ around the positions, for the passes (every record is written before it is read:
   // no value-initialization of megabytes)
-  std::unique_ptr<PricingRecord[]> pricing_;
+  PricingRecord* pricing_ = nullptr;
   Vec3d centre_;                        // of the bounding box, in the normalized frame
   std::vector<VertexKind> kinds_;
   std::vector<uint32_t> border_neighbors_;  // two per constrained vertex
@@ -310,15 +313,17 @@ class PositionSimplifier {
   uint32_t round_ = 0;
   // The other two corners of each moving triangle of a collapse's endpoints (room for every
   // triangle, so they are filled without capacity checks).
-  std::unique_ptr<uint32_t[]> from_fan_, to_fan_;
+  uint32_t *from_fan_ = nullptr, *to_fan_ = nullptr;
   uint32_t from_fan_size_ = 0, to_fan_size_ = 0;
   // Pass candidates, their order keys (orderKey of the cost), the cheap and the rest part of a
-  // pass, and the radix order's scratch (radix_order.hpp): room for every edge of the input (the
-  // mesh only shrinks).
-  std::unique_ptr<PassCandidate[]> pass_candidates_, pass_cheap_, pass_rest_;
-  std::unique_ptr<uint32_t[]> pass_keys_;  // orderKey of each pass candidate
-  std::unique_ptr<uint32_t[]> pass_key_scratch_;
-  std::unique_ptr<uint32_t[]> histograms_;  // 3 * kDigits
+  // pass, and the radix order's scratch (radix_order.hpp): room for every candidate of the
+  // first pass (allocatePassArrays).
+  PassCandidate *pass_candidates_ = nullptr, *pass_cheap_ = nullptr, *pass_rest_ = nullptr;
+  uint32_t* pass_keys_ = nullptr;  // orderKey of each pass candidate
+  uint32_t* pass_key_scratch_ = nullptr;
+  uint32_t* histograms_ = nullptr;  // 3 * kDigits
+  // These arrays, pricing_ and the fans, in one block (allocatePassArrays).
+  std::unique_ptr<std::byte[]> pass_memory_;
   size_t pass_candidate_count_ = 0;
   uint32_t edge_triangles_[2] = {kAbsent, kAbsent};
   uint32_t edge_triangle_count_ = 0;
@@ -869,7 +874,7 @@ void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
   const uint32_t* indices = indices_.data();
   // (Only where the records outgrow the L2 cache, as for the spatial order.)
   const PricingRecord* pricing =
-      greedy_ || vertex_count_ < kSpatialOrderMinimum ? nullptr : pricing_.get();
+      greedy_ || vertex_count_ < kSpatialOrderMinimum ? nullptr : pricing_;
   constexpr size_t kAhead = 8;
   for (size_t t = 0; t < triangles; ++t) {
     const uint32_t* v = indices + t * 3;
@@ -915,9 +920,9 @@ void PositionSimplifier::collectCandidates() {
   // b, then a): Qa(b) = ea - 2 ga·d + dᵀAa d, Qb(a) = eb + 2 gb·d + dᵀAb d,
   // Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4.
   const Quadric* quadrics = quadrics_.data();
-  const PricingRecord* pricing = pricing_.get();
-  PassCandidate* out = pass_candidates_.get();
-  uint32_t* keys = pass_keys_.get();
+  const PricingRecord* pricing = pricing_;
+  PassCandidate* out = pass_candidates_;
+  uint32_t* keys = pass_keys_;
   size_t count = 0;
   const bool has_error_target = std::isfinite(options_.target_error);
   // Inlined into the edge walk (a call per edge costs ~15% of the pricing in saved registers).
@@ -1028,7 +1033,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   // from's triangles: the ones on the edge (they die), the others (they move); mark from's
   // neighbours.
   const uint32_t near_round = nextRound();
-  uint32_t* from_fan = from_fan_.get();
+  uint32_t* from_fan = from_fan_;
   uint32_t from_fan_size = 0, edge_count = 0;
   uint32_t opposite[2] = {kAbsent, kAbsent};
   for_each_triangle(from, [&](uint32_t t, uint32_t k) {
@@ -1065,7 +1070,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     }
   const uint32_t counted_round = nextRound();
   uint32_t common = 0, to_fan_size = 0;
-  uint32_t* to_fan = to_fan_.get();
+  uint32_t* to_fan = to_fan_;
   bool duplicate = false;
   for_each_triangle(to, [&](uint32_t t, uint32_t k) {
     const uint32_t x = survivor(indices[t * 3 + kNext[k]]);
@@ -1091,8 +1096,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     const bool moves_to = p.x != at_to.x || p.y != at_to.y || p.z != at_to.z;
     // from's triangles keep their shape when the survivor sits where `from` was.
     const bool moves_from = p.x != at_from.x || p.y != at_from.y || p.z != at_from.z;
-    return (moves_from && fanFlips(from_fan_.get(), from_fan_size_, at_from, p)) ||
-           (moves_to && fanFlips(to_fan_.get(), to_fan_size_, at_to, p));
+    return (moves_from && fanFlips(from_fan_, from_fan_size_, at_from, p)) ||
+           (moves_to && fanFlips(to_fan_, to_fan_size_, at_to, p));
   };
   Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
   if (kGreedy && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
@@ -1226,16 +1231,16 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     // pricing order among equal costs.
     const size_t count = pass_candidate_count_;
     const size_t goal = pass_target > 0 ? (live_triangles_ - pass_target + 1) / 2 : 0;
-    PassCandidate* const candidates = pass_candidates_.get();
-    PassCandidate* const cheap = pass_cheap_.get();
-    PassCandidate* const rest = pass_rest_.get();
+    PassCandidate* const candidates = pass_candidates_;
+    PassCandidate* const cheap = pass_cheap_;
+    PassCandidate* const rest = pass_rest_;
     const PassCandidate* order = nullptr;
     size_t cheap_count = count, rest_count = 0;
-    const uint32_t* keys = pass_keys_.get();
+    const uint32_t* keys = pass_keys_;
     uint32_t limit = ~0u;  // the cheap part's largest key
     if (goal > 0 && goal < count) {
       const uint32_t goal_key =
-          selectKey(keys, count, goal, histograms_.get(), pass_key_scratch_.get());
+          selectKey(keys, count, goal, histograms_, pass_key_scratch_);
       float goal_cost;
       std::memcpy(&goal_cost, &goal_key, 4);
       limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
@@ -1246,9 +1251,9 @@ void PositionSimplifier::runPasses(size_t pass_target) {
       }
       rest_count = count - cheap_count;
       // Ordered with the rest's buffer as scratch: the candidates stay as priced, for the rest.
-      order = sortByKey(cheap, rest, cheap_count, histograms_.get());
+      order = sortByKey(cheap, rest, cheap_count, histograms_);
     } else {
-      order = sortByKey(candidates, cheap, count, histograms_.get());
+      order = sortByKey(candidates, cheap, count, histograms_);
     }
     // The rest (in pricing order), gathered only when it is needed (rarely); `open_only`: only
     // the edges whose endpoints this pass left untouched.
@@ -1293,11 +1298,11 @@ void PositionSimplifier::runPasses(size_t pass_target) {
     const size_t left = reached() ? 0 : (live_triangles_ - pass_target + 1) / 2;
     if (applied == 0 && rest_count > 0) {  // the cheap part is spent: its buffers are scratch
       const size_t gathered = gather_rest(false);
-      order = sortByKey(rest, cheap, gathered, histograms_.get());
+      order = sortByKey(rest, cheap, gathered, histograms_);
       apply_range(order, order + gathered);
     } else if (passFinishes(left, goal) && rest_count > 0) {  // collapse_engine.hpp
       const size_t open = gather_rest(true);
-      order = sortByKey(rest, cheap, open, histograms_.get());
+      order = sortByKey(rest, cheap, open, histograms_);
       apply_range(order, order + open);
     }
     if (applied == 0) break;
@@ -1333,8 +1338,8 @@ void PositionSimplifier::runGreedy() {
     if (seeds < live_triangles_ * 3 / 2) {
       collectCandidates();  // the passes' pricing (greedy_ is not set yet)
       if (seeds < pass_candidate_count_) {
-        seed_limit = selectKey(pass_keys_.get(), pass_candidate_count_, seeds, histograms_.get(),
-                               pass_key_scratch_.get());
+        seed_limit = selectKey(pass_keys_, pass_candidate_count_, seeds, histograms_,
+                               pass_key_scratch_);
         seeded = true;
       }
     }
@@ -1374,21 +1379,50 @@ void PositionSimplifier::runGreedy() {
   }
 }
 
+// The pass arrays, the pricing records and the fans, carved out of one block. As separate
+// blocks of megabytes they were the top of the heap when a call freed them, so glibc gave them
+// back to the system and the next call faulted every page in again (bunny: ~1300 page faults a
+// call, 6-8% of its time at 10% and 1%; bench/RESULTS.md, issue 3, session 15). Room for every
+// candidate a pass can emit (forEachCandidateEdge): at most two per triangle (of a triangle's
+// three edges, one or two run from a lower to a higher id) and two per constrained vertex; the
+// mesh only shrinks.
+void PositionSimplifier::allocatePassArrays() {
+  const size_t edge_room = 2 * (indices_.size() / 3) + 2 * constrained_.size();
+  size_t size = 0;
+  auto place = [&](size_t bytes) {  // each array at a 64-byte boundary
+    const size_t offset = size;
+    size += (bytes + 63) & ~size_t(63);
+    return offset;
+  };
+  const size_t candidates_at = place(edge_room * sizeof(PassCandidate));
+  const size_t cheap_at = place(edge_room * sizeof(PassCandidate));
+  const size_t rest_at = place(edge_room * sizeof(PassCandidate));
+  const size_t keys_at = place(edge_room * 4), scratch_at = place(edge_room * 4);
+  const size_t histograms_at = place(3 * kDigits * 4);
+  const size_t pricing_at = place(vertex_count_ * sizeof(PricingRecord));
+  const size_t from_fan_at = place(indices_.size() * 2 * 4);
+  const size_t to_fan_at = place(indices_.size() * 2 * 4);
+  // (Trivial types: the block's bytes become their objects as they are written, C++20.)
+  pass_memory_.reset(new std::byte[size + 63]);
+  std::byte* base = reinterpret_cast<std::byte*>(
+      (reinterpret_cast<uintptr_t>(pass_memory_.get()) + 63) & ~uintptr_t(63));
+  pass_candidates_ = reinterpret_cast<PassCandidate*>(base + candidates_at);
+  pass_cheap_ = reinterpret_cast<PassCandidate*>(base + cheap_at);
+  pass_rest_ = reinterpret_cast<PassCandidate*>(base + rest_at);
+  pass_keys_ = reinterpret_cast<uint32_t*>(base + keys_at);
+  pass_key_scratch_ = reinterpret_cast<uint32_t*>(base + scratch_at);
+  histograms_ = reinterpret_cast<uint32_t*>(base + histograms_at);
+  pricing_ = reinterpret_cast<PricingRecord*>(base + pricing_at);
+  from_fan_ = reinterpret_cast<uint32_t*>(base + from_fan_at);
+  to_fan_ = reinterpret_cast<uint32_t*>(base + to_fan_at);
+}
+
 SimplifyResult PositionSimplifier::run() {
   setUp();
   buildAdjacency();
   clearAbsorbed();
   classify();
-  const size_t edge_room = indices_.size() + 2 * constrained_.size();
-  pass_candidates_.reset(new PassCandidate[edge_room]);
-  pass_cheap_.reset(new PassCandidate[edge_room]);
-  pass_rest_.reset(new PassCandidate[edge_room]);
-  pass_keys_.reset(new uint32_t[edge_room]);
-  pass_key_scratch_.reset(new uint32_t[edge_room]);
-  histograms_.reset(new uint32_t[3 * kDigits]);
-  from_fan_.reset(new uint32_t[indices_.size() * 2]);
-  to_fan_.reset(new uint32_t[indices_.size() * 2]);
-  pricing_.reset(new PricingRecord[vertex_count_]);
+  allocatePassArrays();
   for (uint32_t v = 0; v < vertex_count_; ++v)
     pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
   EngineOptions tail_options;
