@@ -222,7 +222,7 @@ TEST(GreedyTail, OnlyAtTheCoarseEnd) {
   EXPECT_EQ(mesh::greedyTailTriangles(options, 4510), 281u);
 }
 
-TEST(PassEnds, FinishingAndStalling) {
+TEST(PassEnds, FinishingStallingAndNearingTheTail) {
   // Finishing: at most a seventh of the goal left undone by the cheap part.
   EXPECT_TRUE(mesh::passFinishes(100, 700));
   EXPECT_FALSE(mesh::passFinishes(101, 700));
@@ -234,6 +234,11 @@ TEST(PassEnds, FinishingAndStalling) {
   EXPECT_TRUE(mesh::passStalls(0, 100, 2000, options));
   EXPECT_FALSE(mesh::passStalls(0, 100, 2001, options));  // too much left for the queue
   EXPECT_FALSE(mesh::passStalls(0, 100, 0, options));     // at the pass target already
+  // Nearing the tail: at most a quarter of the tail left above the pass target.
+  EXPECT_TRUE(mesh::passNearsTail(500, 2000));
+  EXPECT_FALSE(mesh::passNearsTail(501, 2000));
+  EXPECT_FALSE(mesh::passNearsTail(0, 2000));  // at the pass target already
+  EXPECT_FALSE(mesh::passNearsTail(1, 0));     // no tail: the passes go on
 }
 
 TEST(PrepareMesh, DropsDuplicateTrianglesKeepsTheFirstAndTheReversed) {

@@ -1210,7 +1210,9 @@ void Engine::runPasses() {
       apply_range(first_rest, open_end);
     }
     if (applied == 0) break;
-    if (passStalls(applied, goal, reached() ? 0 : s.live_triangles - pass_target, options_)) break;
+    const size_t above_target = reached() ? 0 : s.live_triangles - pass_target;
+    if (passStalls(applied, goal, above_target, options_) || passNearsTail(above_target, tail))
+      break;
   }
   batch_.clear();
 }

@@ -219,7 +219,7 @@ class PositionSimplifier {
   void emitEdge(uint32_t a, uint32_t b);
   void collectCandidates();
   void allocatePassArrays();
-  void runPasses(size_t pass_target);
+  void runPasses(size_t pass_target, size_t tail);
   void runGreedy();
   void emitAround(uint32_t v);
   // kGreedy: in the greedy tail (survivors are chains, triangles come from absorbed vertices
@@ -1214,7 +1214,8 @@ SimplifyResult PositionSimplifier::finish() {
   return result;
 }
 
-void PositionSimplifier::runPasses(size_t pass_target) {
+// `tail`: the greedy tail's triangles (pass_target is the target plus those, or 0 for none).
+void PositionSimplifier::runPasses(size_t pass_target, size_t tail) {
   auto reached = [&] { return live_triangles_ <= pass_target; };
   EngineOptions defaults;
   for (uint32_t pass = 1; !reached(); ++pass) {
@@ -1306,7 +1307,9 @@ void PositionSimplifier::runPasses(size_t pass_target) {
       apply_range(order, order + open);
     }
     if (applied == 0) break;
-    if (passStalls(applied, goal, reached() ? 0 : live_triangles_ - pass_target, defaults)) break;
+    const size_t above_target = reached() ? 0 : live_triangles_ - pass_target;
+    if (passStalls(applied, goal, above_target, defaults) || passNearsTail(above_target, tail))
+      break;
   }
   compact();
 }
@@ -1429,7 +1432,7 @@ SimplifyResult PositionSimplifier::run() {
   tail_options.target_triangles = options_.target_triangles;
   const size_t tail = greedyTailTriangles(tail_options, live_triangles_);
   const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
-  runPasses(pass_target);
+  runPasses(pass_target, tail);
   runGreedy();
   return finish();
 }
