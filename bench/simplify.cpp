@@ -13,7 +13,9 @@
 // Meshes: positional arguments, or the defaults below. CGAL's meshes come from the Debian package
 // libcgal-demo: run scripts/fetch-bench-data.sh [DIR] and pass --data-dir DIR (default
 // $DUOLOD_DATA_DIR, else /tmp/duolod-data). Meshes are loaded as they are (no generated normals or
-// tangents); duolod uses whatever attributes a file has, meshoptimizer sees positions only.
+// tangents); duolod uses whatever attributes a file has, meshoptimizer sees positions only (the
+// file's vertices, attribute seams included, in the plain row; one vertex per position in the
+// '(positions only)' row, for both).
 #include <meshoptimizer.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -236,9 +238,10 @@ int main(int argc, char** argv) {
       "count, and both outputs are measured against that input by the same "
       "mesh::surfaceDistance. meshopt_simplify 0.18 is position-only; a plain row runs "
       "duolod on the file as loaded (attribute-aware when the file has normals/UVs), a "
-      "'(positions only)' row on the same mesh stripped to positions: the speed target "
-      "is judged on position-only rows (CGAL meshes have no attributes, so their one row "
-      "is both).\n\n",
+      "'(positions only)' row on the same surface stripped to positions and welded (one "
+      "vertex per position), for both: the speed target is judged on position-only rows "
+      "(CGAL meshes have no attributes, so their one row is both). In a plain row "
+      "meshopt_simplify gets the file's vertices, so attribute seams stay seams for both.\n\n",
       endpoint ? "endpoint" : "optimal", MESHOPTIMIZER_VERSION / 1000,
       (MESHOPTIMIZER_VERSION % 1000) / 10, repeats, repeats, samples);
   std::printf(
@@ -305,14 +308,18 @@ int main(int argc, char** argv) {
     }
 
     // Rows: our default (attribute-aware: whatever the file has) and, when the file has
-    // attributes, the same mesh with positions only, which is what meshopt_simplify 0.18 sees
-    // (it is position-only): that row is the like-for-like speed comparison.
+    // attributes, the same surface with positions only, welded (one vertex per position): that
+    // row is the like-for-like comparison, both simplifiers on the same position-only mesh.
+    // (Unwelded, meshopt_simplify would keep the attribute seams' duplicate positions as seams
+    // and we would weld them away: different problems.) The plain row gives meshopt the file's
+    // vertices, seams included, which it keeps as seams as our attribute-aware mode does.
     core::Mesh positions_only;
     positions_only.positions = input.positions;
     positions_only.indices = input.indices;
     positions_only.submeshes = input.submeshes;
     const bool has_attributes =
         positions_only.vertexCount() == input.vertexCount() && attributeList(input) != "position";
+    if (has_attributes) core::weldVertices(positions_only);
     struct Variant {
       std::string label;
       const core::Mesh* mesh;
@@ -339,10 +346,10 @@ int main(int argc, char** argv) {
         const bench::PairedTimes times = bench::pairedMedianSeconds(
             repeats, [&] { ours = mesh::simplifyQuadric(ours_input, options); },
             [&] {
-              index_count = meshopt_simplify(destination.data(), input.indices.data(),
-                                             input.indices.size(), &input.positions[0].x,
-                                             input.vertexCount(), sizeof(core::Vec3), target * 3,
-                                             1.0f, 0, &meshopt_error);
+              index_count = meshopt_simplify(
+                  destination.data(), ours_input.indices.data(), ours_input.indices.size(),
+                  &ours_input.positions[0].x, ours_input.vertexCount(), sizeof(core::Vec3),
+                  target * 3, 1.0f, 0, &meshopt_error);
             });
         const double ours_s = times.a_seconds, meshopt_s = times.b_seconds;
         if (digest) {
@@ -355,7 +362,7 @@ int main(int argc, char** argv) {
                        static_cast<unsigned long long>(h));
         }
         core::Mesh theirs;
-        theirs.positions = input.positions;
+        theirs.positions = ours_input.positions;
         theirs.indices.assign(destination.begin(), destination.begin() + index_count);
 
         mesh::SurfaceDistance d_ours, d_theirs;  // --samples 0 skips them (for profiling)
