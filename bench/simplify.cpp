@@ -317,8 +317,7 @@ int main(int argc, char** argv) {
     positions_only.positions = input.positions;
     positions_only.indices = input.indices;
     positions_only.submeshes = input.submeshes;
-    const bool has_attributes =
-        positions_only.vertexCount() == input.vertexCount() && attributeList(input) != "position";
+    const bool has_attributes = attributeList(input) != "position";
     if (has_attributes) core::weldVertices(positions_only);
     struct Variant {
       std::string label;

@@ -1385,7 +1385,7 @@ void PositionSimplifier::runGreedy() {
 // The pass arrays, the pricing records and the fans, carved out of one block. As separate
 // blocks of megabytes they were the top of the heap when a call freed them, so glibc gave them
 // back to the system and the next call faulted every page in again (bunny: ~1300 page faults a
-// call, 3-8% of its time at 10% and 1% depending on the run; bench/RESULTS.md, issue 3, session
+// call; 0-8% of its time at 10% and 1%, by run; bench/RESULTS.md, issue 3, session
 // 15). Room for every candidate a pass can emit (forEachCandidateEdge): at most two per triangle
 // (of a triangle's three edges, one or two run from a lower to a higher id) and two per
 // constrained vertex; the mesh only shrinks.
