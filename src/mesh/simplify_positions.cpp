@@ -351,10 +351,12 @@ void PositionSimplifier::setUp() {
 #if defined(__SSE2__)
     // The plane's 11 members in registers, added two at a time to each corner's quadric (the
     // same sums as addQuadric; this loop runs three times per input triangle).
+    // Paired in registers, not loaded from the plane in memory: a 16-byte load of two 8-byte
+    // stores cannot be forwarded from the store buffer and waits for them to retire.
     static_assert(sizeof(Quadric) == 11 * sizeof(double), "Quadric is 11 packed doubles");
-    const double* p = &plane.a00;
-    const __m128d p0 = _mm_loadu_pd(p), p1 = _mm_loadu_pd(p + 2), p2 = _mm_loadu_pd(p + 4),
-                  p3 = _mm_loadu_pd(p + 6), p4 = _mm_loadu_pd(p + 8);
+    const __m128d p0 = _mm_set_pd(plane.a01, plane.a00), p1 = _mm_set_pd(plane.a11, plane.a02),
+                  p2 = _mm_set_pd(plane.a22, plane.a12), p3 = _mm_set_pd(plane.b1, plane.b0),
+                  p4 = _mm_set_pd(plane.c, plane.b2);
     for (int k = 0; k < 3; ++k) {
       double* q = &quadrics_[v[k]].a00;
       _mm_storeu_pd(q, _mm_add_pd(_mm_loadu_pd(q), p0));
@@ -362,7 +364,7 @@ void PositionSimplifier::setUp() {
       _mm_storeu_pd(q + 4, _mm_add_pd(_mm_loadu_pd(q + 4), p2));
       _mm_storeu_pd(q + 6, _mm_add_pd(_mm_loadu_pd(q + 6), p3));
       _mm_storeu_pd(q + 8, _mm_add_pd(_mm_loadu_pd(q + 8), p4));
-      q[10] += p[10];
+      q[10] += plane.weight;
     }
 #else
     for (int k = 0; k < 3; ++k) addQuadric(quadrics_[v[k]], plane);
