@@ -513,17 +513,17 @@ void PositionSimplifier::prepareWorkingMesh() {
   // Proper triangles (in range, three distinct vertices) and the vertices they use.
   std::vector<uint32_t> corners(triangles * 3);
   std::vector<uint8_t> proper(triangles, 0), used(n, 0);
+  // In named values, not an array: the array went through memory, and copying two of its
+  // 4-byte entries into `corners` as one 8-byte load is not store-forwarded (it waited for the
+  // stores to retire: ~10% of the set-up on WaterBottle).
   for (size_t t = 0; t < triangles; ++t) {
-    uint32_t r[3];
-    bool in_range = true;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t index = m.indices[t * 3 + k];
-      in_range &= index < n;
-      r[k] = in_range ? representative[index] : 0;
-    }
-    if (!in_range || r[0] == r[1] || r[1] == r[2] || r[0] == r[2]) continue;
+    const uint32_t i0 = m.indices[t * 3], i1 = m.indices[t * 3 + 1], i2 = m.indices[t * 3 + 2];
+    if (!(i0 < n && i1 < n && i2 < n)) continue;
+    const uint32_t r0 = representative[i0], r1 = representative[i1], r2 = representative[i2];
+    if (r0 == r1 || r1 == r2 || r0 == r2) continue;
     proper[t] = 1;
-    for (int k = 0; k < 3; ++k) corners[t * 3 + k] = r[k], used[r[k]] = 1;
+    corners[t * 3] = r0, corners[t * 3 + 1] = r1, corners[t * 3 + 2] = r2;
+    used[r0] = used[r1] = used[r2] = 1;
   }
   // The prepared ids (the used vertices in input order) and the frame of their box.
   std::vector<uint32_t> prepared_id(n, kAbsent);
