@@ -413,21 +413,21 @@ void PositionSimplifier::setUp() {
 
   // Plane quadrics (Garland & Heckbert 1997 eq. 2), weighted by planeWeight (quadric.hpp).
   quadrics_.assign(vertex_count_, Quadric{});
-  for (size_t t = 0; t < live_triangles_; ++t) {
-    const uint32_t* v = &indices_[t * 3];
-    Quadric plane;
-    if (!triangleQuadric(vertices_[v[0]].position, vertices_[v[1]].position,
-                         vertices_[v[2]].position, plane))
-      continue;
+  size_t t = 0;
 #if defined(__SSE2__)
-    // The plane's 11 members in registers, added two at a time to each corner's quadric (the
-    // same sums as addQuadric; this loop runs three times per input triangle). Paired from the
-    // plane's members, not loaded from it in memory: a 16-byte load of two 8-byte stores is not
-    // forwarded from the store buffer and waits for them to retire (set-up 4-5% slower).
-    static_assert(sizeof(Quadric) == 11 * sizeof(double), "Quadric is 11 packed doubles");
-    const __m128d p0 = _mm_set_pd(plane.a01, plane.a00), p1 = _mm_set_pd(plane.a11, plane.a02),
-                  p2 = _mm_set_pd(plane.a22, plane.a12), p3 = _mm_set_pd(plane.b1, plane.b0),
-                  p4 = _mm_set_pd(plane.c, plane.b2);
+  // Two triangles at a time, one per lane: triangleQuadric's operations in the same order (so the
+  // same bits), with its three square roots and its division shared by the pair (they were the
+  // loop's critical path). Each lane's plane is then added to its corners' quadrics, the first
+  // triangle's before the second's, as in the scalar loop. The pairs are built in registers, not
+  // loaded from a plane in memory: a 16-byte load of two 8-byte stores is not forwarded from the
+  // store buffer and waits for them to retire (set-up 4-5% slower).
+  static_assert(sizeof(Quadric) == 11 * sizeof(double), "Quadric is 11 packed doubles");
+  const VertexState* vertices = vertices_.data();
+  const __m128d zero = _mm_setzero_pd(), half = _mm_set1_pd(0.5), one = _mm_set1_pd(1.0),
+                sign = _mm_set1_pd(-0.0);
+  const __m128d infinity = _mm_set1_pd(std::numeric_limits<double>::infinity());
+  auto add_plane = [&](const uint32_t* v, __m128d p0, __m128d p1, __m128d p2, __m128d p3,
+                       __m128d p4, double weight) {
     for (int k = 0; k < 3; ++k) {
       double* q = &quadrics_[v[k]].a00;
       _mm_storeu_pd(q, _mm_add_pd(_mm_loadu_pd(q), p0));
@@ -435,11 +435,63 @@ void PositionSimplifier::setUp() {
       _mm_storeu_pd(q + 4, _mm_add_pd(_mm_loadu_pd(q + 4), p2));
       _mm_storeu_pd(q + 6, _mm_add_pd(_mm_loadu_pd(q + 6), p3));
       _mm_storeu_pd(q + 8, _mm_add_pd(_mm_loadu_pd(q + 8), p4));
-      q[10] += plane.weight;
+      q[10] += weight;
     }
-#else
-    for (int k = 0; k < 3; ++k) addQuadric(quadrics_[v[k]], plane);
+  };
+  for (; t + 2 <= live_triangles_; t += 2) {
+    const uint32_t* v = &indices_[t * 3];
+    const Vec3d &a0 = vertices[v[0]].position, &b0 = vertices[v[1]].position,
+                &c0 = vertices[v[2]].position, &a1 = vertices[v[3]].position,
+                &b1 = vertices[v[4]].position, &c1 = vertices[v[5]].position;
+    const __m128d ax = _mm_set_pd(a1.x, a0.x), ay = _mm_set_pd(a1.y, a0.y),
+                  az = _mm_set_pd(a1.z, a0.z);
+    const __m128d ex = _mm_sub_pd(_mm_set_pd(b1.x, b0.x), ax),
+                  ey = _mm_sub_pd(_mm_set_pd(b1.y, b0.y), ay),
+                  ez = _mm_sub_pd(_mm_set_pd(b1.z, b0.z), az);
+    const __m128d fx = _mm_sub_pd(_mm_set_pd(c1.x, c0.x), ax),
+                  fy = _mm_sub_pd(_mm_set_pd(c1.y, c0.y), ay),
+                  fz = _mm_sub_pd(_mm_set_pd(c1.z, c0.z), az);
+    // cross(e, f), dot as (x + y) + z, as collapse_engine.hpp's cross and dot.
+    const __m128d cx = _mm_sub_pd(_mm_mul_pd(ey, fz), _mm_mul_pd(ez, fy));
+    const __m128d cy = _mm_sub_pd(_mm_mul_pd(ez, fx), _mm_mul_pd(ex, fz));
+    const __m128d cz = _mm_sub_pd(_mm_mul_pd(ex, fy), _mm_mul_pd(ey, fx));
+    const __m128d double_area = _mm_sqrt_pd(_mm_add_pd(
+        _mm_add_pd(_mm_mul_pd(cx, cx), _mm_mul_pd(cy, cy)), _mm_mul_pd(cz, cz)));
+    // triangleQuadric's test: 0 < double_area < infinity (NaN fails).
+    const int proper = _mm_movemask_pd(_mm_and_pd(_mm_cmpgt_pd(double_area, zero),
+                                                  _mm_cmplt_pd(double_area, infinity)));
+    if (proper == 0) continue;
+    const __m128d w = _mm_sqrt_pd(_mm_sqrt_pd(_mm_mul_pd(half, double_area)));  // planeWeight
+    const __m128d inverse = _mm_div_pd(one, double_area);
+    const __m128d nx = _mm_mul_pd(cx, inverse), ny = _mm_mul_pd(cy, inverse),
+                  nz = _mm_mul_pd(cz, inverse);
+    const __m128d d = _mm_xor_pd(sign, _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx, ax),
+                                                             _mm_mul_pd(ny, ay)),
+                                                  _mm_mul_pd(nz, az)));  // -dot(n, a)
+    // planeQuadric(n, d, w, w), lane by lane the same products.
+    const __m128d wx = _mm_mul_pd(w, nx), wy = _mm_mul_pd(w, ny), wz = _mm_mul_pd(w, nz),
+                  wd = _mm_mul_pd(w, d);
+    const __m128d a00 = _mm_mul_pd(wx, nx), a01 = _mm_mul_pd(wx, ny), a02 = _mm_mul_pd(wx, nz),
+                  a11 = _mm_mul_pd(wy, ny), a12 = _mm_mul_pd(wy, nz), a22 = _mm_mul_pd(wz, nz),
+                  q0 = _mm_mul_pd(wd, nx), q1 = _mm_mul_pd(wd, ny), q2 = _mm_mul_pd(wd, nz),
+                  qc = _mm_mul_pd(wd, d);
+    if (proper & 1)
+      add_plane(v, _mm_unpacklo_pd(a00, a01), _mm_unpacklo_pd(a02, a11),
+                _mm_unpacklo_pd(a12, a22), _mm_unpacklo_pd(q0, q1), _mm_unpacklo_pd(q2, qc),
+                _mm_cvtsd_f64(w));
+    if (proper & 2)
+      add_plane(v + 3, _mm_unpackhi_pd(a00, a01), _mm_unpackhi_pd(a02, a11),
+                _mm_unpackhi_pd(a12, a22), _mm_unpackhi_pd(q0, q1), _mm_unpackhi_pd(q2, qc),
+                _mm_cvtsd_f64(_mm_unpackhi_pd(w, w)));
+  }
 #endif
+  for (; t < live_triangles_; ++t) {  // the last, odd triangle (all of them without SSE2)
+    const uint32_t* v = &indices_[t * 3];
+    Quadric plane;
+    if (!triangleQuadric(vertices_[v[0]].position, vertices_[v[1]].position,
+                         vertices_[v[2]].position, plane))
+      continue;
+    for (int k = 0; k < 3; ++k) addQuadric(quadrics_[v[k]], plane);
   }
 }
 
