@@ -30,9 +30,9 @@
 // wall clock is the measure: the pass pricing and the pass order are written without
 // data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
 // candidates ahead; each executes more instructions than the branchy code it replaced, and runs
-// faster. Bunny 10% by phase: set-up 25% (preparation, quadrics, classification, pricing records),
-// pass pricing 18%, order 4%, applying collapses 40% (the fan walks wait on memory), greedy tail
-// 8%. Tried and not kept: re-using prices between passes (only 16% of the edges keep both
+// faster. Bunny 10% by phase (session 16): set-up 25% (preparation, quadrics, classification,
+// pricing records), pass pricing 16%, compaction, corner tables and order 12%, applying collapses
+// 39% (the fan walks wait on memory), greedy tail 8%. Tried and not kept: re-using prices between passes (only 16% of the edges keep both
 // endpoints untouched), a branch-free edge list before the pricing, corners that carry their
 // triangle's other vertices (3x the table: slower on bunny; as 8-byte fan entries without dead
 // flags: same speed), a greedy tail of 1000 triangles (-2%,
@@ -42,10 +42,13 @@
 // only), choosing in cost order but applying in vertex order (+5%: failed collapses then hold
 // their locks, passes yield less), fine passes instead of the greedy tail (Hausdorff above
 // meshopt's at armadillo 10% and 1%) and a lazily priced greedy tail (no faster: its fan walks and
-// queue cost, not its solves). Set-up alone (a run to 100%) is 1.2-1.45x meshopt's; the passes
+// queue cost, not its solves). Set-up alone (a run to 100%) is 0.96-1.23x meshopt's; the passes
 // at 50% are faster than meshopt's.
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
-// endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail).
+// endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail):
+// without the greedy tail, the optimal placement, the midpoint and the link condition this code
+// ran at 0.89x meshopt's time, and its Hausdorff distance was above meshopt's in 9 of 30 cells;
+// each of the four cost 5-8% (bench/RESULTS.md, issue 3, session 16).
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
