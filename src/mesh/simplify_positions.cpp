@@ -32,10 +32,10 @@
 // candidates ahead; each executes more instructions than the branchy code it replaced, and runs
 // faster. Bunny 10% by phase (session 16): set-up 25% (preparation, quadrics, classification,
 // pricing records), pass pricing 16%, compaction, corner tables and order 12%, applying collapses
-// 39% (the fan walks wait on memory), greedy tail 8%. Tried and not kept: re-using prices between passes (only 16% of the edges keep both
-// endpoints untouched), a branch-free edge list before the pricing, corners that carry their
-// triangle's other vertices (3x the table: slower on bunny; as 8-byte fan entries without dead
-// flags: same speed), a greedy tail of 1000 triangles (-2%,
+// 39% (the fan walks wait on memory), greedy tail 8%. Tried and not kept: re-using prices between
+// passes (only 16% of the edges keep both endpoints untouched), a branch-free edge list before
+// the pricing, corners that carry their triangle's other vertices (3x the table: slower on bunny;
+// as 8-byte fan entries without dead flags: same speed), a greedy tail of 1000 triangles (-2%,
 // Hausdorff mixed), no optimal placement in the passes (-4%, Hausdorff and mean clearly worse),
 // meshopt's coarse cost order (-4%, Hausdorff worse than meshopt in 1-2 cells), no greedy tail
 // at any target (-10%, armadillo 1% Hausdorff 1.27x meshopt's: it now runs at the coarse end
@@ -73,12 +73,12 @@ namespace {
 constexpr uint32_t kNext[3] = {1, 2, 0};
 constexpr uint32_t kPrevious[3] = {2, 0, 1};
 
-// The greedy tail's queue: cheapest first, ties by `from`, then `to` (the order of the engine's
-// kGreedy). A 4-ary min-heap over one 64-bit key (the cost's float bits, then `from`) and `to`:
-// half the levels of std::push_heap/pop_heap's binary heap and no float compares; the sifts and
-// the pops were ~4% of a run at 10% on ChineseDragon-10kv. Candidates with equal keys are the
-// same edge at different versions, of which at most one is current, so the order among them
-// does not change what is applied.
+// The greedy tail's queue: cheapest first, ties by `from`, then `to`. A 4-ary min-heap over one
+// 64-bit key (the cost's float bits, then `from`) and `to`: half the levels of
+// std::push_heap/pop_heap's binary heap and no float compares; the sifts and the pops were ~4% of
+// a run at 10% on ChineseDragon-10kv. Candidates with equal keys are the same edge at different
+// versions, of which at most one is current, so the order among them does not change what is
+// applied.
 struct QueuedCandidate {
   uint64_t key;  // costBits(cost) << 32 | from
   uint32_t to, from_version, to_version;
@@ -464,7 +464,8 @@ void PositionSimplifier::setUp() {
     const int proper = _mm_movemask_pd(_mm_and_pd(_mm_cmpgt_pd(double_area, zero),
                                                   _mm_cmplt_pd(double_area, infinity)));
     if (proper == 0) continue;
-    const __m128d w = _mm_sqrt_pd(_mm_sqrt_pd(_mm_mul_pd(half, double_area)));  // planeWeight
+    // planeWeight(area) of a position-only mesh, sqrt(sqrt(area)) (quadric.hpp: change both).
+    const __m128d w = _mm_sqrt_pd(_mm_sqrt_pd(_mm_mul_pd(half, double_area)));
     const __m128d inverse = _mm_div_pd(one, double_area);
     const __m128d nx = _mm_mul_pd(cx, inverse), ny = _mm_mul_pd(cy, inverse),
                   nz = _mm_mul_pd(cz, inverse);
