@@ -42,6 +42,7 @@
 // Lazy re-pricing in the greedy queue was tried earlier: 29% fewer pricings but 15% more
 // instructions (each stale entry needs a gather to be re-priced).
 #include "mesh/collapse_engine.hpp"
+#include "mesh/quaternary_heap.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -159,7 +160,22 @@ class CollapseQueue {
   }
   bool empty() const { return keys_.empty(); }
   // Adds without restoring the heap order; call heapify() before popping.
-  void append(float cost, const QueuedCollapse& collapse) {
+  void append(float cost, const QueuedCollapse& collapse) { keys_.append(keyOf(cost, collapse)); }
+  void push(float cost, const QueuedCollapse& collapse) { keys_.push(keyOf(cost, collapse)); }
+  void heapify() { keys_.heapify(); }
+  // Removes the cheapest; returns its cost and collapse.
+  QueuedCollapse pop(float& cost) {
+    const uint64_t top = keys_.pop();
+    uint32_t slot = uint32_t(top);
+    uint32_t bits = uint32_t(top >> 32);
+    std::memcpy(&cost, &bits, 4);
+    free_.push_back(slot);
+    return slots_[slot];
+  }
+
+ private:
+  // Stores the collapse in a free slot and returns its key.
+  uint64_t keyOf(float cost, const QueuedCollapse& collapse) {
     uint32_t slot;
     if (!free_.empty()) {
       slot = free_.back();
@@ -169,69 +185,16 @@ class CollapseQueue {
       slot = uint32_t(slots_.size());
       slots_.push_back(collapse);
     }
-    keys_.push_back(uint64_t(costBits(cost)) << 32 | slot);
+    return uint64_t(costBits(cost)) << 32 | slot;
   }
-  void push(float cost, const QueuedCollapse& collapse) {
-    append(cost, collapse);
-    siftUp(keys_.size() - 1);
-  }
-  void heapify() {
-    if (keys_.size() < 2) return;
-    for (size_t i = (keys_.size() - 2) / 4 + 1; i-- > 0;) siftDown(i);
-  }
-  // Removes the cheapest; returns its cost and collapse.
-  QueuedCollapse pop(float& cost) {
-    uint64_t top = keys_.front();
-    keys_.front() = keys_.back();
-    keys_.pop_back();
-    if (!keys_.empty()) siftDown(0);
-    uint32_t slot = uint32_t(top);
-    uint32_t bits = uint32_t(top >> 32);
-    std::memcpy(&cost, &bits, 4);
-    free_.push_back(slot);
-    return slots_[slot];
-  }
-
- private:
   static uint32_t costBits(float cost) {
     if (!(cost >= 0)) cost = cost < 0 ? 0.0f : std::numeric_limits<float>::max();  // NaN: last
     uint32_t bits;
     std::memcpy(&bits, &cost, 4);
     return bits;
   }
-  void siftUp(size_t i) {
-    uint64_t key = keys_[i];
-    while (i > 0) {
-      size_t parent = (i - 1) / 4;
-      if (keys_[parent] <= key) break;
-      keys_[i] = keys_[parent];
-      i = parent;
-    }
-    keys_[i] = key;
-  }
-  void siftDown(size_t i) {
-    const size_t n = keys_.size();
-    uint64_t key = keys_[i];
-    for (;;) {
-      size_t first = i * 4 + 1;
-      if (first >= n) break;
-      size_t best = first;
-      if (first + 4 <= n) {  // full node: branch-free minimum of four
-        const uint64_t* k = &keys_[first];
-        size_t lo = k[1] < k[0] ? 1 : 0, hi = k[3] < k[2] ? 3 : 2;
-        best = first + (k[hi] < k[lo] ? hi : lo);
-      } else {
-        for (size_t c = first + 1; c < n; ++c)
-          if (keys_[c] < keys_[best]) best = c;
-      }
-      if (keys_[best] >= key) break;
-      keys_[i] = keys_[best];
-      i = best;
-    }
-    keys_[i] = key;
-  }
 
-  std::vector<uint64_t> keys_;
+  QuaternaryHeap<uint64_t> keys_;
   std::vector<QueuedCollapse> slots_;
   std::vector<uint32_t> free_;
 };

@@ -65,6 +65,7 @@
 
 #include "mesh/attributes.hpp"
 #include "mesh/quadric.hpp"
+#include "mesh/quaternary_heap.hpp"
 #include "mesh/radix_order.hpp"
 
 namespace duolod::mesh {
@@ -73,16 +74,20 @@ namespace {
 constexpr uint32_t kNext[3] = {1, 2, 0};
 constexpr uint32_t kPrevious[3] = {2, 0, 1};
 
-// The greedy tail's queue: cheapest first, ties by `from`, then `to`. A 4-ary min-heap over one
-// 64-bit key (the cost's float bits, then `from`) and `to`: half the levels of
-// std::push_heap/pop_heap's binary heap and no float compares; the sifts and the pops were ~4% of
-// a run at 10% on ChineseDragon-10kv. Candidates with equal keys are the same edge at different
-// versions, of which at most one is current, so the order among them does not change what is
-// applied.
+// The greedy tail's queue entries: cheapest first, ties by `from`, then `to`, in a 4-ary heap
+// (quaternary_heap.hpp) over one 64-bit key (the cost's order key, then `from`) and `to`: no
+// float compares, half the levels of std::push_heap/pop_heap's binary heap (its sifts and pops
+// were 3-4% of our time at 10% on ChineseDragon-10kv, by perf). Entries with equal keys and `to`
+// are the same edge at different versions, of which at most one is current, so the order among
+// them does not change what is applied.
 struct QueuedCandidate {
-  uint64_t key;  // costBits(cost) << 32 | from
+  uint64_t key;  // orderKey(cost) << 32 | from
   uint32_t to, from_version, to_version;
   bool endpoint_only;
+  static QueuedCandidate make(float cost, uint32_t from, uint32_t to, uint32_t from_version,
+                              uint32_t to_version, bool endpoint_only) {
+    return {uint64_t(orderKey(cost)) << 32 | from, to, from_version, to_version, endpoint_only};
+  }
   uint32_t from() const { return uint32_t(key); }
   float cost() const {
     const uint32_t bits = uint32_t(key >> 32);
@@ -90,67 +95,13 @@ struct QueuedCandidate {
     std::memcpy(&cost, &bits, 4);
     return cost;
   }
-};
-class TailQueue {
- public:
-  static QueuedCandidate make(float cost, uint32_t from, uint32_t to, uint32_t from_version,
-                              uint32_t to_version, bool endpoint_only) {
-    cost += 0.0f;  // -0 to +0: the bits must order as the values (costs are finite, >= 0)
-    uint32_t bits;
-    std::memcpy(&bits, &cost, 4);
-    return {uint64_t(bits) << 32 | from, to, from_version, to_version, endpoint_only};
-  }
-  void clear() { items_.clear(); }
-  bool empty() const { return items_.empty(); }
-  void append(const QueuedCandidate& c) { items_.push_back(c); }  // in no order until heapify()
-  void heapify() {
-    for (size_t i = items_.size() / 4 + 1; i-- > 0;) siftDown(i);
-  }
-  void push(const QueuedCandidate& c) {
-    items_.push_back(c);
-    siftUp(items_.size() - 1);
-  }
-  QueuedCandidate pop() {
-    const QueuedCandidate top = items_.front();
-    items_.front() = items_.back();
-    items_.pop_back();
-    if (!items_.empty()) siftDown(0);
-    return top;
-  }
-
- private:
-  static bool before(const QueuedCandidate& a, const QueuedCandidate& b) {
-    return a.key != b.key ? a.key < b.key : a.to < b.to;
-  }
-  void siftUp(size_t i) {
-    const QueuedCandidate item = items_[i];
-    while (i > 0) {
-      const size_t parent = (i - 1) / 4;
-      if (!before(item, items_[parent])) break;
-      items_[i] = items_[parent];
-      i = parent;
+  struct Before {
+    bool operator()(const QueuedCandidate& a, const QueuedCandidate& b) const {
+      return a.key != b.key ? a.key < b.key : a.to < b.to;
     }
-    items_[i] = item;
-  }
-  void siftDown(size_t i) {
-    const size_t n = items_.size();
-    if (i >= n) return;
-    const QueuedCandidate item = items_[i];
-    for (;;) {
-      const size_t first = i * 4 + 1;
-      if (first >= n) break;
-      size_t best = first;
-      const size_t end = std::min(first + 4, n);
-      for (size_t c = first + 1; c < end; ++c)
-        if (before(items_[c], items_[best])) best = c;
-      if (!before(items_[best], item)) break;
-      items_[i] = items_[best];
-      i = best;
-    }
-    items_[i] = item;
-  }
-  std::vector<QueuedCandidate> items_;
+  };
 };
+using TailQueue = QuaternaryHeap<QueuedCandidate, QueuedCandidate::Before>;
 
 // A pass candidate: `from` collapses into `to`; the survivor goes to the fixed point `at`
 // (quadric.hpp) unless the optimal placement is better when it is applied.
@@ -952,7 +903,7 @@ void PositionSimplifier::pushCandidate(uint32_t from, uint32_t to, bool endpoint
       (std::isfinite(options_.target_error) && !(errorOf(cost, q.weight) <= options_.target_error)))
     return;
   const QueuedCandidate queued =
-      TailQueue::make(float(cost), from, to, version_[from], version_[to], endpoint_only);
+      QueuedCandidate::make(float(cost), from, to, version_[from], version_[to], endpoint_only);
   if (filling_)
     queue_.append(queued);
   else
