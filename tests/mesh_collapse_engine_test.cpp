@@ -227,13 +227,16 @@ TEST(PassEnds, FinishingStallingAndNearingTheTail) {
   EXPECT_TRUE(mesh::passFinishes(100, 700));
   EXPECT_FALSE(mesh::passFinishes(101, 700));
   EXPECT_FALSE(mesh::passFinishes(0, 700));  // nothing left: the pass is done
-  // Stalling: a quarter of the goal or less applied, within the greedy tail's reach.
+  // Stalling: a quarter of the goal or less applied, within the greedy tail's capacity.
+  EXPECT_TRUE(mesh::passStalls(25, 100, 500, 2000));
+  EXPECT_FALSE(mesh::passStalls(26, 100, 500, 2000));
+  EXPECT_TRUE(mesh::passStalls(0, 100, 2000, 2000));
+  EXPECT_FALSE(mesh::passStalls(0, 100, 2001, 2000));  // too much left for the queue
+  EXPECT_FALSE(mesh::passStalls(0, 100, 0, 2000));     // at the pass target already
+  // The capacity: greedy_tail_triangles, at most 1/16 of the input.
   mesh::EngineOptions options;  // greedy_tail_triangles = 2000
-  EXPECT_TRUE(mesh::passStalls(25, 100, 500, options));
-  EXPECT_FALSE(mesh::passStalls(26, 100, 500, options));
-  EXPECT_TRUE(mesh::passStalls(0, 100, 2000, options));
-  EXPECT_FALSE(mesh::passStalls(0, 100, 2001, options));  // too much left for the queue
-  EXPECT_FALSE(mesh::passStalls(0, 100, 0, options));     // at the pass target already
+  EXPECT_EQ(mesh::greedyTailCapacity(options, 75408), 2000u);
+  EXPECT_EQ(mesh::greedyTailCapacity(options, 7598), 474u);
   // Nearing the tail: at most a quarter of the tail left above the pass target.
   EXPECT_TRUE(mesh::passNearsTail(500, 2000));
   EXPECT_FALSE(mesh::passNearsTail(501, 2000));

@@ -1109,6 +1109,7 @@ void Engine::runPasses() {
   pass_lock_.assign(s.positions.size(), 0);
   // The passes stop short of the target at the coarse end; the greedy queue does the rest.
   const size_t tail = greedyTailTriangles(options_, s.live_triangles);
+  const size_t tail_capacity = greedyTailCapacity(options_, s.live_triangles);
   const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
   auto reached = [&] { return s.live_triangles <= pass_target; };
   model_.setPassPricing(true);
@@ -1174,7 +1175,7 @@ void Engine::runPasses() {
     }
     if (applied == 0) break;
     const size_t above_target = reached() ? 0 : s.live_triangles - pass_target;
-    if (passStalls(applied, goal, above_target, options_) || passNearsTail(above_target, tail))
+    if (passStalls(applied, goal, above_target, tail_capacity) || passNearsTail(above_target, tail))
       break;
   }
   batch_.clear();

@@ -246,8 +246,13 @@ struct EngineOptions {
 // 50%, 25% and 15%, median over 5 input orders: every Hausdorff ratio to meshopt stayed below
 // 0.95) and it took 5-21% of the time at 50% (bench/RESULTS.md, issue 3, session 13).
 constexpr size_t kGreedyTailReach = 4;
+// The greedy tail's size at a coarse target: greedy_tail_triangles, at most 1/16 of the `input`
+// triangles.
+inline size_t greedyTailCapacity(const EngineOptions& options, size_t input) {
+  return std::min(options.greedy_tail_triangles, input / 16);
+}
 inline size_t greedyTailTriangles(const EngineOptions& options, size_t input) {
-  const size_t tail = std::min(options.greedy_tail_triangles, input / 16);
+  const size_t tail = greedyTailCapacity(options, input);
   return options.target_triangles <= kGreedyTailReach * tail ? tail : 0;
 }
 
@@ -260,9 +265,13 @@ inline size_t greedyTailTriangles(const EngineOptions& options, size_t input) {
 //     bit; Hausdorff still below meshopt's in every cell (bench/RESULTS.md, issue 3, session 14).
 //   - Stalling: a pass that applied at most 1/kPassStallShare of its goal (the cheap edges left
 //     are ones the link and flip tests refuse, as on the flat regions of CAD models) ends the
-//     passes when at most greedy_tail_triangles remain above the pass target: the greedy queue
-//     takes the rest, re-pricing around each collapse instead of every edge per pass (fandisk:
-//     its last 2-4 passes, of 1-70 collapses each; 50% 5% less time).
+//     passes when at most `tail_capacity` (greedyTailCapacity) triangles remain above the pass
+//     target: the greedy queue takes the rest, re-pricing around each collapse instead of every
+//     edge per pass (fandisk: its last 2-4 passes, of 1-70 collapses each; 50% 5% less time).
+//     Not more: a queue collapse costs about four pass collapses, and with 2000 triangles on any
+//     mesh CGAL's anchor_dense (7.6k triangles) at 10% handed 2400 triangles to the queue, 1.75x
+//     meshopt's time; capped at 1/16 of the input, 1.31x, Hausdorff no worse (bench/RESULTS.md,
+//     issue 3, session 17).
 //   - Nearing the tail: a pass that leaves at most 1/kPassTailShare of the greedy tail above the
 //     pass target ends the passes; another pass would re-price every edge for a few collapses
 //     that the queue makes in cost order anyway (fandisk at 10%: its last two passes applied 57
@@ -275,10 +284,8 @@ inline bool passFinishes(size_t left, size_t goal) {
 inline bool passNearsTail(size_t above_target, size_t tail) {
   return above_target > 0 && above_target * kPassTailShare <= tail;
 }
-inline bool passStalls(size_t applied, size_t goal, size_t above_target,
-                       const EngineOptions& options) {
-  return applied * kPassStallShare <= goal && above_target > 0 &&
-         above_target <= options.greedy_tail_triangles;
+inline bool passStalls(size_t applied, size_t goal, size_t above_target, size_t tail_capacity) {
+  return applied * kPassStallShare <= goal && above_target > 0 && above_target <= tail_capacity;
 }
 
 // A feature line turning by more than 60° at a vertex makes it a corner (locked): the corner of a

@@ -75,20 +75,20 @@ constexpr uint32_t kNext[3] = {1, 2, 0};
 constexpr uint32_t kPrevious[3] = {2, 0, 1};
 
 // The greedy tail's queue entries: cheapest first, ties by `from`, then `to`, in a 4-ary heap
-// (quaternary_heap.hpp) over one 64-bit key (the cost's order key, then `from`) and `to`: no
-// float compares, half the levels of std::push_heap/pop_heap's binary heap (its sifts and pops
-// were 3-4% of our time at 10% on ChineseDragon-10kv, by perf). Entries with equal keys and `to`
-// are the same edge at different versions, of which at most one is current, so the order among
-// them does not change what is applied.
+// (quaternary_heap.hpp) over one 64-bit key (the cost's order key, then `from`) and then `to`
+// and `id`: no float compares, half the levels of std::push_heap/pop_heap's binary heap (its
+// sifts and pops were 3-4% of our time at 10% on ChineseDragon-10kv, by perf). (One 128-bit
+// compare instead of the key's, branch-free: 2-8% slower, the key's branch is predictable.)
+// Entries that differ only in `id` are the same edge priced at different times, of which at most
+// one is current, so their order does not change what is applied. `id` numbers the pricings
+// (TailPricing): an entry is current while neither endpoint has changed since it was priced
+// (PositionSimplifier::changed_at_), and then its placement is still the optimal one.
 struct QueuedCandidate {
   uint64_t key;  // orderKey(cost) << 32 | from
-  uint32_t to, from_version, to_version;
-  bool endpoint_only;
-  static QueuedCandidate make(float cost, uint32_t from, uint32_t to, uint32_t from_version,
-                              uint32_t to_version, bool endpoint_only) {
-    return {uint64_t(orderKey(cost)) << 32 | from, to, from_version, to_version, endpoint_only};
-  }
+  uint64_t to_id;  // to << 32 | id
   uint32_t from() const { return uint32_t(key); }
+  uint32_t to() const { return uint32_t(to_id >> 32); }
+  uint32_t id() const { return uint32_t(to_id); }
   float cost() const {
     const uint32_t bits = uint32_t(key >> 32);
     float cost;
@@ -97,9 +97,15 @@ struct QueuedCandidate {
   }
   struct Before {
     bool operator()(const QueuedCandidate& a, const QueuedCandidate& b) const {
-      return a.key != b.key ? a.key < b.key : a.to < b.to;
+      return a.key != b.key ? a.key < b.key : a.to_id < b.to_id;
     }
   };
+};
+// What the greedy tail found when it priced a candidate: where the survivor goes (so that
+// applying it needs no second solve) and whether that is the `to` end.
+struct TailPricing {
+  Vec3d placement;
+  bool endpoint_only;
 };
 using TailQueue = QuaternaryHeap<QueuedCandidate, QueuedCandidate::Before>;
 
@@ -252,13 +258,14 @@ class PositionSimplifier {
   void emitEdge(uint32_t a, uint32_t b);
   void collectCandidates();
   void allocatePassArrays();
-  void runPasses(size_t pass_target, size_t tail);
+  void runPasses(size_t pass_target, size_t tail, size_t tail_capacity);
   void runGreedy();
   void emitAround(uint32_t v);
   // kGreedy: in the greedy tail (survivors are chains, triangles come from absorbed vertices
   // too, placement is the optimal one); a template so that the passes pay for none of it.
+  // `placement`: the greedy tail's optimal placement, found when the candidate was priced.
   template <bool kGreedy>
-  bool tryCollapse(const PassCandidate& candidate, uint32_t pass);
+  bool tryCollapse(const PassCandidate& candidate, uint32_t pass, Vec3d placement = {});
   bool fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner, Vec3d moved) const;
   template <class Emit>
   void forEachCandidateEdge(Emit&& emit);
@@ -331,7 +338,10 @@ class PositionSimplifier {
   // Greedy tail: the vertices absorbed into a vertex, as a chain through absorbed_next_.
   bool greedy_ = false;
   std::vector<uint32_t> absorbed_next_, absorbed_last_;
-  std::vector<uint32_t> version_;  // bumped when a vertex's quadric or position changes
+  // Greedy tail: the pricings so far (QueuedCandidate::id), and per vertex how many there were
+  // when its quadric or position last changed (entries priced before that are stale).
+  std::vector<TailPricing> tail_pricing_;
+  std::vector<uint32_t> changed_at_;
   TailQueue queue_;
   bool filling_ = false;  // appending to queue_ before one heapify
 
@@ -895,15 +905,17 @@ void PositionSimplifier::pushCandidate(uint32_t from, uint32_t to, bool endpoint
   Quadric q = quadrics_[from];
   addQuadric(q, quadrics_[to]);
   double cost = 0;
+  Vec3d placement = vertices_[to].position;
   if (endpoint_only)
-    cost = evaluateQuadric(q, vertices_[to].position);
+    cost = evaluateQuadric(q, placement);
   else
-    minimizeQuadric(q, vertices_[from].position, vertices_[to].position, &cost);
+    placement = minimizeQuadric(q, vertices_[from].position, placement, &cost);
   if (!std::isfinite(cost) ||
       (std::isfinite(options_.target_error) && !(errorOf(cost, q.weight) <= options_.target_error)))
     return;
-  const QueuedCandidate queued =
-      QueuedCandidate::make(float(cost), from, to, version_[from], version_[to], endpoint_only);
+  const QueuedCandidate queued{uint64_t(orderKey(float(cost))) << 32 | from,
+                               uint64_t(to) << 32 | uint32_t(tail_pricing_.size())};
+  tail_pricing_.push_back({placement, endpoint_only});
   if (filling_)
     queue_.append(queued);
   else
@@ -1090,7 +1102,8 @@ __attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const ui
 // optimal placement if it beats the priced point without turning a triangle over, else the
 // priced point, then the flip test.
 template <bool kGreedy>
-bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass) {
+bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass,
+                                     Vec3d placement) {
   const uint32_t from = candidate.from, to = candidate.to;
   // Raw pointers, so that the stores below (marks, fans) do not make the compiler reload the
   // vectors' data pointers.
@@ -1185,9 +1198,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   };
   Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
   if (kGreedy && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
-    Quadric q = quadrics_[from];
-    addQuadric(q, quadrics_[to]);
-    priced = minimizeQuadric(q, at_from, at_to);
+    priced = placement;
   } else if (!candidate.endpoint_only && candidate.cost > 0) {
     // (At a price of 0 nothing is better: minimizeQuadric's values are >= 0. Flat regions.)
     Quadric q = quadrics_[from];
@@ -1219,7 +1230,7 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   if (greedy_) {  // `to` takes over from's triangles
     absorbed_next_[absorbed_last_[to]] = from;
     absorbed_last_[to] = absorbed_last_[from];
-    ++version_[to];
+    changed_at_[to] = uint32_t(tail_pricing_.size());
   }
   addQuadric(quadrics_[to], quadrics_[from]);
   const Vec3d at_to = vertices_[to].position, at_from = vertices_[from].position;
@@ -1298,8 +1309,9 @@ SimplifyResult PositionSimplifier::finish() {
   return result;
 }
 
-// `tail`: the greedy tail's triangles (pass_target is the target plus those, or 0 for none).
-void PositionSimplifier::runPasses(size_t pass_target, size_t tail) {
+// `tail`: the greedy tail's triangles (pass_target is the target plus those, or 0 for none);
+// `tail_capacity`: how many a stalled pass may leave to it (passStalls).
+void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_capacity) {
   auto reached = [&] { return live_triangles_ <= pass_target; };
   EngineOptions defaults;
   for (uint32_t pass = 1; !reached(); ++pass) {
@@ -1392,7 +1404,7 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail) {
     }
     if (applied == 0) break;
     const size_t above_target = reached() ? 0 : live_triangles_ - pass_target;
-    if (passStalls(applied, goal, above_target, defaults) || passNearsTail(above_target, tail))
+    if (passStalls(applied, goal, above_target, tail_capacity) || passNearsTail(above_target, tail))
       break;
   }
   compact();
@@ -1432,7 +1444,8 @@ void PositionSimplifier::runGreedy() {
     }
   }
   greedy_ = true;
-  version_.assign(vertex_count_, 0);
+  changed_at_.assign(vertex_count_, 0);
+  tail_pricing_.clear();
   for (int fill = 0; fill < EngineOptions{}.max_passes && !reached(); ++fill) {
     buildAdjacency();
     clearAbsorbed();
@@ -1453,12 +1466,11 @@ void PositionSimplifier::runGreedy() {
     const size_t rejected_before = stats_.rejected_topology + stats_.rejected_flip;
     while (!queue_.empty() && !reached()) {
       const QueuedCandidate e = queue_.pop();
-      const uint32_t from = e.from();
-      if (!alive_[from] || !alive_[e.to] || version_[from] != e.from_version ||
-          version_[e.to] != e.to_version)
-        continue;
-      const PassCandidate c{from, e.to, e.cost(), kFixedAtB, e.endpoint_only};
-      if (tryCollapse<true>(c, 0)) emitAround(e.to);
+      const uint32_t from = e.from(), to = e.to(), id = e.id();
+      if (!alive_[from] || !alive_[to] || id < changed_at_[from] || id < changed_at_[to]) continue;
+      const TailPricing priced = tail_pricing_[id];
+      const PassCandidate c{from, to, e.cost(), kFixedAtB, priced.endpoint_only};
+      if (tryCollapse<true>(c, 0, priced.placement)) emitAround(to);
     }
     compact();
     if (!from_seeds && stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
@@ -1515,7 +1527,7 @@ SimplifyResult PositionSimplifier::run() {
   tail_options.target_triangles = options_.target_triangles;
   const size_t tail = greedyTailTriangles(tail_options, live_triangles_);
   const size_t pass_target = options_.target_triangles > 0 ? options_.target_triangles + tail : 0;
-  runPasses(pass_target, tail);
+  runPasses(pass_target, tail, greedyTailCapacity(tail_options, live_triangles_));
   runGreedy();
   return finish();
 }
