@@ -27,10 +27,11 @@ while [ "$i" -lt "$runs" ]; do
   for side in A B; do
     binary=$a
     [ "$side" = B ] && binary=$b
-    # Table rows: | mesh | tris in | target | ours | meshopt | ms ours | ms meshopt | ratio | ...
+    # The main table's rows (NF >= 15: not the narrower tables after it): | mesh | tris in |
+    # target | ours | meshopt | ms ours | ms meshopt | ratio | ...
     "$binary" --gltfpack "" --repeats "${REPEATS:-9}" --samples 0 --no-progressive \
       --rows positions "$@" 2>/dev/null |
-      awk -F'|' -v side="$side" '/^\| / && !/^\| mesh/ {
+      awk -F'|' -v side="$side" 'NF >= 15 && /^\| / && !/^\| mesh/ {
         mesh = $2; target = $4; gsub(/^ +| +$/, "", mesh); gsub(/ /, "", target)
         gsub(/ /, "_", mesh)
         print side, mesh "@" target, $7 + 0, $9 + 0 }' >>"$out"
