@@ -269,8 +269,8 @@ inline size_t greedyTailTriangles(const EngineOptions& options, size_t input) {
 //     target: the greedy queue takes the rest, re-pricing around each collapse instead of every
 //     edge per pass (fandisk: its last 2-4 passes, of 1-70 collapses each; 50% 5% less time).
 //     Not more: a queue collapse costs about four pass collapses, and with 2000 triangles on any
-//     mesh CGAL's anchor_dense (7.6k triangles) at 10% handed 2400 triangles to the queue, 1.75x
-//     meshopt's time; capped at 1/16 of the input, 1.31x, Hausdorff no worse (bench/RESULTS.md,
+//     mesh CGAL's anchor_dense (7.6k triangles) at 10% handed 2400 triangles to the queue, 1.78x
+//     meshopt's time; capped at 1/16 of the input, 1.28x, Hausdorff no worse (bench/RESULTS.md,
 //     issue 3, session 17).
 //   - Nearing the tail: a pass that leaves at most 1/kPassTailShare of the greedy tail above the
 //     pass target ends the passes; another pass would re-price every edge for a few collapses
