@@ -237,6 +237,10 @@ TEST(PassEnds, FinishingStallingAndNearingTheTail) {
   mesh::EngineOptions options;  // greedy_tail_triangles = 2000
   EXPECT_EQ(mesh::greedyTailCapacity(options, 75408), 2000u);
   EXPECT_EQ(mesh::greedyTailCapacity(options, 7598), 474u);
+  // A thin cheap part: fewer edges than 5/4 of the goal.
+  EXPECT_TRUE(mesh::passCheapPartThin(124, 100));
+  EXPECT_FALSE(mesh::passCheapPartThin(125, 100));
+  EXPECT_FALSE(mesh::passCheapPartThin(0, 0));
   // Nearing the tail: at most a quarter of the tail left above the pass target.
   EXPECT_TRUE(mesh::passNearsTail(500, 2000));
   EXPECT_FALSE(mesh::passNearsTail(501, 2000));

@@ -1133,8 +1133,9 @@ void Engine::runPasses() {
     if (pass_order_.empty()) break;
     ++stats_.passes;
     // Goal: the collapses still needed (each removes about two triangles). Edges up to
-    // pass_cost_slack times the goal-rank cost are taken in order; the rest wait for the next pass,
-    // unless none of the taken ones could be applied.
+    // pass_cost_slack times the goal-rank cost (or the kThinPassRank * goal cheapest, when those
+    // are fewer than passCheapPartThin allows) are taken in order; the rest wait for the next
+    // pass, unless none of the taken ones could be applied.
     const size_t goal = pass_target > 0 ? (s.live_triangles - pass_target + 1) / 2 : 0;
     auto first_rest = pass_order_.end();
     if (goal > 0 && goal < pass_order_.size()) {
@@ -1146,6 +1147,15 @@ void Engine::runPasses() {
           uint64_t(cost_bits(double(goal_cost) * options_.pass_cost_slack)) << 32 | 0xffffffffu;
       first_rest = std::partition(pass_order_.begin(), pass_order_.end(),
                                   [&](uint64_t key) { return key <= limit; });
+      const size_t thin_rank = kThinPassRank * goal;
+      if (passCheapPartThin(size_t(first_rest - pass_order_.begin()), goal) &&
+          thin_rank < pass_order_.size()) {
+        // The kThinPassRank * goal cheapest and their equals in cost (collapse_engine.hpp).
+        std::nth_element(pass_order_.begin(), pass_order_.begin() + thin_rank, pass_order_.end());
+        const uint64_t thin_limit = pass_order_[thin_rank] | 0xffffffffu;
+        first_rest = std::partition(pass_order_.begin(), pass_order_.end(),
+                                    [&](uint64_t key) { return key <= thin_limit; });
+      }
     }
     std::sort(pass_order_.begin(), first_rest);
     size_t applied = 0;

@@ -278,6 +278,18 @@ inline size_t greedyTailTriangles(const EngineOptions& options, size_t input) {
 //     and 3 collapses; 3% less time, Hausdorff unchanged or lower; bench/RESULTS.md, issue 3,
 //     session 15).
 constexpr size_t kPassFinishingShare = 7, kPassStallShare = 4, kPassTailShare = 4;
+// kPasses: a thin cheap part. When the edges up to pass_cost_slack times the goal-rank cost are
+// fewer than 5/4 of the goal (the costs climb steeply past the goal rank), the pass takes its
+// kThinPassRank times goal cheapest edges instead (and all edges of the same cost as the last of
+// them). A pass applies only about a third of its cheap part (a collapse locks its endpoints'
+// other edges), so a thin one falls far short of its goal and another pass re-prices every edge:
+// fandisk at 50% took 8 passes. Measured on bench/simplify: fandisk's three cells 5-9% less time,
+// CGAL's anchor_dense and fandisk_large 9-12%; Hausdorff over 5 orders no worse on the benchmark
+// (fandisk 1% 0.64 -> 0.62, its worst order 1.67 -> 0.80), on 24 other meshes 12 cells worse than
+// meshopt instead of 13; cells whose cheap part is never thin are unchanged bit for bit
+// (bench/RESULTS.md, issue 3, session 17).
+constexpr size_t kThinPassRank = 2;
+inline bool passCheapPartThin(size_t cheap, size_t goal) { return cheap * 4 < goal * 5; }
 inline bool passFinishes(size_t left, size_t goal) {
   return left > 0 && left * kPassFinishingShare <= goal;
 }

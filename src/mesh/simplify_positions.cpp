@@ -25,7 +25,7 @@
 //     it absorbed, and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
-// Speed (bench/RESULTS.md, issue 3): 0.84-1.37x meshoptimizer 0.18's wall clock (paired timing,
+// Speed (bench/RESULTS.md, issue 3): 0.81-1.36x meshoptimizer 0.18's wall clock (paired timing,
 // bench/simplify_ab.sh), 1.1-1.6x its instructions (bench/simplify_callgrind.sh). The
 // wall clock is the measure: the pass pricing and the pass order are written without
 // data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
@@ -1323,8 +1323,9 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
     if (pass_candidate_count_ == 0) break;
     ++stats_.passes;
     // As the engine's runPasses: the collapses still needed (about two triangles each) set the
-    // goal rank; edges up to pass_cost_slack times its cost are applied in order, the rest wait
-    // for the next pass unless none of the cheap ones could be applied. Both parts keep the
+    // goal rank; edges up to pass_cost_slack times its cost (or the kThinPassRank times goal
+    // cheapest, when those are fewer than passCheapPartThin allows) are applied in order, the
+    // rest wait for the next pass unless none of the cheap ones could be applied. Both parts keep the
     // pricing order among equal costs.
     const size_t count = pass_candidate_count_;
     const size_t goal = pass_target > 0 ? (live_triangles_ - pass_target + 1) / 2 : 0;
@@ -1341,10 +1342,17 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
       float goal_cost;
       std::memcpy(&goal_cost, &goal_key, 4);
       limit = costBits(double(goal_cost) * defaults.pass_cost_slack);
-      cheap_count = 0;
-      for (size_t i = 0; i < count; ++i) {  // the store always, the count when kept: no branch
-        cheap[cheap_count] = candidates[i];
-        cheap_count += keys[i] <= limit;
+      auto gather_cheap = [&] {
+        cheap_count = 0;
+        for (size_t i = 0; i < count; ++i) {  // the store always, the count when kept: no branch
+          cheap[cheap_count] = candidates[i];
+          cheap_count += keys[i] <= limit;
+        }
+      };
+      gather_cheap();
+      if (passCheapPartThin(cheap_count, goal) && kThinPassRank * goal < count) {
+        limit = selectKey(keys, count, kThinPassRank * goal, histograms_, pass_key_scratch_);
+        gather_cheap();
       }
       rest_count = count - cheap_count;
       // Ordered with the rest's buffer as scratch: the candidates stay as priced, for the rest.
