@@ -23,6 +23,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cstdio>
@@ -30,6 +31,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -76,20 +78,22 @@ struct Topology {
   bool operator==(const Topology&) const = default;
 };
 Topology topologyOf(const core::Mesh& m) {
-  std::unordered_map<uint64_t, uint32_t> welded_id;  // position bits -> welded vertex
+  std::map<std::array<float, 3>, uint32_t> welded_id;  // equal positions (+0 == -0): one vertex
   std::vector<uint32_t> weld(m.vertexCount());
+  uint32_t welded = 0;
   for (size_t v = 0; v < m.vertexCount(); ++v) {
     const core::Vec3 p = m.positions[v];
-    uint32_t bits[3];
-    std::memcpy(bits, &p, sizeof bits);
-    const uint64_t key = (uint64_t(bits[0]) * 0x9e3779b97f4a7c15ull ^ uint64_t(bits[1])) *
-                             0xc2b2ae3d27d4eb4full ^
-                         bits[2];
-    // (A hash of the bits: a collision would merge two positions, which these counts tolerate.)
-    weld[v] = welded_id.emplace(key, uint32_t(welded_id.size())).first->second;
+    if (!core::isFinite(p)) {  // (no order among NaNs: such a vertex stays on its own)
+      weld[v] = welded++;
+      continue;
+    }
+    const std::array<float, 3> key = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};  // -0 + 0 is +0
+    const auto [it, added] = welded_id.emplace(key, welded);
+    welded += added;
+    weld[v] = it->second;
   }
   std::unordered_map<uint64_t, uint32_t> edge_triangles;
-  std::vector<uint8_t> used(welded_id.size(), 0);
+  std::vector<uint8_t> used(welded, 0);
   long long faces = 0;
   for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
     const uint32_t v[3] = {weld[m.indices[t]], weld[m.indices[t + 1]], weld[m.indices[t + 2]]};
@@ -458,12 +462,12 @@ int main(int argc, char** argv) {
           ++topology_cells;
           ours_topology_changed += !(after_ours == before);
           meshopt_topology_changed += !(after_theirs == before);
-          std::snprintf(line, sizeof line, "| %s | %zu (%g%%) | %lld, %zu | %lld, %zu%s | %lld, %zu%s |",
-                        variant.label.c_str(), target, r * 100, before.euler,
-                        before.non_manifold_edges, after_ours.euler,
-                        after_ours.non_manifold_edges, after_ours == before ? "" : " (changed)",
-                        after_theirs.euler, after_theirs.non_manifold_edges,
-                        after_theirs == before ? "" : " (changed)");
+          std::snprintf(
+              line, sizeof line, "| %s | %zu (%g%%) | %lld, %zu | %lld, %zu%s | %lld, %zu%s |",
+              variant.label.c_str(), target, r * 100, before.euler, before.non_manifold_edges,
+              after_ours.euler, after_ours.non_manifold_edges,
+              after_ours == before ? "" : " (changed)", after_theirs.euler,
+              after_theirs.non_manifold_edges, after_theirs == before ? "" : " (changed)");
           topology_lines.push_back(line);
         }
         const double time_ratio = times.ratio;

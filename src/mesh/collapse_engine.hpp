@@ -289,7 +289,9 @@ constexpr size_t kPassFinishingShare = 7, kPassStallShare = 4, kPassTailShare = 
 // meshopt instead of 13; cells whose cheap part is never thin are unchanged bit for bit
 // (bench/RESULTS.md, issue 3, session 17).
 constexpr size_t kThinPassRank = 2;
-inline bool passCheapPartThin(size_t cheap, size_t goal) { return cheap * 4 < goal * 5; }
+inline bool passCheapPartThin(size_t cheap, size_t goal) {
+  return cheap * 4 < goal * 5;
+}
 inline bool passFinishes(size_t left, size_t goal) {
   return left > 0 && left * kPassFinishingShare <= goal;
 }

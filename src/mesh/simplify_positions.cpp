@@ -1325,8 +1325,8 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
     // As the engine's runPasses: the collapses still needed (about two triangles each) set the
     // goal rank; edges up to pass_cost_slack times its cost (or the kThinPassRank times goal
     // cheapest, when those are fewer than passCheapPartThin allows) are applied in order, the
-    // rest wait for the next pass unless none of the cheap ones could be applied. Both parts keep the
-    // pricing order among equal costs.
+    // rest wait for the next pass unless none of the cheap ones could be applied. Both parts keep
+    // the pricing order among equal costs.
     const size_t count = pass_candidate_count_;
     const size_t goal = pass_target > 0 ? (live_triangles_ - pass_target + 1) / 2 : 0;
     PassCandidate* const candidates = pass_candidates_;
