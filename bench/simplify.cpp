@@ -28,7 +28,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -66,7 +65,6 @@ std::string attributeList(const core::Mesh& m) {
   return s;
 }
 
-// gltfpack run as a separate process on one input at one ratio.
 // The surface's topology, welded by position (so attribute seams do not count as borders): its
 // Euler characteristic V - E + F and its non-manifold edges (three or more triangles). meshopt
 // 0.18 has no link condition, so at coarse targets its output may pinch handles shut or fold
@@ -112,6 +110,7 @@ Topology topologyOf(const core::Mesh& m) {
   return topology;
 }
 
+// gltfpack run as a separate process on one input at one ratio.
 struct GltfpackCell {
   bool ran = false;     // false: the input is not a format gltfpack reads, or no gltfpack
   std::string failure;  // non-empty: gltfpack or reading its output failed
@@ -381,6 +380,7 @@ int main(int argc, char** argv) {
       variants.push_back({name + " (positions only)", &positions_only, true});
 
     for (const Variant& variant : variants) {
+      const Topology input_topology = topologyOf(*variant.mesh);
       for (double r : ratios) {
         const core::Mesh& ours_input = *variant.mesh;
         const size_t target = std::max<size_t>(1, size_t(double(input.triangleCount()) * r + 0.5));
@@ -457,11 +457,11 @@ int main(int argc, char** argv) {
           worst_order_mean = std::max(worst_order_mean, m);
         }
         {
-          const Topology before = topologyOf(ours_input), after_ours = topologyOf(ours.mesh),
-                         after_theirs = topologyOf(theirs);
+          const Topology& before = input_topology;
+          const Topology after_ours = topologyOf(ours.mesh), after_theirs = topologyOf(theirs);
           ++topology_cells;
-          ours_topology_changed += !(after_ours == before);
-          meshopt_topology_changed += !(after_theirs == before);
+          ours_topology_changed += after_ours != before;
+          meshopt_topology_changed += after_theirs != before;
           std::snprintf(
               line, sizeof line, "| %s | %zu (%g%%) | %lld, %zu | %lld, %zu%s | %lld, %zu%s |",
               variant.label.c_str(), target, r * 100, before.euler, before.non_manifold_edges,
