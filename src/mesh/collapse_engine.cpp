@@ -330,6 +330,7 @@ class Engine {
   CollapseQueue queue_;
   std::vector<uint64_t> pass_order_;     // kPasses: (cost bits << 32 | batch index)
   std::vector<uint32_t> pass_lock_;      // kPasses: per position, the pass that touched it
+  bool coarse_pass_ = false;             // kPasses: passIsCoarse (no placement solve)
 
   SimplifyStats stats_;
   size_t pass_rejections_ = 0;
@@ -1079,7 +1080,7 @@ bool Engine::tryPassCollapse(const CandidateCollapse& priced) {
     ++stats_.rejected_topology;
     return false;
   }
-  if (!cand.endpoint_only) {
+  if (!cand.endpoint_only && !coarse_pass_) {
     const Vec3d priced_position = cand.position;
     const double priced_cost = cand.cost, priced_error = cand.error;
     model_.refinePlacement(state_, cand);
@@ -1121,6 +1122,7 @@ void Engine::runPasses() {
     return bits;
   };
   for (uint32_t pass = 1; !reached(); ++pass) {
+    coarse_pass_ = passIsCoarse(s.live_triangles, pass_target);
     collectPassCandidates();
     if (batch_.empty()) break;
     model_.evaluate(s, batch_);

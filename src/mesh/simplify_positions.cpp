@@ -17,7 +17,8 @@
 //   - candidates are read off the triangles (free endpoints) and the border neighbours, priced at
 //     the best of the endpoints and the midpoint from each endpoint's quadric expanded around its
 //     own position, in float with SSE (PricingRecord), and the optimal placement is solved (in
-//     double) only for the collapses applied (as CostModel::refinePlacement does);
+//     double) only for the collapses applied (as CostModel::refinePlacement does), and not in
+//     the coarse passes far above the target (passIsCoarse, collapse_engine.hpp);
 //   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
 //     the input) use a greedy queue as the engine's kGreedy does (cheapest first, priced at the
 //     optimal placement, the survivor's edges priced again after each collapse); the corner table
@@ -337,6 +338,7 @@ class PositionSimplifier {
   std::vector<uint32_t> cursor_;
   // Greedy tail: the vertices absorbed into a vertex, as a chain through absorbed_next_.
   bool greedy_ = false;
+  bool coarse_pass_ = false;  // passIsCoarse: the survivor stays where it was priced
   std::vector<uint32_t> absorbed_next_, absorbed_last_;
   // Greedy tail: the pricings so far (QueuedCandidate::id), and per vertex how many there were
   // when its quadric or position last changed (entries priced before that are stale).
@@ -1199,7 +1201,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
   if (kGreedy && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
     priced = placement;
-  } else if (!candidate.endpoint_only && candidate.cost > 0) {
+  } else if (!candidate.endpoint_only && candidate.cost > 0 && !coarse_pass_) {
     // (At a price of 0 nothing is better: minimizeQuadric's values are >= 0. Flat regions.)
     Quadric q = quadrics_[from];
     addQuadric(q, quadrics_[to]);
@@ -1319,6 +1321,7 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
       compact();
       buildAdjacency();
     }
+    coarse_pass_ = passIsCoarse(live_triangles_, pass_target);  // collapse_engine.hpp
     collectCandidates();
     if (pass_candidate_count_ == 0) break;
     ++stats_.passes;
@@ -1415,6 +1418,7 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
     if (passStalls(applied, goal, above_target, tail_capacity) || passNearsTail(above_target, tail))
       break;
   }
+  coarse_pass_ = false;
   compact();
 }
 
