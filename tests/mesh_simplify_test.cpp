@@ -209,7 +209,50 @@ TEST(SimplifyQuadric, PositionFastPathKeepsTheGuaranteesDeepDown) {
   EXPECT_EQ(replayed.positions, out.positions);
 }
 
-// A pass whose cheap part falls a few collapses short of its goal finishes from the rest of its
+// Coarse passes (collapse_engine.hpp, passIsCoarse): while a pass starts above kCoarsePassFactor
+// times the pass target, every survivor stays where its collapse was priced, at an endpoint or at
+// the midpoint; the later passes and the greedy tail solve for the optimal placement, which here
+// lies elsewhere for some collapse (so the check can fail). Replayed from the record, whose steps
+// carry the survivor's new position.
+TEST(SimplifyQuadric, CoarsePassesPlaceAtEndpointsOrMidpoints) {
+  const Mesh sphere = test::icosphere(5, 1.0f, test::lumps);  // 20480 triangles, position-only
+  SimplifyOptions options{.target_triangles = 205};
+  auto result = mesh::simplifyQuadric(sphere, options);
+  ASSERT_EQ(result.record.steps.size(), result.stats.collapses);
+  mesh::EngineOptions engine;
+  engine.target_triangles = options.target_triangles;
+  const size_t pass_target =
+      options.target_triangles + mesh::greedyTailTriangles(engine, sphere.triangleCount());
+  ASSERT_EQ(pass_target, 205u + 1280u);  // the tail: 20480 / 16
+  std::vector<Vec3> at = sphere.positions;  // each vertex's position as the steps move it
+  size_t coarse_steps = 0, fixed_point_steps = 0, later_steps = 0, later_elsewhere = 0;
+  for (const mesh::CollapseStep& step : result.record.steps) {
+    const Vec3 a = at[step.removed], b = at[step.kept];
+    const Vec3 p = result.record.values.positions[step.kept_value];
+    const Vec3 mid = (a + b) * 0.5f;
+    const float tolerance = 1e-5f * core::length(b - a);
+    const bool fixed_point = core::length(p - a) <= tolerance || core::length(p - b) <= tolerance ||
+                             core::length(p - mid) <= tolerance;
+    // A step above the bound belongs to a pass that started above it: a coarse one.
+    if (step.triangles_after > mesh::kCoarsePassFactor * pass_target) {
+      ++coarse_steps;
+      fixed_point_steps += fixed_point;
+    } else {
+      ++later_steps;
+      later_elsewhere += !fixed_point;
+    }
+    at[step.kept] = p;
+  }
+  EXPECT_GT(coarse_steps, 4000u);  // the first pass alone removes ~35% of the triangles
+  EXPECT_EQ(fixed_point_steps, coarse_steps);
+  EXPECT_GT(later_steps, 0u);
+  EXPECT_GT(later_elsewhere, 0u);
+  EXPECT_TRUE(mesh::passIsCoarse(601, 100));
+  EXPECT_FALSE(mesh::passIsCoarse(600, 100));
+  EXPECT_FALSE(mesh::passIsCoarse(1000, 0));  // an error target only: no pass is coarse
+}
+
+
 // edges (collapse_engine.hpp, passFinishes) instead of starting another pass over every edge: on
 // these meshes one pass fewer, in the fast path and in the engine (endpoint placement takes the
 // engine). Without the rule the counts are 5 and 3. The results are still at their targets.
