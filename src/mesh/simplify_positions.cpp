@@ -21,7 +21,8 @@
 //     the coarse passes far above the target (passIsCoarse, collapse_engine.hpp);
 //   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
 //     the input) use a greedy queue as the engine's kGreedy does (cheapest first, priced at the
-//     optimal placement, the survivor's edges priced again after each collapse); the corner table
+//     optimal placement; an entry whose endpoint changed is priced again when it comes up, as
+//     the survivor's edge, and queued again: runGreedy); the corner table
 //     then grows by chaining: a vertex's triangles are its own corners and those of the vertices
 //     it absorbed, and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
@@ -42,9 +43,10 @@
 // at any target (-10%, armadillo 1% Hausdorff 1.27x meshopt's: it now runs at the coarse end
 // only), choosing in cost order but applying in vertex order (+5%: failed collapses then hold
 // their locks, passes yield less), fine passes instead of the greedy tail (Hausdorff above
-// meshopt's at armadillo 10% and 1%) and a lazily priced greedy tail (no faster: its fan walks and
-// queue cost, not its solves). Set-up alone (a run to 100%) is 0.96-1.23x meshopt's; the passes
-// at 50% are faster than meshopt's.
+// meshopt's at armadillo 10% and 1%) and a greedy tail queued by the fixed-point prices and
+// solved when popped (no faster: its fan walks and queue cost, not its solves; the lazy
+// re-pricing of runGreedy saves both). Set-up alone (a run to 100%) is 0.96-1.23x meshopt's; the
+// passes at 50% are faster than meshopt's.
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
 // endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail):
 // without the greedy tail, the optimal placement, the midpoint and the link condition this code
@@ -81,7 +83,8 @@ constexpr uint32_t kPrevious[3] = {2, 0, 1};
 // sifts and pops were 3-4% of our time at 10% on ChineseDragon-10kv, by perf). (One 128-bit
 // compare instead of the key's, branch-free: 2-8% slower, the key's branch is predictable.)
 // Entries that differ only in `id` are the same edge priced at different times, of which at most
-// one is current, so their order does not change what is applied. `id` numbers the pricings
+// one is current, or priced twice in the same state (two stale entries that came up as the same
+// edge: runGreedy), so their order does not change what is applied. `id` numbers the pricings
 // (TailPricing): an entry is current while neither endpoint has changed since it was priced
 // (PositionSimplifier::changed_at_), and then its placement is still the optimal one.
 struct QueuedCandidate {
@@ -261,7 +264,6 @@ class PositionSimplifier {
   void allocatePassArrays();
   void runPasses(size_t pass_target, size_t tail, size_t tail_capacity);
   void runGreedy();
-  void emitAround(uint32_t v);
   // kGreedy: in the greedy tail (survivors are chains, triangles come from absorbed vertices
   // too, placement is the optimal one); a template so that the passes pay for none of it.
   // `placement`: the greedy tail's optimal placement, found when the candidate was priced.
@@ -944,20 +946,6 @@ void PositionSimplifier::emitEdge(uint32_t a, uint32_t b) {
     pushCandidate(b, a, true);
 }
 
-// Greedy tail: after a collapse into v, the candidates of v's edges are priced again.
-void PositionSimplifier::emitAround(uint32_t v) {
-  const uint32_t round = nextRound();
-  vertices_[v].mark = round;
-  forEachTriangle(v, [&](uint32_t t, uint32_t k) {
-    for (uint32_t corner : {kNext[k], kPrevious[k]}) {
-      const uint32_t n = resolve(indices_[t * 3 + corner]);
-      if (vertices_[n].mark == round) continue;
-      vertices_[n].mark = round;
-      emitEdge(v, n);
-    }
-  });
-}
-
 // Every live edge once: an edge with a free endpoint is interior and manifold (a free vertex has
 // no feature edge, and collapses keep it so), taken from the triangle where it runs from the
 // lower to the higher id; only a free end may go, and it goes to the other end exactly when that
@@ -1422,11 +1410,21 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
   compact();
 }
 
-// The greedy queue of Garland & Heckbert 1997 for the last collapses (as the engine's runGreedy
-// with invalidation ring 1): always the cheapest edge next, priced at its optimal placement; a
-// collapse prices the survivor's edges again. Candidates refused by the link or flip test are not
-// retried until their neighbourhood changes; when the queue runs dry short of the target it is
-// filled again from all edges, at most EngineOptions::max_passes times.
+// The greedy queue of Garland & Heckbert 1997 for the last collapses: always the cheapest edge
+// next, priced at its optimal placement. A collapse changes the survivor's edges, and their entries
+// are priced again lazily: an entry whose endpoint was absorbed or changed since its pricing is,
+// when it comes to the top, priced again as the edge between the endpoints' survivors and queued
+// again. Its old price is (nearly always) a lower bound of the new one: the merged quadric only
+// grows, so an edge is not applied before a cheaper one. The eager way (the engine's runGreedy
+// with invalidation ring 1, and this code until session 18) priced all of the survivor's edges
+// after each collapse: ~7 solves and queue entries a collapse, most of them stale before they came
+// up (bunny 1%: 9468 pops for 1195 collapses). Measured on bench/simplify: geomean 1.047 -> 1.023
+// (the cells with a tail 2-7% faster); error over 5 orders unchanged on the benchmark (Hausdorff
+// geomean 0.616 -> 0.616, mean 0.559 -> 0.560) and on the survey's 75 cells (11 worse than meshopt
+// before and after; anchor_dense 1%, already worse, 1.03 -> 1.31); bench/RESULTS.md, issue 3,
+// session 18. A candidate refused by the link or flip test leaves the queue; when the queue runs
+// dry short of the target, refusals having been made, it is filled again from all edges, at most
+// EngineOptions::max_passes times.
 void PositionSimplifier::runGreedy() {
   auto reached = [&] {
     return options_.target_triangles > 0 && live_triangles_ <= options_.target_triangles;
@@ -1434,7 +1432,7 @@ void PositionSimplifier::runGreedy() {
   // The first fill is seeded with the edges cheapest at their fixed points (the passes' float
   // prices), kGreedySeedsPerCollapse per collapse still needed, instead of solving every edge at
   // its optimal placement (at 50% the tail needs ~1000 collapses out of ~60k edges on bunny). The
-  // survivors' edges are priced again after each collapse as before, and if the seeds run out
+  // seeds' entries are priced again as they come up, as above, and if the seeds run out
   // short of the target the next fill takes every edge. Measured on bench/simplify: same output
   // on every mesh and ratio there (bunny 50%: 13% less time); with 4 seeds per collapse,
   // Hausdorff moved both ways (bunny 10% 0.90 -> 1.24, spot 50% 1.11 -> 0.98), so the seeds stay
@@ -1479,10 +1477,14 @@ void PositionSimplifier::runGreedy() {
     while (!queue_.empty() && !reached()) {
       const QueuedCandidate e = queue_.pop();
       const uint32_t from = e.from(), to = e.to(), id = e.id();
-      if (!alive_[from] || !alive_[to] || id < changed_at_[from] || id < changed_at_[to]) continue;
+      if (!alive_[from] || !alive_[to] || id < changed_at_[from] || id < changed_at_[to]) {
+        const uint32_t a = resolve(from), b = resolve(to);
+        if (a != b) emitEdge(a, b);  // priced again and queued (unless it may not collapse)
+        continue;
+      }
       const TailPricing priced = tail_pricing_[id];
       const PassCandidate c{from, to, e.cost(), kFixedAtB, priced.endpoint_only};
-      if (tryCollapse<true>(c, 0, priced.placement)) emitAround(to);
+      tryCollapse<true>(c, 0, priced.placement);
     }
     compact();
     if (!from_seeds && stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
