@@ -20,11 +20,11 @@
 //     double) only for the collapses applied (as CostModel::refinePlacement does), and not in
 //     the coarse passes far above the target (passIsCoarse, collapse_engine.hpp);
 //   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
-//     the input) use a greedy queue as the engine's kGreedy does (cheapest first, priced at the
-//     optimal placement; an entry whose endpoint changed is priced again when it comes up, as
-//     the survivor's edge, and queued again: runGreedy); the corner table
-//     then grows by chaining: a vertex's triangles are its own corners and those of the vertices
-//     it absorbed, and the remap becomes a union-find.
+//     the input) use a greedy queue, cheapest first and priced at the optimal placement as the
+//     engine's kGreedy; unlike the engine's, an entry whose endpoint changed is priced again only
+//     when it comes up, as the survivors' edge (runGreedy). The corner table then grows by
+//     chaining: a vertex's triangles are its own corners and those of the vertices it absorbed,
+//     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
 // Speed (bench/RESULTS.md, issue 3): 0.78-1.28x meshoptimizer 0.18's wall clock (paired timing,
