@@ -252,7 +252,7 @@ TEST(SimplifyQuadric, CoarsePassesPlaceAtEndpointsOrMidpoints) {
   EXPECT_FALSE(mesh::passIsCoarse(1000, 0));  // an error target only: no pass is coarse
 }
 
-
+// A pass whose cheap part falls a few collapses short of its goal finishes from the rest of its
 // edges (collapse_engine.hpp, passFinishes) instead of starting another pass over every edge: on
 // these meshes one pass fewer, in the fast path and in the engine (endpoint placement takes the
 // engine). Without the rule the counts are 5 and 3. The results are still at their targets.

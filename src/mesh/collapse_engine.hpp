@@ -306,14 +306,13 @@ inline bool passStalls(size_t applied, size_t goal, size_t above_target, size_t 
 // passes stop at (`pass_target`: the target plus the greedy tail), places each survivor where its
 // collapse was priced (an endpoint or the midpoint) instead of solving for the optimal placement
 // (CostModel::refinePlacement). Its collapses are the cheapest of the run, far below the error the
-// last passes and the tail make, so the final error is settled later; the solve and the flip test
-// of the solved point were ~5% of the time of a 1% run. Measured on bench/simplify (paired A/B,
-// median over 5 input orders for the error, 31 meshes at 50/10/1%): factor 6 made the run 1.9%
-// faster (10% and 1% cells 2-6%; 50% cells never coarse) with Hausdorff no worse than meshopt's in
-// any benchmark cell and worse in 11 of the 105 cells instead of 12; factor 4 gained 2.9% but
-// moved the 10% cells' Hausdorff up by ~20% (armadillo 0.77 -> 0.95); factor 2, armadillo 10%
-// 1.44. Pricing at the endpoints only as well (no midpoint) put ChineseDragon-10kv at 10% at 1.30
-// (bench/RESULTS.md, issue 3, session 18).
+// last passes and the tail make, so the final error is settled later. Measured on bench/simplify
+// (paired A/B, median over 5 input orders for the error, 31 meshes at 50/10/1%): factor 6 made
+// the run 1.8% faster (1% cells 3.5-5%, 10% cells 0-3%; 50% cells never coarse) with Hausdorff
+// no worse than meshopt's in any benchmark cell and worse in 11 of the 105 cells instead of 12;
+// factor 4 gained 2.9% but moved the 10% cells' Hausdorff up by ~20% (armadillo 0.77 -> 0.95);
+// factor 2, armadillo 10% 1.44. Pricing at the endpoints only as well (no midpoint) put
+// ChineseDragon-10kv at 10% at 1.30 (bench/RESULTS.md, issue 3, session 18).
 constexpr size_t kCoarsePassFactor = 6;
 inline bool passIsCoarse(size_t live_triangles, size_t pass_target) {
   return pass_target > 0 && live_triangles > kCoarsePassFactor * pass_target;

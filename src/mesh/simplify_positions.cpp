@@ -45,8 +45,8 @@
 // their locks, passes yield less), fine passes instead of the greedy tail (Hausdorff above
 // meshopt's at armadillo 10% and 1%) and a greedy tail queued by the fixed-point prices and
 // solved when popped (no faster: its fan walks and queue cost, not its solves; the lazy
-// re-pricing of runGreedy saves both). Set-up alone (a run to 100%) is 0.96-1.23x meshopt's; the
-// passes at 50% are faster than meshopt's.
+// re-pricing of runGreedy saves the fan walks). Set-up alone (a run to 100%) is 0.96-1.23x
+// meshopt's; the passes at 50% are faster than meshopt's.
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
 // endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail):
 // without the greedy tail, the optimal placement, the midpoint and the link condition this code
