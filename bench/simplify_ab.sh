@@ -7,7 +7,8 @@
 # Usage: bench/simplify_ab.sh RUNS BINARY_A BINARY_B [bench_simplify arguments...]
 #   e.g. bench/simplify_ab.sh 7 /tmp/old/bench_simplify build/bench/bench_simplify
 # Each run is `BINARY --gltfpack "" --repeats $REPEATS (default 9) --samples 0 --no-progressive
-# --rows positions [arguments]`: the positions-only rows, no distances.
+# --rows $ROWS (default positions) [arguments]`: the positions-only rows, no distances
+# (ROWS=default: the attribute-aware rows of files with attributes, i.e. the general engine).
 set -eu
 if [ $# -lt 3 ]; then
   echo "usage: $0 RUNS BINARY_A BINARY_B [bench_simplify arguments...]" >&2
@@ -30,7 +31,7 @@ while [ "$i" -lt "$runs" ]; do
     # The main table's rows (NF >= 15: not the narrower tables after it): | mesh | tris in |
     # target | ours | meshopt | ms ours | ms meshopt | ratio | ...
     "$binary" --gltfpack "" --repeats "${REPEATS:-9}" --samples 0 --no-progressive \
-      --rows positions "$@" 2>/dev/null |
+      --rows "${ROWS:-positions}" "$@" 2>/dev/null |
       awk -F'|' -v side="$side" 'NF >= 15 && /^\| / && !/^\| mesh/ {
         mesh = $2; target = $4; gsub(/^ +| +$/, "", mesh); gsub(/ /, "", target)
         gsub(/ /, "_", mesh)
