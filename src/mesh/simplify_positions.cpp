@@ -50,8 +50,10 @@
 // The rest of the gap is work meshopt 0.18 does not do (it prices by one quadric at the other
 // endpoint, has no link condition, tests one fan, places at endpoints, has no greedy tail):
 // without the greedy tail, the optimal placement, the midpoint and the link condition this code
-// ran at 0.89x meshopt's time, and its Hausdorff distance was above meshopt's in 9 of 30 cells;
-// each of the four cost 5-8% (bench/RESULTS.md, issue 3, session 16).
+// runs at 0.68-0.97x meshopt's time (geomean 0.83), and its error is then worse than meshopt's in
+// 14 of the 21 position-only cells; the link condition costs 7.8%, the midpoint 5.9%, the greedy
+// tail 5.1%, the optimal placement 1.7% (bench/guarantees-experiment.patch; bench/RESULTS.md,
+// issue 3, session 19).
 #include "mesh/simplify_positions.hpp"
 
 #include <algorithm>
