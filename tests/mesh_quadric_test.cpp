@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 
 #include "mesh/quadric.hpp"
 
@@ -46,6 +47,70 @@ TEST(QuadricWeights, FeaturePlaneWeighsEightFacesOfHalfItsSquaredLength) {
   EXPECT_DOUBLE_EQ(evaluateQuadric(q, {1.0, 1.0, 3.0}), 8.0 * std::pow(2.0, 0.25));
   EXPECT_DOUBLE_EQ(evaluateQuadric(with_attributes, {1.0, 1.0, 3.0}), 8.0 * std::pow(2.0, 0.9));
   EXPECT_DOUBLE_EQ(q.weight, 0.0);  // feature planes add no surface
+}
+
+// Spike tips (quadric.hpp): the angle sum as a product of (e·f, |e × f|), compared with π.
+Vec3d unitAt(double degrees) {
+  const double r = degrees * M_PI / 180.0;
+  return {std::cos(r), std::sin(r), 0.0};
+}
+bool anglesBelowHalfTurn(std::initializer_list<double> corners_degrees, double scale = 1.0) {
+  AngleSum sum;
+  for (double degrees : corners_degrees) sum.addCorner(Vec3d{scale, 0, 0}, unitAt(degrees) * 3.0);
+  return sum.belowHalfTurn();
+}
+
+TEST(SpikeTips, AngleSumComparesWithHalfATurn) {
+  EXPECT_TRUE(anglesBelowHalfTurn({50, 50, 50}));       // 150°
+  EXPECT_FALSE(anglesBelowHalfTurn({50, 50, 50, 50}));  // 200°
+  EXPECT_TRUE(anglesBelowHalfTurn({100, 70, 5}));       // 175°, in any order
+  EXPECT_TRUE(anglesBelowHalfTurn({5, 70, 100}));
+  EXPECT_FALSE(anglesBelowHalfTurn({100, 70, 15}));  // 185°
+  EXPECT_FALSE(anglesBelowHalfTurn({170, 170, 170}));  // 510°: not back below once past π
+  EXPECT_FALSE(anglesBelowHalfTurn({60, 60, 60, 60, 60, 60}));  // a flat vertex, 360°
+  // The edge lengths scale the factors, not their angles (1e-30: no underflow in 8 corners).
+  EXPECT_TRUE(anglesBelowHalfTurn({20, 20, 20, 20, 20, 20, 20, 20}, 1e-30));  // 160°
+  EXPECT_FALSE(AngleSum{}.belowHalfTurn());  // no corner: no tip
+}
+
+TEST(SpikeTips, DegenerateCornersEndTheSum) {
+  AngleSum straight, empty_edge;
+  straight.addCorner({1, 0, 0}, {-1, 0, 0});  // an angle of π: e × f = 0
+  EXPECT_FALSE(straight.belowHalfTurn());
+  straight.addCorner({1, 0, 0}, unitAt(10));  // stays ended
+  EXPECT_FALSE(straight.belowHalfTurn());
+  empty_edge.addCorner({0, 0, 0}, {1, 0, 0});
+  EXPECT_FALSE(empty_edge.belowHalfTurn());
+}
+
+// The planes of a cone's sides, with unit normals at `tilt` degrees from its axis (z).
+Quadric coneQuadric(int sides, double tilt) {
+  Quadric q;
+  for (int i = 0; i < sides; ++i) {
+    const double azimuth = 2 * M_PI * i / sides, t = tilt * M_PI / 180.0;
+    const Vec3d n{std::sin(t) * std::cos(azimuth), std::sin(t) * std::sin(azimuth), std::cos(t)};
+    addQuadric(q, planeQuadric(n, 0.0, 1.0, 1.0));
+  }
+  return q;
+}
+
+TEST(SpikeTips, PlanesMustSpreadAsAroundASpike) {
+  EXPECT_TRUE(mayBeSpikeTip(coneQuadric(4, 80)));    // a thin spike: |A|²/tr² = 0.47
+  EXPECT_TRUE(mayBeSpikeTip(coneQuadric(3, 60)));    // a cone of half-angle 30°: 0.34
+  EXPECT_FALSE(mayBeSpikeTip(coneQuadric(6, 10)));   // a gentle bump: 0.94
+  EXPECT_FALSE(mayBeSpikeTip(coneQuadric(1, 45)));   // one plane: 1
+  EXPECT_FALSE(mayBeSpikeTip(Quadric{}));            // no plane
+}
+
+TEST(SpikeTips, PinCostsItsWeightTimesThePlanesWeightPerSquaredDistance) {
+  Quadric q = planeQuadric({0, 0, 1}, 0.0, 2.0, 2.0);  // z = 0, weight 2
+  const Vec3d tip{1, 2, 0};
+  pinSpikeTip(q, tip);
+  EXPECT_DOUBLE_EQ(q.weight, 2.0);  // errors stay in the planes' units
+  EXPECT_NEAR(evaluateQuadric(q, tip), 0.0, 1e-12);
+  // 0.5 along the plane: only the pin, 4 * 2 * 0.25; 0.5 off it: the plane's 2 * 0.25 as well.
+  EXPECT_NEAR(evaluateQuadric(q, {1.5, 2, 0}), kSpikePinWeight * 2.0 * 0.25, 1e-12);
+  EXPECT_NEAR(evaluateQuadric(q, {1, 2, 0.5}), (kSpikePinWeight + 1.0) * 2.0 * 0.25, 1e-12);
 }
 
 }  // namespace

@@ -88,6 +88,40 @@ inline core::Mesh icosphere(int subdivisions, float radius = 1.0f,
   return mesh;
 }
 
+// A closed horn along +z: `rings` rings of `sides` vertices (every other ring turned by half a
+// side), radius `radius` (1 - z / length) at z = length * i / rings, so the sides are a straight
+// cone ending in a tip vertex at (0, 0, length); a fan closes the base at z = 0. The tip is the
+// vertex before last, the base centre the last.
+inline core::Mesh hornMesh(int rings, int sides, float radius, float length) {
+  core::Mesh m;
+  for (int i = 0; i < rings; ++i) {
+    const float z = length * float(i) / float(rings), r = radius * (1 - z / length);
+    for (int j = 0; j < sides; ++j) {
+      const float a = 2 * float(M_PI) * (float(j) + 0.5f * float(i % 2)) / float(sides);
+      m.positions.push_back({r * std::cos(a), r * std::sin(a), z});
+    }
+  }
+  const uint32_t tip = uint32_t(m.positions.size());
+  m.positions.push_back({0, 0, length});
+  const uint32_t base = uint32_t(m.positions.size());
+  m.positions.push_back({0, 0, 0});
+  auto id = [&](int i, int j) { return uint32_t(i * sides + (j + sides) % sides); };
+  for (int i = 0; i + 1 < rings; ++i)
+    for (int j = 0; j < sides; ++j) {
+      if (i % 2 == 0)
+        m.indices.insert(m.indices.end(), {id(i, j), id(i, j + 1), id(i + 1, j), id(i, j + 1),
+                                           id(i + 1, j + 1), id(i + 1, j)});
+      else
+        m.indices.insert(m.indices.end(), {id(i, j), id(i, j + 1), id(i + 1, j + 1), id(i, j),
+                                           id(i + 1, j + 1), id(i + 1, j)});
+    }
+  for (int j = 0; j < sides; ++j)
+    m.indices.insert(m.indices.end(),
+                     {id(rings - 1, j), id(rings - 1, j + 1), tip, id(0, j + 1), id(0, j), base});
+  m.submeshes = {{0, uint32_t(m.indices.size()), 0}};
+  return m;
+}
+
 // A deterministic lumpy displacement (sum of a few sines), for meshes without symmetric ties.
 inline float lumps(core::Vec3 d) {
   return 0.08f * std::sin(3.1f * d.x + 0.7f) * std::cos(2.3f * d.y - 0.4f) +

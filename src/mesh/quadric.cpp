@@ -77,6 +77,13 @@ bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q,
   return true;
 }
 
+void pinSpikeTip(Quadric& q, Vec3d p) {
+  const double w = kSpikePinWeight * q.weight;
+  q.a00 += w, q.a11 += w, q.a22 += w;
+  q.b0 -= w * p.x, q.b1 -= w * p.y, q.b2 -= w * p.z;
+  q.c += w * dot(p, p);
+}
+
 
 namespace {
 
@@ -300,6 +307,30 @@ void QuadricModel::begin(const EngineState& state) {
     addInto(geometric_[edge.a], plane);
     addInto(geometric_[edge.b], plane);
   }
+
+  // Spike tips (quadric.hpp): the free positions whose planes spread as around a spike, then
+  // their angle sums, in one sweep over the triangles when there are any.
+  const uint32_t position_count = uint32_t(state.positions.size());
+  std::vector<uint8_t> maybe_tip(position_count, 0);
+  bool any_maybe_tip = false;
+  for (uint32_t p = 0; p < position_count; ++p)
+    if (state.kinds[p] == VertexKind::kFree && mayBeSpikeTip(geometric_[p]))
+      maybe_tip[p] = 1, any_maybe_tip = true;
+  if (!any_maybe_tip) return;
+  std::vector<AngleSum> angles(position_count);
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!state.triangle_alive[t]) continue;
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t p = state.cornerPosition(uint32_t(t * 3 + k));
+      if (!maybe_tip[p]) continue;
+      const Vec3d at = state.positions[p];
+      const uint32_t next = state.cornerPosition(uint32_t(t * 3 + (k + 1) % 3));
+      const uint32_t previous = state.cornerPosition(uint32_t(t * 3 + (k + 2) % 3));
+      angles[p].addCorner(state.positions[next] - at, state.positions[previous] - at);
+    }
+  }
+  for (uint32_t p = 0; p < position_count; ++p)
+    if (maybe_tip[p] && angles[p].belowHalfTurn()) pinSpikeTip(geometric_[p], state.positions[p]);
 }
 
 const double* QuadricModel::mergedAttributeQuadric(const CandidateCollapse& candidate,

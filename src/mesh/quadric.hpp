@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "mesh/collapse_engine.hpp"
@@ -89,6 +90,52 @@ bool featureEdgeQuadric(Vec3d a, Vec3d b, Vec3d face_normal, Quadric& q,
                         bool with_attributes = false);
 // The unit normal of a triangle, or zero.
 Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2);
+
+// Spike tips. Where the surface comes to a sharp point (the tail tip of CGAL's cow: four
+// triangles, 153° around it), the planes of the tip's triangles nearly contain the spike's axis,
+// so its quadric barely grows when the tip moves along the axis, and a cheap collapse cuts the
+// spike short (cow at 50%: the tip moved 7e-3 of the diagonal, Hausdorff 1.89x meshopt's). Such
+// a tip is a free vertex whose corner angles sum to less than π (a smooth vertex has ~2π, a cone
+// of half-angle α has 2π sin α: below π for α < 30°). It gets a point quadric
+// kSpikePinWeight · W · |x - p|², W its summed plane weights, so that moving it by d costs as
+// much as moving d off kSpikePinWeight times its planes (measured 0.25 to 16: bench/RESULTS.md,
+// issue 3, session 20).
+inline constexpr double kSpikePinWeight = 4.0;
+// A cheap necessary test first, on the quadric alone: the unit normals around a spike spread over
+// a cone, so A/tr(A) has no dominant eigenvalue (|A|²/tr(A)² is ~1/2 or less around a symmetric
+// spike; ~1 on a smooth surface, 1/2 on a right-angled crease). Passes below 3/4.
+inline bool mayBeSpikeTip(const Quadric& q) {
+  const double trace = q.a00 + q.a11 + q.a22;
+  const double frobenius = q.a00 * q.a00 + q.a11 * q.a11 + q.a22 * q.a22 +
+                           2 * (q.a01 * q.a01 + q.a02 * q.a02 + q.a12 * q.a12);
+  return trace > 0 && frobenius < 0.75 * trace * trace;
+}
+// The angle sum at a vertex, corner by corner in any order, as the argument of a product of
+// complex numbers (e·f, |e × f|) (each corner's cos and sin scaled by |e||f|: no acos). Each
+// factor turns the product by less than π, so the sum has reached π when the imaginary part
+// first stops being positive; the product then becomes NaN for good. A degenerate corner
+// (e × f = 0 at an angle of π, or zero-length edges) and under- or overflow also end it as NaN:
+// such a vertex is not taken for a tip.
+class AngleSum {
+ public:
+  void addCorner(Vec3d e, Vec3d f) {  // e, f: the corner's two edges from the vertex
+    const Vec3d n = cross(e, f);
+    addCorner(dot(e, f), std::sqrt(dot(n, n)));
+  }
+  // The same from e·f and |e × f| (twice its triangle's area, the same at its three corners).
+  void addCorner(double c, double s) {
+    const double re = re_ * c - im_ * s, im = re_ * s + im_ * c;
+    const bool below = im > 0 && std::isfinite(re) && std::isfinite(im);
+    re_ = below ? re : std::numeric_limits<double>::quiet_NaN();
+    im_ = below ? im : std::numeric_limits<double>::quiet_NaN();
+  }
+  bool belowHalfTurn() const { return im_ > 0; }
+ private:
+  double re_ = 1, im_ = 0;
+};
+// Adds the spike tip's point quadric at p to q (Quadric::weight unchanged: errors stay in the
+// planes' distance units).
+void pinSpikeTip(Quadric& q, Vec3d p);
 
 // Prices the collapse of edge [a, b] (b the survivor) at the best of b, a and the midpoint for
 // the merged quadric q (three evaluations around b, no solve): returns Q at the chosen point and
