@@ -68,9 +68,33 @@ TEST(SpikeTips, AngleSumComparesWithHalfATurn) {
   EXPECT_FALSE(anglesBelowHalfTurn({100, 70, 15}));  // 185°
   EXPECT_FALSE(anglesBelowHalfTurn({170, 170, 170}));  // 510°: not back below once past π
   EXPECT_FALSE(anglesBelowHalfTurn({60, 60, 60, 60, 60, 60}));  // a flat vertex, 360°
-  // The edge lengths scale the factors, not their angles (1e-30: no underflow in 8 corners).
+  // The edge lengths scale the factors, not their angles.
   EXPECT_TRUE(anglesBelowHalfTurn({20, 20, 20, 20, 20, 20, 20, 20}, 1e-30));  // 160°
   EXPECT_FALSE(AngleSum{}.belowHalfTurn());  // no corner: no tip
+}
+
+TEST(SpikeTips, ACornerOfZeroTurnsNothingWhereverItComes) {
+  AngleSum first, later;
+  first.addCorner({1, 0, 0}, {2, 0, 0});  // 0°: e × f = 0, e·f > 0
+  first.addCorner({1, 0, 0}, unitAt(50));
+  later.addCorner({1, 0, 0}, unitAt(50));
+  later.addCorner({1, 0, 0}, {2, 0, 0});
+  EXPECT_TRUE(first.belowHalfTurn());
+  EXPECT_TRUE(later.belowHalfTurn());
+  AngleSum only_zero;
+  only_zero.addCorner({1, 0, 0}, {2, 0, 0});
+  EXPECT_FALSE(only_zero.belowHalfTurn());  // no angle at all: not a tip
+}
+
+TEST(SpikeTips, ManySmallCornersDoNotUnderflow) {
+  // A 64-sided cone's tip with edges of 1e-3: each factor is ~1e-6, the product ~1e-384 unscaled.
+  AngleSum tip, flat;
+  for (int i = 0; i < 64; ++i) {
+    tip.addCorner(Vec3d{1e-3, 0, 0}, unitAt(2.5) * 1e-3);   // 160° in all
+    flat.addCorner(Vec3d{1e-3, 0, 0}, unitAt(5.625) * 1e-3);  // 360°
+  }
+  EXPECT_TRUE(tip.belowHalfTurn());
+  EXPECT_FALSE(flat.belowHalfTurn());
 }
 
 TEST(SpikeTips, DegenerateCornersEndTheSum) {
@@ -109,8 +133,8 @@ TEST(SpikeTips, PinCostsItsWeightTimesThePlanesWeightPerSquaredDistance) {
   EXPECT_DOUBLE_EQ(q.weight, 2.0);  // errors stay in the planes' units
   EXPECT_NEAR(evaluateQuadric(q, tip), 0.0, 1e-12);
   // 0.5 along the plane: only the pin, 4 * 2 * 0.25; 0.5 off it: the plane's 2 * 0.25 as well.
-  EXPECT_NEAR(evaluateQuadric(q, {1.5, 2, 0}), kSpikePinWeight * 2.0 * 0.25, 1e-12);
-  EXPECT_NEAR(evaluateQuadric(q, {1, 2, 0.5}), (kSpikePinWeight + 1.0) * 2.0 * 0.25, 1e-12);
+  EXPECT_NEAR(evaluateQuadric(q, {1.5, 2, 0}), 4.0 * 2.0 * 0.25, 1e-12);  // kSpikePinWeight 4
+  EXPECT_NEAR(evaluateQuadric(q, {1, 2, 0.5}), (4.0 + 1.0) * 2.0 * 0.25, 1e-12);
 }
 
 }  // namespace

@@ -114,7 +114,7 @@ TEST(SimplifyQuadric, ClosedMeshStaysClosed) {
 }
 
 // A spike (quadric.hpp, spike tips): a horn 1 long, 0.15 wide at its base; six triangles meet at
-// its tip (their corner angles sum to ~52°). The planes of its sides nearly contain its axis, so
+// its tip (their corner angles sum to 51°). The planes of its sides nearly contain its axis, so
 // the quadrics barely grow as the tip slides down it. The distance from the tip to the nearest
 // output vertex, at 240 and 96 of the 480 triangles: without the pin (kSpikePinWeight 0) 0.018
 // and 0.031 in the fast path (positions only), 0.042 and 0.042 in the engine (with normals);

@@ -308,8 +308,12 @@ void QuadricModel::begin(const EngineState& state) {
     addInto(geometric_[edge.b], plane);
   }
 
-  // Spike tips (quadric.hpp): the free positions whose planes spread as around a spike, then
-  // their angle sums, in one sweep over the triangles when there are any.
+  pinSpikeTips(state);  // quadric.hpp, kSpikePinWeight
+}
+
+// The free positions whose planes spread as around a spike (mayBeSpikeTip), then their angle
+// sums, in one sweep over the triangles when there are any.
+void QuadricModel::pinSpikeTips(const EngineState& state) {
   const uint32_t position_count = uint32_t(state.positions.size());
   std::vector<uint8_t> maybe_tip(position_count, 0);
   bool any_maybe_tip = false;
@@ -318,6 +322,7 @@ void QuadricModel::begin(const EngineState& state) {
       maybe_tip[p] = 1, any_maybe_tip = true;
   if (!any_maybe_tip) return;
   std::vector<AngleSum> angles(position_count);
+  const size_t triangles = state.triangle_alive.size();
   for (size_t t = 0; t < triangles; ++t) {
     if (!state.triangle_alive[t]) continue;
     for (uint32_t k = 0; k < 3; ++k) {

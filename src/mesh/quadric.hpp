@@ -99,7 +99,8 @@ Vec3d unitTriangleNormal(Vec3d p0, Vec3d p1, Vec3d p2);
 // of half-angle α has 2π sin α: below π for α < 30°). It gets a point quadric
 // kSpikePinWeight · W · |x - p|², W its summed plane weights, so that moving it by d costs as
 // much as moving d off kSpikePinWeight times its planes (measured 0.25 to 16: bench/RESULTS.md,
-// issue 3, session 20).
+// issue 3, session 20). Only free vertices are pinned: a tip on a UV seam or a border is
+// constrained (it may still slide along its line) or locked (it never moves).
 inline constexpr double kSpikePinWeight = 4.0;
 // A cheap test first, on the quadric alone: the unit normals around a spike spread over a cone,
 // so A/tr(A) has no dominant eigenvalue (|A|²/tr(A)² is ~1/2 or less around a symmetric spike;
@@ -114,10 +115,12 @@ inline bool mayBeSpikeTip(const Quadric& q) {
 }
 // The angle sum at a vertex, corner by corner in any order, as the argument of a product of
 // complex numbers (e·f, |e × f|) (each corner's cos and sin scaled by |e||f|: no acos). Each
-// factor turns the product by less than π, so the sum has reached π when the imaginary part
-// first stops being positive; the product then becomes NaN for good. A degenerate corner
-// (e × f = 0 at an angle of π, or zero-length edges) and under- or overflow also end it as NaN:
-// such a vertex is not taken for a tip.
+// factor turns the product by at least 0 and at most π, so the sum has reached π when the
+// imaginary part first stops being positive (a product still on the positive real axis has
+// turned by 0); the product then becomes NaN for good. A corner of π, a zero-length edge and
+// NaN or infinite positions also end it as NaN: such a vertex is not taken for a tip. The
+// product is scaled by 2^500 whenever it falls below 2^-500 (exactly: a power of two), so that
+// many small corners (a 64-sided cone with edges of 1e-3 of the diagonal) do not underflow.
 class AngleSum {
  public:
   void addCorner(Vec3d e, Vec3d f) {  // e, f: the corner's two edges from the vertex
@@ -126,8 +129,9 @@ class AngleSum {
   }
   // The same from e·f and |e × f| (twice its triangle's area, the same at its three corners).
   void addCorner(double c, double s) {
-    const double re = re_ * c - im_ * s, im = re_ * s + im_ * c;
-    const bool below = im > 0 && std::isfinite(re) && std::isfinite(im);
+    double re = re_ * c - im_ * s, im = re_ * s + im_ * c;
+    const bool below = (im > 0 || (im == 0 && re > 0)) && std::isfinite(re) && std::isfinite(im);
+    if (below && std::abs(re) + im < 0x1p-500) re *= 0x1p500, im *= 0x1p500;
     re_ = below ? re : std::numeric_limits<double>::quiet_NaN();
     im_ = below ? im : std::numeric_limits<double>::quiet_NaN();
   }
@@ -209,6 +213,8 @@ class QuadricModel final : public CostModel {
   // the survivor's wedges, minimized over the attributes) that prices and places it.
   void mergedQuadrics(const EngineState& state, const CandidateCollapse& candidate,
                       Quadric& geometric, Quadric& total) const;
+  // Adds the spike tips' point quadrics to geometric_ (see kSpikePinWeight).
+  void pinSpikeTips(const EngineState& state);
 
   QuadricModelOptions options_;
   bool fixed_point_pricing_ = false;

@@ -1565,6 +1565,7 @@ SimplifyResult PositionSimplifier::run() {
     if (kinds_[v] == VertexKind::kFree && mayBeSpikeTip(quadrics_[v])) pinIfSpikeTip(v);
     pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
   }
+  double_areas_ = {};  // read by pinIfSpikeTip only
   EngineOptions tail_options;
   tail_options.target_triangles = options_.target_triangles;
   const size_t tail = greedyTailTriangles(tail_options, live_triangles_);
