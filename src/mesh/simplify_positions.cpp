@@ -326,7 +326,6 @@ class PositionSimplifier {
   std::vector<VertexState> vertices_;
   std::vector<core::Vec3> asset_positions_;  // asset units, exact while unmoved
   std::vector<Quadric> quadrics_;
-  std::vector<double> double_areas_;  // per set-up triangle: |e × f|, twice its area
   // quadrics_ around the positions, for the passes (every record is written before it is read:
   // no value-initialization of megabytes)
   PricingRecord* pricing_ = nullptr;
@@ -387,8 +386,6 @@ void PositionSimplifier::setUp() {
 
   // Plane quadrics (Garland & Heckbert 1997 eq. 2), weighted by planeWeight (quadric.hpp).
   quadrics_.assign(vertex_count_, Quadric{});
-  double_areas_.resize(live_triangles_);  // for the spike tips' angle sums (pinIfSpikeTip)
-  double* double_areas = double_areas_.data();
   size_t t = 0;
 #if defined(__SSE2__)
   // Two triangles at a time, one per lane: triangleQuadric's operations in the same order (so the
@@ -433,7 +430,6 @@ void PositionSimplifier::setUp() {
     const __m128d cz = _mm_sub_pd(_mm_mul_pd(ex, fy), _mm_mul_pd(ey, fx));
     const __m128d double_area = _mm_sqrt_pd(_mm_add_pd(
         _mm_add_pd(_mm_mul_pd(cx, cx), _mm_mul_pd(cy, cy)), _mm_mul_pd(cz, cz)));
-    _mm_storeu_pd(double_areas + t, double_area);
     // triangleQuadric's test: 0 < double_area < infinity (NaN fails).
     const int proper = _mm_movemask_pd(_mm_and_pd(_mm_cmpgt_pd(double_area, zero),
                                                   _mm_cmplt_pd(double_area, infinity)));
@@ -465,9 +461,6 @@ void PositionSimplifier::setUp() {
 #endif
   for (; t < live_triangles_; ++t) {  // the last, odd triangle (all of them without SSE2)
     const uint32_t* v = &indices_[t * 3];
-    const Vec3d edge_normal = cross(vertices_[v[1]].position - vertices_[v[0]].position,
-                                    vertices_[v[2]].position - vertices_[v[0]].position);
-    double_areas[t] = std::sqrt(dot(edge_normal, edge_normal));
     Quadric plane;
     if (!triangleQuadric(vertices_[v[0]].position, vertices_[v[1]].position,
                          vertices_[v[2]].position, plane))
@@ -887,14 +880,15 @@ void PositionSimplifier::classify() {
 }
 
 // A free vertex whose corner angles sum to less than π is a spike tip: pinned (quadric.hpp).
+// |e × f| is computed again here, for the candidates only: the set-up's double areas kept in a
+// per-triangle array cost more (fresh pages every call: bunny 50% 2-5% slower, with no candidate).
 void PositionSimplifier::pinIfSpikeTip(uint32_t v) {
   const Vec3d p = vertices_[v].position;
   AngleSum angles;
   for (uint32_t i = corner_start_[v], end = corner_start_[v + 1]; i < end; ++i) {
     const uint32_t t = corners_[i] >> 2, k = corners_[i] & 3;
-    angles.addCorner(dot(vertices_[indices_[t * 3 + kNext[k]]].position - p,
-                         vertices_[indices_[t * 3 + kPrevious[k]]].position - p),
-                     double_areas_[t]);
+    angles.addCorner(vertices_[indices_[t * 3 + kNext[k]]].position - p,
+                     vertices_[indices_[t * 3 + kPrevious[k]]].position - p);
     if (!angles.belowHalfTurn()) return;  // most candidates pass π within a few corners
   }
   pinSpikeTip(quadrics_[v], p);
@@ -1565,7 +1559,6 @@ SimplifyResult PositionSimplifier::run() {
     if (kinds_[v] == VertexKind::kFree && mayBeSpikeTip(quadrics_[v])) pinIfSpikeTip(v);
     pricing_[v] = pricingRecord(quadrics_[v], vertices_[v].position, centre_);
   }
-  double_areas_ = {};  // read by pinIfSpikeTip only
   EngineOptions tail_options;
   tail_options.target_triangles = options_.target_triangles;
   const size_t tail = greedyTailTriangles(tail_options, live_triangles_);
