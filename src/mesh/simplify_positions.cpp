@@ -29,7 +29,7 @@
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
-// Speed (bench/RESULTS.md, issue 3): 0.78-1.28x meshoptimizer 0.18's wall clock (paired timing,
+// Speed (bench/RESULTS.md, issue 3): 0.78-1.30x meshoptimizer 0.18's wall clock (paired timing,
 // bench/simplify_ab.sh), 1.1-1.6x its instructions (bench/simplify_callgrind.sh). The
 // wall clock is the measure: the pass pricing and the pass order are written without
 // data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
