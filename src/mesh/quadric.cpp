@@ -84,7 +84,6 @@ void pinSpikeTip(Quadric& q, Vec3d p) {
   q.c += w * dot(p, p);
 }
 
-
 namespace {
 
 // The right-hand side r = -(A center + b) of A x = r, for the offset x from `center`.

@@ -15,7 +15,7 @@
 //   - vertex kinds (free, on a border line, locked) are found once: collapses keep them, and a
 //     border vertex keeps its two border neighbours, updated when the border collapses; a free
 //     vertex whose planes spread as around a spike has its angle sum checked, and a spike tip is
-//     pinned by a point quadric (quadric.hpp, as the engine's QuadricModel::begin does);
+//     pinned by a point quadric (quadric.hpp, as the engine's QuadricModel::pinSpikeTips does);
 //   - candidates are read off the triangles (free endpoints) and the border neighbours, priced at
 //     the best of the endpoints and the midpoint from each endpoint's quadric expanded around its
 //     own position, in float with SSE (PricingRecord), and the optimal placement is solved (in
@@ -881,7 +881,7 @@ void PositionSimplifier::classify() {
 
 // A free vertex whose corner angles sum to less than π is a spike tip: pinned (quadric.hpp).
 // |e × f| is computed again here, for the candidates only: the set-up's double areas kept in a
-// per-triangle array cost more (fresh pages every call: bunny 50% 2-5% slower, with no candidate).
+// per-triangle array cost more (fresh pages every call: bunny 50% 1-4% slower, with no candidate).
 void PositionSimplifier::pinIfSpikeTip(uint32_t v) {
   const Vec3d p = vertices_[v].position;
   AngleSum angles;
