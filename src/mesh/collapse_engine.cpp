@@ -754,9 +754,10 @@ void Engine::fillQueue() {
 }
 
 // Link condition: the common neighbours of the endpoints are exactly the edge's opposite
-// vertices (one on a border edge, two inside); and no duplicate triangle may appear (a
-// tetrahedron-like configuration where (from, o1, o2) and (to, o1, o2) both exist). Fills
-// to_incident_ with the survivor's live corners.
+// vertices (one on a border edge, two inside); no duplicate triangle may appear (a
+// tetrahedron-like configuration where (from, o1, o2) and (to, o1, o2) both exist); and a border
+// edge's triangle may not be a component of its own. Fills to_incident_ with the survivor's live
+// corners.
 bool Engine::linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge) {
   EngineState& s = state_;
   uint32_t opposite[2] = {kAbsent, kAbsent};
@@ -783,7 +784,7 @@ bool Engine::linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge
     }
   }
   uint32_t counted_round = nextRound();
-  uint32_t common = 0;
+  uint32_t common = 0, to_triangles_at_opposite = 0;
   bool duplicate = false;
   to_incident_.clear();
   uint32_t previous = kAbsent;
@@ -813,9 +814,17 @@ bool Engine::linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge
     if (from_has_opposite_pair && ((x == opposite[0] && y == opposite[1]) ||
                                    (x == opposite[1] && y == opposite[0])))
       duplicate = true;
+    to_triangles_at_opposite += x == opposite[0] || y == opposite[0];
     c = next;
   }
-  return common == edge.count && !duplicate;
+  if (common != edge.count || duplicate) return false;
+  // On a border edge, its triangle's other two edges must not both be border edges: that
+  // triangle is all that is left of a component (the border closed by a virtual vertex, as
+  // simplify_positions.cpp's isolatedTriangle explains).
+  if (edge.count == 1 && to_triangles_at_opposite == 1)
+    for (const Neighbor& nb : neighbors_)
+      if (nb.vertex == opposite[0] && nb.count == 1) return false;
+  return true;
 }
 
 // Whether moving position `moving` to `position` flips (turns by 90° or more) or flattens any of
