@@ -4,8 +4,8 @@
 # [arguments]`, both at once (the error does not depend on timing), and the table of the
 # Hausdorff and mean ratios to meshopt_simplify 0.18 (medians over the ORDERS + 1 input orders)
 # is compared cell by cell: the cells whose medians changed, then per side the cells worse than
-# meshopt (either ratio above 1.0) and the geometric means (cells with a zero Hausdorff ratio
-# left out of that mean). bench/RESULTS.md, issue 3, uses it for the benchmark and survey meshes.
+# meshopt (either ratio above 1.0) and the geometric means (cells with a zero ratio, printed as
+# 0.00 when both errors are tiny, left out of that mean). bench/RESULTS.md, issue 3, uses it for the benchmark and survey meshes.
 # Usage: bench/simplify_quality.sh BINARY_A BINARY_B [bench_simplify arguments...]
 #   e.g. bench/simplify_quality.sh /tmp/old/bench_simplify build/bench/bench_simplify MESHES
 set -eu
@@ -55,11 +55,12 @@ awk '
       if ((k in hb) && (hb[k] > 1 || mb[k] > 1)) { worse_b++; list_b = list_b " " k }
       if (h[k] > 0) { na++; lha += log(h[k]) }
       if ((k in hb) && hb[k] > 0) { nb++; lhb += log(hb[k]) }
-      lma += log(m[k]); if (k in hb) { lmb += log(mb[k]); mcount++ }
+      if (m[k] > 0) { ma++; lma += log(m[k]) }
+      if ((k in hb) && mb[k] > 0) { mb_count++; lmb += log(mb[k]) }
     }
     printf "\n%d cells. Worse than meshopt (Hausdorff or mean above 1.0): A %d, B %d\n",
       cells, worse_a, worse_b
     printf "  A:%s\n  B:%s\n", list_a, list_b
     printf "geometric means: Hausdorff A %.3f, B %.3f; mean A %.3f, B %.3f\n",
-      exp(lha / na), exp(lhb / nb), exp(lma / cells), exp(lmb / mcount)
+      exp(lha / na), exp(lhb / nb), exp(lma / ma), exp(lmb / mb_count)
   }' "$dir/a.cells" "$dir/b.cells"
