@@ -143,6 +143,30 @@ TEST(SimplifyQuadric, ComponentsDoNotVanish) {
     // The sphere stops at a tetrahedron (the link condition's other end).
     EXPECT_EQ(out.triangleCount(), 5u);
   }
+  // The same in the passes (the cases above end in the greedy queues): a disc small enough to
+  // shrink within them, beside a finer sphere, in the fast path's passes (positions only) and the
+  // engine's (endpoint placement).
+  Mesh finer = test::icosphere(4);  // 5120 triangles
+  const uint32_t small_centre = uint32_t(finer.vertexCount());
+  finer.positions.push_back({4, 0, 0});
+  for (int i = 0; i < 24; ++i) {
+    const float angle = float(i) * 3.14159265f / 12.0f;
+    finer.positions.push_back({4 + 0.01f * std::cos(angle), 0.01f * std::sin(angle), 0});
+  }
+  for (uint32_t i = 0; i < 24; ++i)
+    finer.indices.insert(finer.indices.end(),
+                         {small_centre, small_centre + 1 + i, small_centre + 1 + (i + 1) % 24});
+  finer.submeshes = {{0, uint32_t(finer.indices.size()), 0}};
+  for (auto [placement, target] :
+       {std::pair{mesh::Placement::kOptimal, 400}, std::pair{mesh::Placement::kEndpoint, 200}}) {
+    auto result = mesh::simplifyQuadric(
+        finer, {.target_triangles = size_t(target), .placement = placement});
+    size_t disc_triangles = 0;
+    for (size_t t = 0; t < result.mesh.triangleCount(); ++t)
+      disc_triangles += result.mesh.positions[result.mesh.indices[t * 3]].x > 2.5f;
+    EXPECT_GE(disc_triangles, 1u) << (placement == mesh::Placement::kOptimal ? "fast path"
+                                                                             : "engine passes");
+  }
 }
 
 // A spike (quadric.hpp, spike tips): a horn 1 long, 0.15 wide at its base; six triangles meet at

@@ -756,8 +756,8 @@ void Engine::fillQueue() {
 // Link condition: the common neighbours of the endpoints are exactly the edge's opposite
 // vertices (one on a border edge, two inside); no duplicate triangle may appear (a
 // tetrahedron-like configuration where (from, o1, o2) and (to, o1, o2) both exist); and a border
-// edge's triangle may not be a component of its own. Fills to_incident_ with the survivor's live
-// corners.
+// edge's triangle may not be joined to nothing across an edge. Fills to_incident_ with the
+// survivor's live corners.
 bool Engine::linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge) {
   EngineState& s = state_;
   uint32_t opposite[2] = {kAbsent, kAbsent};
@@ -819,8 +819,8 @@ bool Engine::linkConditionHolds(uint32_t from, uint32_t to, const Neighbor& edge
   }
   if (common != edge.count || duplicate) return false;
   // On a border edge, its triangle's other two edges must not both be border edges: that
-  // triangle is all that is left of a component (the border closed by a virtual vertex, as
-  // simplify_positions.cpp's isolatedTriangle explains).
+  // triangle is all that is left of an edge-connected component (the border closed by a virtual
+  // vertex, as simplify_positions.cpp's isolatedTriangle explains).
   if (edge.count == 1 && to_triangles_at_opposite == 1)
     for (const Neighbor& nb : neighbors_)
       if (nb.vertex == opposite[0] && nb.count == 1) return false;

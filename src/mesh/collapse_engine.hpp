@@ -11,9 +11,10 @@
 // Rules (checked by the engine, never by the model):
 //   - the link condition (Dey, Edelsbrunner et al. 1999, "Topology preserving edge contraction"):
 //     the two endpoints' common neighbours are exactly the edge's opposite vertices, plus the
-//     tetrahedron case (no duplicate triangle may appear) and, on a border, the virtual vertex
-//     that closes it (a triangle whose three edges are border edges, all that is left of a
-//     component, does not collapse: the component stays);
+//     tetrahedron case (no duplicate triangle may appear) and, with the border closed by a
+//     virtual vertex, its edge part (a triangle whose three edges are border edges, all that is
+//     left of an edge-connected component, does not collapse: the component stays); its vertex
+//     part (no interior edge between two border vertices) holds by the feature-line rules below;
 //   - feature lines: border edges (one triangle), attribute seams (the two triangles use different
 //     wedges at an endpoint) and material borders (different submeshes, unless allowed). A
 //     position on no feature line is *free*; one on exactly two feature edges of the same kind is

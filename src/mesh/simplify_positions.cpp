@@ -1109,9 +1109,10 @@ __attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const ui
 
 // The link condition on a surface with a border (Dey, Edelsbrunner et al. 1999: the border
 // closed by a virtual vertex joined to every border vertex) asks one thing more of a border edge:
-// its triangle's other two edges must not both be border edges too. Such a triangle is all that
-// is left of a component, and its collapse would remove the component (WaterBottle's cap and the
-// Avocado's skin went at 0.5%, each a disc by then one triangle). The edge's endpoints' other
+// its triangle's other two edges must not both be border edges too. Such a triangle is joined to
+// nothing across an edge: all that is left of an edge-connected component (or an ear hanging on
+// one vertex), and its collapse would remove it (WaterBottle's cap and the Avocado's skin went at
+// 0.5%, each a disc by then one triangle). The edge's endpoints' other
 // triangles (`from_fan`, `to_fan`: their other two corners) hold no edge to `opposite` exactly
 // when both those edges are border edges.
 bool isolatedTriangle(uint32_t opposite, const uint32_t* from_fan, uint32_t from_fan_size,
