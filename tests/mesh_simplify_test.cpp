@@ -1,7 +1,8 @@
 // Quadric simplification (simplifyQuadric over the collapse engine) on meshes whose answer is
 // known: a flat grid collapses to its two corner triangles at zero error; a cube has no free
 // collapse; a UV seam keeps its discontinuity; a closed surface stays closed; a component shrinks
-// to one triangle but does not vanish; no triangle turns
+// to one triangle but does not vanish; a hole shrinks to three edges but does not close; no
+// triangle turns
 // over; the same mesh at 1000x scale simplifies the same way; two runs are identical; bad input
 // never crashes.
 #include <gtest/gtest.h>
@@ -166,6 +167,44 @@ TEST(SimplifyQuadric, ComponentsDoNotVanish) {
       disc_triangles += result.mesh.positions[result.mesh.indices[t * 3]].x > 2.5f;
     EXPECT_GE(disc_triangles, 1u) << (placement == mesh::Placement::kOptimal ? "fast path"
                                                                              : "engine passes");
+  }
+}
+
+// An open tube (a cylinder without caps: an annulus, Euler characteristic 0; its two border
+// circles turn by 15° at each vertex, so they are border lines that may shrink along themselves),
+// simplified to 1 triangle: each border may shrink to three edges but not close (a collapse on a
+// three-edge hole would join its two sides and change the topology), so the result is the
+// smallest tube, a prism of 6 triangles without its ends, in the fast path and the engine.
+TEST(SimplifyQuadric, HoleStaysOpen) {
+  constexpr int kSegments = 24, kRings = 8;
+  Mesh tube;
+  for (int ring = 0; ring <= kRings; ++ring)
+    for (int i = 0; i < kSegments; ++i) {
+      const float angle = float(i) * 2 * 3.14159265f / kSegments;
+      tube.positions.push_back({std::cos(angle), std::sin(angle), 2.0f * float(ring) / kRings});
+    }
+  auto at = [&](int ring, int i) { return uint32_t(ring * kSegments + (i % kSegments)); };
+  for (int ring = 0; ring < kRings; ++ring)
+    for (int i = 0; i < kSegments; ++i) {
+      tube.indices.insert(tube.indices.end(), {at(ring, i), at(ring, i + 1), at(ring + 1, i + 1)});
+      tube.indices.insert(tube.indices.end(), {at(ring, i), at(ring + 1, i + 1), at(ring + 1, i)});
+    }
+  tube.submeshes = {{0, uint32_t(tube.indices.size()), 0}};
+  Mesh with_normals = tube;
+  core::computeNormals(with_normals);
+  for (const Mesh* input : {&tube, &with_normals}) {
+    const Mesh out = mesh::simplifyQuadric(*input, {.target_triangles = 1}).mesh;
+    const char* path = input == &tube ? "positions only" : "with normals";
+    const auto edges = test::edgeTriangleCounts(out);
+    size_t border = 0;
+    for (const auto& [edge, count] : edges) {
+      EXPECT_LE(count, 2) << path;
+      border += count == 1;
+    }
+    EXPECT_EQ(out.triangleCount(), 6u) << path;
+    EXPECT_EQ(border, 6u) << path;  // two loops of three
+    EXPECT_EQ(int64_t(out.vertexCount()) - int64_t(edges.size()) + int64_t(out.triangleCount()), 0)
+        << path;
   }
 }
 
