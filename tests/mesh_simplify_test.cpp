@@ -2,9 +2,8 @@
 // known: a flat grid collapses to its two corner triangles at zero error; a cube has no free
 // collapse; a UV seam keeps its discontinuity; a closed surface stays closed; a component shrinks
 // to one triangle but does not vanish; a hole shrinks to three edges but does not close; no
-// triangle turns
-// over; the same mesh at 1000x scale simplifies the same way; two runs are identical; bad input
-// never crashes.
+// triangle turns over; the same mesh at 1000x scale simplifies the same way; two runs are
+// identical; bad input never crashes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
