@@ -1112,9 +1112,9 @@ __attribute__((always_inline)) inline bool PositionSimplifier::fanFlips(const ui
 // its triangle's other two edges must not both be border edges too. Such a triangle is joined to
 // nothing across an edge: all that is left of an edge-connected component (or an ear hanging on
 // one vertex), and its collapse would remove it (WaterBottle's cap and the Avocado's skin went at
-// 0.5%, each a disc by then one triangle). The edge's endpoints' other
-// triangles (`from_fan`, `to_fan`: their other two corners) hold no edge to `opposite` exactly
-// when both those edges are border edges.
+// 0.5%, each a disc by then one triangle). The edge's endpoints' other triangles (`from_fan`,
+// `to_fan`: their other two corners) hold no edge to `opposite` exactly when both those edges
+// are border edges.
 bool isolatedTriangle(uint32_t opposite, const uint32_t* from_fan, uint32_t from_fan_size,
                       const uint32_t* to_fan, uint32_t to_fan_size) {
   for (uint32_t i = 0; i < from_fan_size; ++i)
@@ -1185,7 +1185,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
   // Link condition (Dey, Edelsbrunner et al. 1999): the common neighbours of the endpoints are
   // exactly the edge's opposite vertices; no duplicate triangle may appear (a tetrahedron
   // where (from, o1, o2) and (to, o1, o2) both exist); and a border edge's triangle may not be
-  // a component of its own (isolatedTriangle).
+  // joined to nothing across an edge (isolatedTriangle).
   bool from_has_opposite_pair = false;
   if (edge_count == 2)
     for (uint32_t i = 0; i < from_fan_size; i += 2) {
