@@ -90,6 +90,14 @@ TEST(SimplifyCluster, BadInput) {
     for (uint32_t i : result.mesh.indices) EXPECT_LT(i, result.mesh.vertexCount());
     for (Vec3 p : result.mesh.positions) EXPECT_TRUE(core::isFinite(p));
   }
+  // A box wider than a float holds (a sphere of radius near the largest float): still a grid of
+  // cells, not one cell with nothing left (found by fuzzing).
+  Mesh huge = test::icosphere(3, std::numeric_limits<float>::max() * 0.999f);
+  for (int resolution : {2, 3, 7}) {
+    auto coarse = mesh::simplifyCluster(huge, {.grid_resolution = resolution});
+    EXPECT_GT(coarse.mesh.triangleCount(), 0u) << resolution;
+    EXPECT_TRUE(core::validateMesh(coarse.mesh).ok()) << resolution;
+  }
   Mesh flat = test::gridMesh(10);  // zero extent along z
   auto result = mesh::simplifyCluster(flat, {.grid_resolution = 4});
   EXPECT_TRUE(core::validateMesh(result.mesh).ok());

@@ -643,6 +643,34 @@ TEST(SimplifyQuadricBadInput, NonFiniteAndOutOfRange) {
   }
 }
 
+// A sphere whose radius is nearly the largest float: its bounding box is wider than a float
+// holds, and an optimal placement outside the sphere lies beyond float's range. Found by fuzzing;
+// before the fix the fast path wrote ±inf positions (3 at 200 triangles, and in the record), the
+// general engine priced every edge infinite and stopped at 648 triangles, and the cluster grid
+// (see mesh_cluster_test.cpp) had one cell.
+TEST(SimplifyQuadricBadInput, CoordinatesNearTheEndOfFloatRange) {
+  const float radius = std::numeric_limits<float>::max() * 0.999f;
+  Mesh sphere = test::icosphere(3, radius);
+  Mesh with_normals = sphere;
+  core::computeNormals(with_normals);
+  for (const Mesh* input : {&sphere, &with_normals}) {  // the fast path, the general engine
+    for (size_t target : {200u, 20u}) {
+      SCOPED_TRACE(testing::Message() << (input->normals.empty() ? "positions" : "normals")
+                                      << ", target " << target);
+      auto result = mesh::simplifyQuadric(*input, {.target_triangles = target});
+      EXPECT_EQ(result.mesh.triangleCount(), target);
+      EXPECT_TRUE(core::validateMesh(result.mesh).ok());
+      for (Vec3 p : result.mesh.positions) {
+        ASSERT_TRUE(core::isFinite(p));
+        EXPECT_LE(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}), radius);
+      }
+      for (size_t steps = 0; steps <= result.record.steps.size(); steps += 7)
+        for (Vec3 p : mesh::extractMesh(result.record, steps).positions)
+          ASSERT_TRUE(core::isFinite(p)) << "after " << steps << " steps";
+    }
+  }
+}
+
 TEST(SimplifyQuadricBadInput, BrokenSubmeshesAndSingleTriangle) {
   Mesh grid = test::gridMesh(4);
   grid.submeshes = {{3, 9, 0}};  // does not tile the index buffer

@@ -49,8 +49,9 @@ SimplifyResult simplifyCluster(const core::Mesh& mesh, const ClusterOptions& opt
 
   // Grid: `resolution` cells along the longest side; cells are cubes.
   const int resolution = std::clamp(options.grid_resolution, 1, 1 << 16);
-  const core::Vec3 size = bounds.size();
-  const double longest = std::max({double(size.x), double(size.y), double(size.z)});
+  const Vec3d box = boxSize(bounds);
+  const double size[3] = {box.x, box.y, box.z};
+  const double longest = std::max({box.x, box.y, box.z});
   const double cell = longest > 0 ? longest / resolution : 1.0;
   int64_t dims[3];
   for (int k = 0; k < 3; ++k)
@@ -115,8 +116,11 @@ SimplifyResult simplifyCluster(const core::Mesh& mesh, const ClusterOptions& opt
     // Clamp into the cell so the simplified surface stays within one cell of the input.
     p = {std::clamp(p.x, lo.x, lo.x + 1), std::clamp(p.y, lo.y, lo.y + 1),
          std::clamp(p.z, lo.z, lo.z + 1)};
-    representative[c] = {float(bounds.min.x + p.x * cell), float(bounds.min.y + p.y * cell),
-                         float(bounds.min.z + p.z * cell)};
+    Vec3d at{bounds.min.x + p.x * cell, bounds.min.y + p.y * cell, bounds.min.z + p.z * cell};
+    // (The last cell may reach past the box, and past float's range near its end.)
+    clampIfBeyondFloat(at, {bounds.min.x, bounds.min.y, bounds.min.z},
+                       {bounds.max.x, bounds.max.y, bounds.max.z});
+    representative[c] = {float(at.x), float(at.y), float(at.z)};
   }
   for (size_t w = 0; w < wedges; ++w)
     if (cell_of[w] != kAbsent)

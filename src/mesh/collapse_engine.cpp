@@ -357,9 +357,9 @@ void Engine::buildState() {
     if (core::isFinite(p)) bounds.extend(p);
   if (!bounds.empty()) {
     s.origin = {bounds.min.x, bounds.min.y, bounds.min.z};
-    core::Vec3 size = bounds.size();
-    double diagonal = std::sqrt(double(size.x) * size.x + double(size.y) * size.y +
-                                double(size.z) * size.z);
+    s.box_max = {bounds.max.x, bounds.max.y, bounds.max.z};
+    const Vec3d size = boxSize(bounds);
+    const double diagonal = std::sqrt(dot(size, size));
     s.scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
   }
   const double inverse_scale = 1.0 / s.scale;
@@ -895,8 +895,10 @@ void Engine::applyCollapse(CandidateCollapse& cand, uint8_t placement) {
     s.positions[to] = s.positions[from];
     s.asset_positions[to] = s.asset_positions[from];
   } else if (placement == kAtPoint) {
-    s.positions[to] = cand.position;
     Vec3d a = s.origin + cand.position * s.scale;
+    if (clampIfBeyondFloat(a, s.origin, s.box_max))
+      cand.position = (a - s.origin) * (1.0 / s.scale);
+    s.positions[to] = cand.position;
     s.asset_positions[to] = {float(a.x), float(a.y), float(a.z)};
   }
   cand.position = s.positions[to];

@@ -53,6 +53,35 @@ inline Vec3d cross(Vec3d a, Vec3d b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
+// A bounding box's extent per axis: the float difference, as the frames have always used (so
+// outputs stay bit for bit), except where it overflows near the end of float's range (a box from
+// -3e38 to 3e38 is 6e38 wide), then the exact difference in double. With the overflow the frame's
+// scale fell back to 1, every price in float was infinite, and the cluster grid was one cell.
+inline Vec3d boxSize(const core::Bounds& box) {
+  auto extent = [](float lo, float hi) {
+    const float size = hi - lo;
+    return std::isfinite(size) ? double(size) : double(hi) - double(lo);
+  };
+  return {extent(box.min.x, box.max.x), extent(box.min.y, box.max.y),
+          extent(box.min.z, box.max.z)};
+}
+
+// A survivor's position in asset units as floats. An optimal placement may lie outside the
+// input's bounding box [lo, hi]; near the end of float's range it may lie beyond what a float
+// holds, and its ±inf would be an output no reader accepts. Such a point is clamped into the
+// box, coordinate by coordinate, and the function says so (the caller then moves the normalized
+// position with it). A point that fits is left as it is: real meshes never get here. (Found by
+// fuzzing: meshes scaled to ~3e38.)
+inline bool clampIfBeyondFloat(Vec3d& asset, Vec3d lo, Vec3d hi) {
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
+  if (std::abs(asset.x) <= kFloatMax && std::abs(asset.y) <= kFloatMax &&
+      std::abs(asset.z) <= kFloatMax)
+    return false;
+  asset = {std::clamp(asset.x, lo.x, hi.x), std::clamp(asset.y, lo.y, hi.y),
+           std::clamp(asset.z, lo.z, hi.z)};
+  return true;
+}
+
 enum class VertexKind : uint8_t { kFree, kConstrained, kLocked };
 
 // Feature bits of an edge.
@@ -77,8 +106,9 @@ struct FeatureEdge {
 // of the input has diagonal 1 (normalized = (asset - origin) / scale): everything the engine and
 // the quadric model compare is then independent of the asset's units.
 struct EngineState {
-  Vec3d origin;
+  Vec3d origin;      // the bounding box's minimum
   double scale = 1;  // asset units per normalized unit (the bounding-box diagonal)
+  Vec3d box_max;     // the bounding box's maximum
 
   // Positions.
   std::vector<Vec3d> positions;                 // current, normalized

@@ -312,8 +312,9 @@ class PositionSimplifier {
   const core::Mesh& input_;
   SimplifyOptions options_;
   uint32_t vertex_count_ = 0;
-  Vec3d origin_;
+  Vec3d origin_;  // the used vertices' bounding box: its minimum, diagonal and maximum
   double scale_ = 1;
+  Vec3d box_max_;
 
   // The working order of the vertices and triangles (prepareWorkingMesh): input_id_[v] is the
   // prepared mesh's id of working vertex v. Only the progressive record and the output order
@@ -500,9 +501,8 @@ struct MortonFrame {
 void frameOf(const core::Bounds& bounds, Vec3d& origin, double& scale) {
   if (bounds.empty()) return;
   origin = {bounds.min.x, bounds.min.y, bounds.min.z};
-  const core::Vec3 size = bounds.size();
-  const double diagonal =
-      std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
+  const Vec3d size = boxSize(bounds);
+  const double diagonal = std::sqrt(dot(size, size));
   scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
 }
 
@@ -632,9 +632,8 @@ void PositionSimplifier::prepareWorkingMesh() {
   frameOf(bounds, origin_, scale_);
   const double inverse_scale = 1.0 / scale_;
   if (!bounds.empty()) {
-    const core::Vec3 size = bounds.size();
-    centre_ = {0.5 * size.x * inverse_scale, 0.5 * size.y * inverse_scale,
-               0.5 * size.z * inverse_scale};
+    box_max_ = {bounds.max.x, bounds.max.y, bounds.max.z};
+    centre_ = boxSize(bounds) * (0.5 * inverse_scale);
   }
 
   // Working ids: Morton order in the used vertices' frame on large meshes (the weld's order when
@@ -1265,13 +1264,14 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   addQuadric(quadrics_[to], quadrics_[from]);
   const Vec3d at_to = vertices_[to].position, at_from = vertices_[from].position;
   if (position.x != at_to.x || position.y != at_to.y || position.z != at_to.z) {
-    vertices_[to].position = position;
     if (position.x == at_from.x && position.y == at_from.y && position.z == at_from.z) {
       asset_positions_[to] = asset_positions_[from];
     } else {
-      const Vec3d a = origin_ + position * scale_;
+      Vec3d a = origin_ + position * scale_;
+      if (clampIfBeyondFloat(a, origin_, box_max_)) position = (a - origin_) * (1.0 / scale_);
       asset_positions_[to] = {float(a.x), float(a.y), float(a.z)};
     }
+    vertices_[to].position = position;
   }
   if (!greedy_) pricing_[to] = pricingRecord(quadrics_[to], vertices_[to].position, centre_);
   // A border collapse: from's other border neighbour now borders on `to`.
