@@ -331,6 +331,22 @@ TEST(BoundingSphere, ContainsEveryPointOfARandomCloud) {
     EXPECT_LE(core::length(p - sphere.center), sphere.radius * (1 + 1e-6f));
 }
 
+// Float's squared distances overflow beyond ~1e19: the unit cube's corners scaled by 1e20 and by
+// 1e38 still get the cube's sphere, scaled (the radius was infinite: found by fuzzing). Below that
+// the sphere is computed in float, as before.
+TEST(BoundingSphere, HugeCoordinates) {
+  for (float scale : {1e20f, 1e38f}) {
+    Mesh mesh;
+    for (int i = 0; i < 8; ++i)
+      mesh.positions.push_back(
+          Vec3{float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)} * scale);
+    core::Sphere sphere = core::computeBoundingSphere(mesh);
+    ASSERT_TRUE(std::isfinite(sphere.radius)) << scale;
+    EXPECT_NEAR(sphere.radius / scale, std::sqrt(3.0f) / 2, 0.01f) << scale;
+    EXPECT_NEAR(sphere.center.x / scale, 0.5f, 0.01f) << scale;
+  }
+}
+
 TEST(BoundingSphere, EmptyMeshHasZeroRadius) {
   EXPECT_EQ(core::computeBoundingSphere(Mesh{}).radius, 0.0f);
 }

@@ -76,36 +76,64 @@ Bounds computeBounds(const Mesh& mesh) {
   return b;
 }
 
+namespace {
+
 // Ritter (1990): start from a far pair, grow to include outliers; then a second pass shrinks the
-// slack a little by re-centering on the box centre when that is tighter.
-Sphere computeBoundingSphere(const Mesh& mesh) {
-  if (mesh.positions.empty()) return {};
-  const auto& p = mesh.positions;
-  auto farthest = [&](Vec3 from) {
-    size_t best = 0;
-    float best_d = -1;
-    for (size_t i = 0; i < p.size(); ++i) {
-      float d = dot(p[i] - from, p[i] - from);
-      if (d > best_d) best_d = d, best = i;
-    }
-    return p[best];
+// slack a little by re-centering on the box centre when that is tighter. In scalar T: float, or
+// double where float's squared distances overflow (coordinates beyond ~1e19). The operations are
+// those of Vec3's, in the same order, so the float sphere is what it always was.
+template <class T>
+Sphere ritterSphere(const std::vector<Vec3>& points, const Bounds& box) {
+  struct P {
+    T x, y, z;
+    P operator+(P b) const { return {x + b.x, y + b.y, z + b.z}; }
+    P operator-(P b) const { return {x - b.x, y - b.y, z - b.z}; }
+    P operator*(T s) const { return {x * s, y * s, z * s}; }
+    T length() const { return std::sqrt(x * x + y * y + z * z); }
   };
-  Vec3 a = farthest(p[0]);
-  Vec3 b = farthest(a);
-  Sphere s{(a + b) * 0.5f, length(b - a) * 0.5f};
-  for (Vec3 q : p) {
-    float d = length(q - s.center);
-    if (d > s.radius) {
-      float new_radius = (s.radius + d) * 0.5f;
-      s.center = s.center + (q - s.center) * ((new_radius - s.radius) / d);
-      s.radius = new_radius;
+  auto at = [&](size_t i) { return P{T(points[i].x), T(points[i].y), T(points[i].z)}; };
+  auto farthest = [&](P from) {
+    size_t best = 0;
+    T best_d = -1;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const P d = at(i) - from;
+      const T d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+      if (d2 > best_d) best_d = d2, best = i;
+    }
+    return at(best);
+  };
+  const P a = farthest(at(0));
+  const P b = farthest(a);
+  P center = (a + b) * T(0.5);
+  T radius = (b - a).length() * T(0.5);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const P q = at(i);
+    const T d = (q - center).length();
+    if (d > radius) {
+      const T new_radius = (radius + d) * T(0.5);
+      center = center + (q - center) * ((new_radius - radius) / d);
+      radius = new_radius;
     }
   }
-  Vec3 box_center = computeBounds(mesh).center();
-  float box_radius = 0;
-  for (Vec3 q : p) box_radius = std::max(box_radius, length(q - box_center));
-  if (box_radius < s.radius) s = {box_center, box_radius};
-  return s;
+  const P box_center = (P{T(box.min.x), T(box.min.y), T(box.min.z)} +
+                        P{T(box.max.x), T(box.max.y), T(box.max.z)}) *
+                       T(0.5);
+  T box_radius = 0;
+  for (size_t i = 0; i < points.size(); ++i)
+    box_radius = std::max(box_radius, (at(i) - box_center).length());
+  if (box_radius < radius) center = box_center, radius = box_radius;
+  return {{float(center.x), float(center.y), float(center.z)}, float(radius)};
+}
+
+}  // namespace
+
+Sphere computeBoundingSphere(const Mesh& mesh) {
+  if (mesh.positions.empty()) return {};
+  const Bounds box = computeBounds(mesh);
+  const Sphere sphere = ritterSphere<float>(mesh.positions, box);
+  if (std::isfinite(sphere.radius) && isFinite(sphere.center)) return sphere;
+  // (Found by fuzzing: a mesh 1e20 wide had an infinite radius, which every camera is placed by.)
+  return ritterSphere<double>(mesh.positions, box);
 }
 
 void computeNormals(Mesh& mesh) {
