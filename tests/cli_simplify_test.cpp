@@ -196,8 +196,8 @@ TEST(CliSimplify, RefusesToOverwriteItsInput) {
   EXPECT_EQ(test::readText(sphere), before);
 }
 
-// Each bad combination fails before any work with a message naming the problem, and writes
-// nothing.
+// Each bad combination fails with a message naming the problem (before any work, but for a
+// result with no triangles), and writes nothing.
 TEST(CliSimplify, BadFlagsFailWithAMessage) {
   fs::path dir = test::scratchDir("flags");
   std::string sphere = writeSphere(dir);
@@ -222,6 +222,8 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
       {{"--mode", "cluster", "--ratio", "0.5", "--grid", "8"}, "cluster mode: give exactly one"},
       {{"--mode", "cluster", "--grid", "8", "--lock-border"}, "--lock-border"},
       {{"--mode", "cluster", "--grid", "0"}, "--grid must be at least 1"},
+      // One cell holds the whole sphere: no triangle is left, and no empty file is written.
+      {{"--mode", "cluster", "--grid", "1"}, "the result has no triangles (grid 1"},
       {{"--mode", "image", "--pixels", "32", "--ratio", "0.5", "--placement", "optimal"},
        "--placement applies to --mode quadric"},
       {{"--mode", "fancy", "--ratio", "0.5"}, "fancy"},

@@ -559,6 +559,14 @@ int runSimplify(SimplifyFlags& flags) {
               input_triangles ? 100.0 * double(output_triangles) / double(input_triangles) : 0.0,
               simplify_seconds, detail.c_str());
 
+  // A result with no triangles is no mesh: no reader (ours included) takes such a file, so it is
+  // not written. Only the cluster mode gets here (a grid so coarse that every triangle has two
+  // corners in one cell); the collapse modes keep at least one triangle per part.
+  if (output_triangles == 0 && input_triangles > 0)
+    return fail("the result has no triangles (" + detail.substr(0, detail.find(',')) +
+                ": every triangle has two corners in one cell); nothing written. Use a finer "
+                "--grid or a larger target");
+
   // The output keeps the input's materials and textures (and its source path, so that the writers
   // refuse to replace the input or the files beside it).
   core::Asset output = *asset;
