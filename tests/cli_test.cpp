@@ -95,6 +95,21 @@ TEST(Cli, InfoOnMissingAndGarbageFiles) {
   }
 }
 
+// A loader's warning names its file once: the OBJ and PLY readers' own warnings carry the path
+// (and line), the others get it from the CLI (the path was printed twice before).
+TEST(Cli, WarningsNameTheFileOnce) {
+  fs::path dir = test::scratchDir("warn");
+  const std::string path = (dir / "quad.obj").string();
+  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl missing\nf 1 2 3\nf 1 3 4\n"
+                         "f 1 1 2\n";
+  test::CommandRun info = runCli({"info", path});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_TRUE(test::contains(info.err, "duolod: warning: " + path + ":5: material 'missing'"))
+      << info.err;  // the reader's own, with its line
+  EXPECT_TRUE(test::contains(info.err, "duolod: warning: " + path + ": 1 degenerate")) << info.err;
+  EXPECT_FALSE(test::contains(info.err, path + ": " + path)) << info.err;
+}
+
 TEST(Cli, RenderOneViewOfWaterBottle) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
   fs::path dir = test::scratchDir("render");

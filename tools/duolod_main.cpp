@@ -117,8 +117,12 @@ core::Result<core::Asset> loadWithWarnings(const std::string& path,
                                            const io::LoadOptions& options = {}) {
   auto asset = io::loadAsset(path, options);
   if (asset)
-    for (const std::string& warning : asset->warnings)
-      std::fprintf(stderr, "duolod: warning: %s: %s\n", path.c_str(), warning.c_str());
+    for (const std::string& warning : asset->warnings) {
+      // The OBJ and PLY readers' warnings name the file (and line) already: no second path.
+      const bool names_the_file = warning.starts_with(path + ":");
+      std::fprintf(stderr, "duolod: warning: %s%s%s\n", names_the_file ? "" : path.c_str(),
+                   names_the_file ? "" : ": ", warning.c_str());
+    }
   return asset;
 }
 
