@@ -176,6 +176,24 @@ TEST(CliSimplify, QuadricSpotToTenPercentWritesAValidGlb) {
 }
 
 // Works on a scratch copy, so that a regression cannot overwrite a shared asset.
+// A target below what the rules allow is reported with the reason: here a square of two
+// triangles whose every vertex is on its locked border has no candidate edge at all, so no
+// collapse was refused either.
+TEST(CliSimplify, UnreachableTargetSaysWhy) {
+  fs::path dir = test::scratchDir("unreachable");
+  const std::string square = (dir / "square.obj").string();
+  std::ofstream(square) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const std::string out = (dir / "out.glb").string();
+  test::CommandRun run = runCli({"simplify", square, out, "--triangles", "1", "--lock-border"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(test::contains(lineStarting(run.out, "simplify"),
+                             "target 1 not reached (no edge may collapse"))
+      << run.out;
+  auto output = io::loadAsset(out);
+  ASSERT_TRUE(output) << output.error().message;
+  EXPECT_EQ(output->mesh.triangleCount(), 2u);
+}
+
 TEST(CliSimplify, RefusesToOverwriteItsInput) {
   fs::path dir = test::scratchDir("input");
   std::string sphere = writeSphere(dir);

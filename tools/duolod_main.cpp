@@ -551,11 +551,19 @@ int runSimplify(SimplifyFlags& flags) {
   const size_t output_triangles = result.mesh.triangleCount();
   if (target_triangles > 0 && output_triangles > target_triangles) {
     const mesh::SimplifyStats& s = result.stats;
-    std::snprintf(text, sizeof text,
-                  "; target %zu not reached (refused collapses: %zu topology, %zu flip, %zu "
-                  "border, %zu longer than 1 pixel)",
-                  target_triangles, s.rejected_topology, s.rejected_flip, s.rejected_border,
-                  image_stats.rejected_long_edges);
+    const size_t refused = s.rejected_topology + s.rejected_flip + s.rejected_border +
+                           image_stats.rejected_long_edges;
+    if (refused == 0)  // no edge was a candidate at all (a cube's corners, say)
+      std::snprintf(text, sizeof text,
+                    "; target %zu not reached (no edge may collapse: every vertex left is a "
+                    "corner of feature lines, seams, material or locked borders)",
+                    target_triangles);
+    else
+      std::snprintf(text, sizeof text,
+                    "; target %zu not reached (refused collapses: %zu topology, %zu flip, %zu "
+                    "border, %zu longer than 1 pixel)",
+                    target_triangles, s.rejected_topology, s.rejected_flip, s.rejected_border,
+                    image_stats.rejected_long_edges);
     detail += text;
   }
   std::printf("simplify  %s: %zu -> %zu triangles (%.1f%%), %.3f s, %s\n", flags.mode.c_str(),
