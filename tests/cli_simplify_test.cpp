@@ -243,7 +243,9 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
       // One cell holds the whole sphere: no triangle is left, and no empty file is written.
       {{"--mode", "cluster", "--grid", "1"}, "the result has no triangles (grid 1"},
       {{"--mode", "image", "--pixels", "32", "--ratio", "0.5", "--placement", "optimal"},
-       "--placement applies to --mode quadric"},
+       "--placement applies to --mode quadric only (image mode"},
+      {{"--mode", "cluster", "--grid", "4", "--placement", "endpoint"},
+       "--placement applies to --mode quadric only (cluster mode"},
       {{"--mode", "fancy", "--ratio", "0.5"}, "fancy"},
       {{"--placement", "middle", "--ratio", "0.5"}, "middle"},
       {{"--ratio", "half"}, "--ratio"},

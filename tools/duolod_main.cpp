@@ -387,9 +387,11 @@ struct SimplifyFlags {
       return core::Error{"--error must be a finite number >= 0"};
     if (given(grid_option) && grid < 1) return core::Error{"--grid must be at least 1"};
     if (given(placement_option) && mode != "quadric")
-      return core::Error{
-          "--placement applies to --mode quadric only (image mode always places at "
-          "an endpoint)"};
+      return core::Error{mode == "image"
+                             ? "--placement applies to --mode quadric only (image mode always "
+                               "places at an endpoint)"
+                             : "--placement applies to --mode quadric only (cluster mode places "
+                               "one vertex per cell)"};
     if (lock_border && mode == "cluster")
       return core::Error{"--lock-border does not apply to --mode cluster"};
     if (shading.distance < 0 || shading.pixels < 0)
