@@ -123,6 +123,39 @@ Mesh unsharedQuad() {
   return mesh;
 }
 
+// Normals, tangents and the degenerate test do not depend on the scale: a folded, uneven patch
+// scaled by 2^-40 (edges ~1e-13) or 2^40 (~1e12) gets the same normals and tangents bit for bit
+// and loses no triangle. (In float, the cross products' squares underflowed below edges of ~1e-11:
+// triangles were dropped as degenerate and normals were (0,0,1); above ~4e9 they overflowed.)
+TEST(ComputeNormals, ScaleByPowersOfTwoChangesNothing) {
+  Mesh unit;
+  unit.positions = {{0, 0, 0}, {1, 0, 0.2f}, {0.1f, 1, 0.3f}, {1.2f, 1.1f, -0.4f}, {0.5f, 2, 0.9f}};
+  unit.indices = {0, 1, 2, 1, 3, 2, 2, 3, 4};
+  unit.submeshes = {{0, 9, 0}};
+  for (Vec3 p : unit.positions) unit.uv0.push_back({p.x * 0.7f, p.y + 0.1f * p.z});
+  auto prepared = [](Mesh mesh) {
+    EXPECT_EQ(core::removeDegenerateTriangles(mesh), 0u);
+    core::computeNormals(mesh);
+    core::computeTangents(mesh);
+    return mesh;
+  };
+  const Mesh reference = prepared(unit);
+  for (float scale : {std::ldexp(1.0f, -40), std::ldexp(1.0f, 40)}) {
+    SCOPED_TRACE(scale);
+    Mesh scaled = unit;
+    for (Vec3& p : scaled.positions) p = p * scale;
+    const Mesh result = prepared(scaled);
+    ASSERT_EQ(result.indices, reference.indices);
+    for (size_t v = 0; v < unit.vertexCount(); ++v) {
+      EXPECT_EQ(result.normals[v].x, reference.normals[v].x) << v;
+      EXPECT_EQ(result.normals[v].y, reference.normals[v].y) << v;
+      EXPECT_EQ(result.normals[v].z, reference.normals[v].z) << v;
+      EXPECT_EQ(result.tangents[v].x, reference.tangents[v].x) << v;
+      EXPECT_EQ(result.tangents[v].w, reference.tangents[v].w) << v;
+    }
+  }
+}
+
 TEST(WeldVertices, MergesExactDuplicatesAndRemapsIndices) {
   Mesh mesh = unsharedQuad();
   EXPECT_EQ(core::weldVertices(mesh), 2u);

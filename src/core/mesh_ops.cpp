@@ -2,6 +2,7 @@
 // (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998), tangents in the
 // MikkTSpace convention (Mikkelsen, "Simulation of wrinkled surfaces revisited", 2008), welding.
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -12,10 +13,33 @@
 namespace duolod::core {
 namespace {
 
-float cornerAngle(Vec3 a, Vec3 b, Vec3 c) {  // angle at a in triangle (a, b, c)
-  Vec3 u = normalize(b - a), v = normalize(c - a);
-  float cosine = std::clamp(dot(u, v), -1.0f, 1.0f);
+float angleBetween(Vec3 u, Vec3 v) {
+  float cosine = std::clamp(dot(normalize(u), normalize(v)), -1.0f, 1.0f);
   return std::acos(cosine);
+}
+
+// A triangle's edge vectors p1 - p0, p2 - p0 and p2 - p1, scaled by a power of two so that their
+// largest component is in [0.5, 1). Cross products, lengths and unit vectors of them do not
+// underflow for tiny triangles (edges below ~1e-11: float's squares vanish, and the triangle was
+// taken for degenerate) nor overflow for huge ones; at ordinary scales the scaling is exact, so
+// unit vectors and zero tests come out bit for bit as from the raw edges.
+struct TriangleEdges {
+  Vec3 e01, e02, e12;
+};
+TriangleEdges scaledEdges(Vec3 p0, Vec3 p1, Vec3 p2) {
+  TriangleEdges e{p1 - p0, p2 - p0, p2 - p1};
+  float largest = 0;
+  for (Vec3 d : {e.e01, e.e02, e.e12})
+    largest = std::max({largest, std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+  if (!(largest > 0) || !std::isfinite(largest)) return e;
+  int exponent = 0;
+  std::frexp(largest, &exponent);
+  const float scale = std::ldexp(1.0f, -exponent);
+  return {e.e01 * scale, e.e02 * scale, e.e12 * scale};
+}
+// The triangle's angles at p0, p1 and p2.
+std::array<float, 3> cornerAngles(const TriangleEdges& e) {
+  return {angleBetween(e.e01, e.e02), angleBetween(e.e12, -e.e01), angleBetween(-e.e02, -e.e12)};
 }
 
 template <class T>
@@ -140,11 +164,12 @@ void computeNormals(Mesh& mesh) {
   mesh.normals.assign(mesh.vertexCount(), Vec3{});
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     uint32_t i[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
-    Vec3 p[3] = {mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]};
-    Vec3 face = normalize(cross(p[1] - p[0], p[2] - p[0]));
+    const TriangleEdges e =
+        scaledEdges(mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]);
+    Vec3 face = normalize(cross(e.e01, e.e02));
     if (length(face) == 0) continue;
-    for (int k = 0; k < 3; ++k)
-      mesh.normals[i[k]] += face * cornerAngle(p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+    const std::array<float, 3> angle = cornerAngles(e);
+    for (int k = 0; k < 3; ++k) mesh.normals[i[k]] += face * angle[k];
   }
   // Vertices that share a position (split only by a UV or colour seam) share one normal: a
   // texture seam must not become a shading crease.
@@ -184,9 +209,10 @@ void computeTangents(Mesh& mesh) {
   std::vector<Vec3> tangent_sum(n), bitangent_sum(n);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     uint32_t i[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
-    Vec3 p[3] = {mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]};
     Vec2 w[3] = {mesh.uv0[i[0]], mesh.uv0[i[1]], mesh.uv0[i[2]]};
-    Vec3 e1 = p[1] - p[0], e2 = p[2] - p[0];
+    const TriangleEdges e =
+        scaledEdges(mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]);
+    const Vec3 e1 = e.e01, e2 = e.e02;
     float du1 = w[1].x - w[0].x, dv1 = w[1].y - w[0].y;
     float du2 = w[2].x - w[0].x, dv2 = w[2].y - w[0].y;
     float det = du1 * dv2 - du2 * dv1;
@@ -198,10 +224,10 @@ void computeTangents(Mesh& mesh) {
     // do not dominate (as MikkTSpace does).
     tangent = normalize(tangent);
     bitangent = normalize(bitangent);
+    const std::array<float, 3> angle = cornerAngles(e);
     for (int k = 0; k < 3; ++k) {
-      float angle = cornerAngle(p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
-      tangent_sum[i[k]] += tangent * angle;
-      bitangent_sum[i[k]] += bitangent * angle;
+      tangent_sum[i[k]] += tangent * angle[k];
+      bitangent_sum[i[k]] += bitangent * angle[k];
     }
   }
   mesh.tangents.resize(n);
@@ -293,8 +319,8 @@ size_t removeDegenerateTriangles(Mesh& mesh) {
     uint32_t first = static_cast<uint32_t>(kept.size());
     for (uint32_t t = sub.first_index; t + 2 < sub.first_index + sub.index_count; t += 3) {
       uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
-      Vec3 pa = mesh.positions[a], pb = mesh.positions[b], pc = mesh.positions[c];
-      if (a == b || b == c || a == c || length(cross(pb - pa, pc - pa)) == 0) {
+      const TriangleEdges e = scaledEdges(mesh.positions[a], mesh.positions[b], mesh.positions[c]);
+      if (a == b || b == c || a == c || length(cross(e.e01, e.e02)) == 0) {
         ++removed;
         continue;
       }
