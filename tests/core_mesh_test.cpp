@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "duolod/core.hpp"
@@ -151,9 +152,24 @@ TEST(ComputeNormals, ScaleByPowersOfTwoChangesNothing) {
       EXPECT_EQ(result.normals[v].y, reference.normals[v].y) << v;
       EXPECT_EQ(result.normals[v].z, reference.normals[v].z) << v;
       EXPECT_EQ(result.tangents[v].x, reference.tangents[v].x) << v;
+      EXPECT_EQ(result.tangents[v].y, reference.tangents[v].y) << v;
+      EXPECT_EQ(result.tangents[v].z, reference.tangents[v].z) << v;
       EXPECT_EQ(result.tangents[v].w, reference.tangents[v].w) << v;
     }
   }
+}
+
+// A degenerate triangle stays degenerate when it is subnormally small (its scale to unit size
+// would overflow a float, and 0 * inf is NaN, which no zero test catches), and a proper one that
+// small is kept.
+TEST(RemoveDegenerateTriangles, SubnormalTriangles) {
+  const float tiny = std::numeric_limits<float>::denorm_min() * 64;
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {tiny, 0, 0}, {2 * tiny, 0, 0}, {0, tiny, 0}};
+  mesh.indices = {0, 1, 2, 0, 1, 3};  // collinear, then proper
+  mesh.submeshes = {{0, 6, 0}};
+  EXPECT_EQ(core::removeDegenerateTriangles(mesh), 1u);
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 3}));
 }
 
 TEST(WeldVertices, MergesExactDuplicatesAndRemapsIndices) {

@@ -97,6 +97,7 @@ TEST(SimplifyCluster, BadInput) {
     auto coarse = mesh::simplifyCluster(huge, {.grid_resolution = resolution});
     EXPECT_GT(coarse.mesh.triangleCount(), 0u) << resolution;
     EXPECT_TRUE(core::validateMesh(coarse.mesh).ok()) << resolution;
+    EXPECT_TRUE(std::isfinite(coarse.error)) << resolution;  // the largest move, in double
   }
   Mesh flat = test::gridMesh(10);  // zero extent along z
   auto result = mesh::simplifyCluster(flat, {.grid_resolution = 4});

@@ -554,7 +554,7 @@ int runSimplify(SimplifyFlags& flags) {
   if (target_triangles > 0 && output_triangles > target_triangles) {
     const mesh::SimplifyStats& s = result.stats;
     const size_t refused = s.rejected_topology + s.rejected_flip + s.rejected_border +
-                           image_stats.rejected_long_edges;
+                           image_stats.rejected_long_edges + image_stats.rejected_wide_regions;
     if (refused == 0)  // no edge was a candidate at all (a cube's corners, say)
       std::snprintf(text, sizeof text,
                     "; target %zu not reached (no edge may collapse: every vertex left is a "
@@ -563,9 +563,9 @@ int runSimplify(SimplifyFlags& flags) {
     else
       std::snprintf(text, sizeof text,
                     "; target %zu not reached (refused collapses: %zu topology, %zu flip, %zu "
-                    "border, %zu longer than 1 pixel)",
+                    "border, %zu longer than 1 pixel, %zu wider than a tile)",
                     target_triangles, s.rejected_topology, s.rejected_flip, s.rejected_border,
-                    image_stats.rejected_long_edges);
+                    image_stats.rejected_long_edges, image_stats.rejected_wide_regions);
     detail += text;
   }
   std::printf("simplify  %s: %zu -> %zu triangles (%.1f%%), %.3f s, %s\n", flags.mode.c_str(),

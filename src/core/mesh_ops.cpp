@@ -34,7 +34,9 @@ TriangleEdges scaledEdges(Vec3 p0, Vec3 p1, Vec3 p2) {
   if (!(largest > 0) || !std::isfinite(largest)) return e;
   int exponent = 0;
   std::frexp(largest, &exponent);
-  const float scale = std::ldexp(1.0f, -exponent);
+  // (At most 2^125: the scale of a subnormal triangle must stay finite, or 0 * inf = NaN would
+  // keep a degenerate one.)
+  const float scale = std::ldexp(1.0f, -std::max(exponent, -125));
   return {e.e01 * scale, e.e02 * scale, e.e12 * scale};
 }
 // The triangle's angles at p0, p1 and p2.

@@ -123,8 +123,15 @@ SimplifyResult simplifyCluster(const core::Mesh& mesh, const ClusterOptions& opt
     representative[c] = {float(at.x), float(at.y), float(at.z)};
   }
   for (size_t w = 0; w < wedges; ++w)
-    if (cell_of[w] != kAbsent)
-      max_move = std::max(max_move, double(core::length(base.positions[w] - representative[cell_of[w]])));
+    if (cell_of[w] != kAbsent) {
+      const core::Vec3 p = base.positions[w], r = representative[cell_of[w]];
+      double move = core::length(p - r);
+      if (!std::isfinite(move)) {  // float's squares overflow beyond ~1e19: the same in double
+        const Vec3d d{double(p.x) - r.x, double(p.y) - r.y, double(p.z) - r.z};
+        move = std::sqrt(dot(d, d));
+      }
+      max_move = std::max(max_move, move);
+    }
 
   // Clusters: per cell, or per (cell, attribute region) when seams are kept.
   std::vector<uint32_t> parent(wedges);
