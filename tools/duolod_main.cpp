@@ -597,7 +597,10 @@ int runSimplify(SimplifyFlags& flags) {
 
   start = std::chrono::steady_clock::now();
   mesh::SurfaceDistance distances = mesh::surfaceDistance(input, output.mesh);
-  const double diagonal = core::length(core::computeBounds(input).size());
+  // (In double: float's squares vanish for an asset ~1e-20 wide, and the diagonal read 0.)
+  const core::Vec3 size = core::computeBounds(input).size();
+  const double diagonal =
+      std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
   const double percent = diagonal > 0 ? 100.0 / diagonal : 0.0;
   // Where the Hausdorff distance is attained: on the input (detail lost) or on the output (it
   // left the surface).
