@@ -92,6 +92,53 @@ TEST_F(RendererTest, SquareCoversKnownPixelsWithConstantColour) {
   renderer_->releaseAsset(*asset);
 }
 
+// Coverage of the square scaled by `scale` with the camera scaled along (the same picture).
+// Returns -1 and the message when the render is refused.
+int scaledSquareCoverage(render::Renderer& renderer, render::Renderer::ProgramId program,
+                         float scale, std::string& message) {
+  core::Asset asset = squareAsset({1, 1, 1, 1});
+  for (Vec3& p : asset.mesh.positions) p = p * scale;
+  auto id = renderer.uploadAsset(asset);
+  if (!id) return message = id.error().message, -1;
+  render::Sample sample = frontSample(4.0f * scale);
+  sample.projection =
+      core::perspective(2 * std::atan(0.5f), 1.0f, 0.1f * scale, 100.0f * scale);
+  auto batch = renderer.render(*id, program, std::span(&sample, 1), {.resolution = 64});
+  renderer.releaseAsset(*id);
+  if (!batch) return message = batch.error().message, -1;
+  int covered = 0;
+  for (int p = 0; p < 64 * 64; ++p) covered += batch->tile(0)[p * 4 + 3] != 0;
+  return covered;
+}
+
+// 32-bit shading squares distances: far beyond 1e18 units the image came out empty without a
+// word (an asset 1e20 across, even with the constant shader). Such requests are refused with a
+// message; large but representable scenes still render the same picture as at unit scale.
+TEST_F(RendererTest, HugeCoordinatesAreRefusedWithAReason) {
+  std::string message;
+  const int unit = scaledSquareCoverage(*renderer_, constant_program_, 1.0f, message);
+  EXPECT_EQ(unit, 32 * 32) << message;
+  for (float scale : {1e-10f, 1e10f, 1e17f})
+    EXPECT_EQ(scaledSquareCoverage(*renderer_, constant_program_, scale, message), unit)
+        << "scale " << scale << ": " << message;
+  for (float scale : {1e19f, 1e20f, 1e30f}) {
+    message.clear();
+    EXPECT_EQ(scaledSquareCoverage(*renderer_, constant_program_, scale, message), -1)
+        << "scale " << scale;
+    EXPECT_NE(message.find("scale the asset down"), std::string::npos) << message;
+  }
+  // A small asset seen from too far away: the camera is named.
+  core::Asset square = squareAsset({1, 1, 1, 1});
+  auto id = renderer_->uploadAsset(square);
+  ASSERT_TRUE(id);
+  render::Sample far = frontSample(1e20f);
+  auto batch = renderer_->render(*id, constant_program_, std::span(&far, 1), {.resolution = 16});
+  ASSERT_FALSE(batch);
+  EXPECT_NE(batch.error().message.find("sample 0's camera"), std::string::npos)
+      << batch.error().message;
+  renderer_->releaseAsset(*id);
+}
+
 TEST_F(RendererTest, SupersampledReferenceHasFractionalEdgeCoverage) {
   auto asset = renderer_->uploadAsset(squareAsset({1, 1, 1, 1}));
   ASSERT_TRUE(asset);

@@ -206,7 +206,7 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   core::ImageRGBA8 image;
   if (supersample > 1) {
     auto batch = renderer.renderReference(*asset_id, session->program, chosen, options, &stats);
-    if (!batch) return fail(batch.error().message);
+    if (!batch) return fail(path + ": " + batch.error().message);
     render::ImageBatch8 converted{batch->width, batch->height, batch->count, {}};
     for (int i = 0; i < batch->count; ++i) {
       core::ImageRGBA8 tile = render::tileImage(*batch, i);
@@ -215,7 +215,7 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
     image = view >= 0 ? render::tileImage(converted, 0) : render::contactSheet(converted, 5);
   } else {
     auto batch = renderer.render(*asset_id, session->program, chosen, options, &stats);
-    if (!batch) return fail(batch.error().message);
+    if (!batch) return fail(path + ": " + batch.error().message);
     image = view >= 0 ? render::tileImage(*batch, 0) : render::contactSheet(*batch, 5);
   }
   if (auto written = io::writePng(image, out); !written) return fail(written.error().message);

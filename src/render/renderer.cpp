@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <optional>
@@ -511,6 +512,37 @@ core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
   if (options.resolution * options.supersample > s.max_size)
     return Error{"render: a " + std::to_string(options.resolution * options.supersample) +
                  "-pixel tile exceeds the device's " + std::to_string(s.max_size) + " limit"};
+  // The shaders measure distances in 32-bit floats (normalize, length and dot of eye − position,
+  // light − position), whose squares overflow above ~1.8e19: beyond that every shader's lighting
+  // and llvmpipe's clipping go to inf or NaN and the image comes out empty (an asset 1e20 units
+  // across did, with the constant shader too). A clear refusal instead, with room to spare.
+  auto too_far = [](core::Vec3 p) {
+    const float largest = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+    return !(largest <= kLargestRenderableCoordinate);  // NaN too
+  };
+  auto refuse = [](const std::string& what, core::Vec3 p) {
+    const float largest = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+    char reach[32];
+    std::snprintf(reach, sizeof reach, "%.3g", double(largest));
+    return Error{"render: " + what + " reaches " + reach + " units from the origin; the GPU's " +
+                 "32-bit shading squares distances, which overflow above ~1.8e19, so renders " +
+                 "stop at 4e18: scale the asset down (e.g. to metres)"};
+  };
+  const core::Sphere& bounds = s.assets[asset]->bounds;
+  const float r = bounds.radius;
+  const core::Vec3 reach{std::fabs(bounds.center.x) + r, std::fabs(bounds.center.y) + r,
+                         std::fabs(bounds.center.z) + r};
+  if (too_far(reach)) return refuse("the asset's bounding sphere", reach);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& sample = samples[i];
+    const core::Vec3 offset{sample.placement.at(0, 3), sample.placement.at(1, 3),
+                            sample.placement.at(2, 3)};
+    if (too_far(sample.eye)) return refuse("sample " + std::to_string(i) + "'s camera", sample.eye);
+    if (too_far(sample.light))
+      return refuse("sample " + std::to_string(i) + "'s light", sample.light);
+    if (too_far(offset))
+      return refuse("sample " + std::to_string(i) + "'s placement", offset);
+  }
   return core::okStatus();
 }
 
