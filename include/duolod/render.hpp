@@ -56,12 +56,12 @@ struct Display {
   int height_px = 1080;
 };
 
-// One camera × light configuration.
 // The largest coordinate (asset, camera, light or placement, in asset units) a render accepts:
 // the shaders square distances in 32-bit floats, which overflow above ~1.8e19. Larger requests
 // fail with a message instead of an empty image.
 constexpr float kLargestRenderableCoordinate = 4e18f;
 
+// One camera × light configuration.
 struct Sample {
   int view_index = 0;
   int light_index = 0;

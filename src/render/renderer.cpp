@@ -516,32 +516,33 @@ core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
   // light − position), whose squares overflow above ~1.8e19: beyond that every shader's lighting
   // and llvmpipe's clipping go to inf or NaN and the image comes out empty (an asset 1e20 units
   // across did, with the constant shader too). A clear refusal instead, with room to spare.
-  auto too_far = [](core::Vec3 p) {
-    const float largest = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-    return !(largest <= kLargestRenderableCoordinate);  // NaN too
+  auto largest = [](core::Vec3 p) {
+    return std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
   };
-  auto refuse = [](const std::string& what, core::Vec3 p) {
-    const float largest = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-    char reach[32];
-    std::snprintf(reach, sizeof reach, "%.3g", double(largest));
-    return Error{"render: " + what + " reaches " + reach + " units from the origin; the GPU's " +
-                 "32-bit shading squares distances, which overflow above ~1.8e19, so renders " +
-                 "stop at 4e18: scale the asset down (e.g. to metres)"};
+  // The first of `what` that reaches too far (NaN counts), or none.
+  auto refusal = [&](const std::string& what, core::Vec3 p) -> std::optional<Error> {
+    const float reach = largest(p);
+    if (reach <= kLargestRenderableCoordinate) return std::nullopt;
+    char figures[64];
+    std::snprintf(figures, sizeof figures, "%.3g units from the origin; renders stop at %.3g",
+                  double(reach), double(kLargestRenderableCoordinate));
+    return Error{"render: " + what + " reaches " + figures + " (the GPU's 32-bit shading " +
+                 "squares distances, which overflow above ~1.8e19): scale the asset down " +
+                 "(e.g. to metres)"};
   };
   const core::Sphere& bounds = s.assets[asset]->bounds;
   const float r = bounds.radius;
-  const core::Vec3 reach{std::fabs(bounds.center.x) + r, std::fabs(bounds.center.y) + r,
-                         std::fabs(bounds.center.z) + r};
-  if (too_far(reach)) return refuse("the asset's bounding sphere", reach);
+  const core::Vec3 sphere_reach{std::fabs(bounds.center.x) + r, std::fabs(bounds.center.y) + r,
+                                std::fabs(bounds.center.z) + r};
+  if (auto refused = refusal("the asset's bounding sphere", sphere_reach)) return *refused;
   for (size_t i = 0; i < samples.size(); ++i) {
     const Sample& sample = samples[i];
+    const std::string name = "sample " + std::to_string(i) + "'s ";
     const core::Vec3 offset{sample.placement.at(0, 3), sample.placement.at(1, 3),
                             sample.placement.at(2, 3)};
-    if (too_far(sample.eye)) return refuse("sample " + std::to_string(i) + "'s camera", sample.eye);
-    if (too_far(sample.light))
-      return refuse("sample " + std::to_string(i) + "'s light", sample.light);
-    if (too_far(offset))
-      return refuse("sample " + std::to_string(i) + "'s placement", offset);
+    for (const auto& [part, p] : {std::pair{"camera", sample.eye}, std::pair{"light", sample.light},
+                                  std::pair{"placement", offset}})
+      if (auto refused = refusal(name + part, p)) return *refused;
   }
   return core::okStatus();
 }
