@@ -527,6 +527,14 @@ int main(int argc, char** argv) {
     }
   }
   printCorrelations(points, rows, shader_names);
+  {
+    // The stored weights' absolute scale on this machine: the ranks above do not depend on it,
+    // but the milliseconds `generate` and `shader` print and export do.
+    const shader::CostScaleFit scale = shader::fitCostScale(all_features, all_seconds, stored);
+    std::printf("\nstored weights' absolute scale here: measured / predicted = %.4g (common factor "
+                "over %zu configurations); after it, predicted / measured spans %.2f-%.2f\n",
+                scale.factor, scale.points, scale.smallest_ratio, scale.largest_ratio);
+  }
   printWeights(*fitted);
   return 0;
 }

@@ -196,6 +196,39 @@ TEST(ShaderCostModel, VertexOpScaleMultipliesTheVertexStageOpsAndIsRecovered) {
   EXPECT_GT(calibratedCostWeights().vertex_op_scale, 1.0);
 }
 
+TEST(ShaderCostModel, CommonScaleFactorByHand) {
+  CostWeights weights;
+  weights.per_op[static_cast<int>(OpClass::kFloatArithmetic)] = 1;
+  auto features = [](double fragment_ops) {
+    CostFeatures f;
+    f.fragment_ops[static_cast<int>(OpClass::kFloatArithmetic)] = fragment_ops;
+    f.fragment_invocations = 1;
+    return f;
+  };
+  // Predicted 10 and 30 where 10 and 10 were measured: r = 1 and 3, α = Σr / Σr² = 4/10, and
+  // α·r = 0.4 and 1.2 (residual 0.36 + 0.04).
+  std::vector<CostFeatures> set{features(10), features(30), features(50)};
+  std::vector<double> seconds{10, 10, 0};  // the third has no measurement: left out
+  CostScaleFit fit = fitCostScale(set, seconds, weights);
+  EXPECT_EQ(fit.points, 2u);
+  EXPECT_DOUBLE_EQ(fit.factor, 0.4);
+  EXPECT_DOUBLE_EQ(fit.residual, 0.4);
+  EXPECT_DOUBLE_EQ(fit.smallest_ratio, 0.4);
+  EXPECT_DOUBLE_EQ(fit.largest_ratio, 1.2);
+  // Predictions 12.5x too high everywhere (weights calibrated on a loaded machine): α = 0.08 and
+  // nothing left over.
+  const std::vector<double> loaded{0.8, 2.4, 4.0};
+  fit = fitCostScale(set, loaded, weights);
+  EXPECT_EQ(fit.points, 3u);
+  EXPECT_NEAR(fit.factor, 0.08, 1e-15);
+  EXPECT_NEAR(fit.residual, 0, 1e-24);
+  // Nothing measured: the neutral factor, no points.
+  const std::vector<double> none{0, 0, 0};
+  fit = fitCostScale(set, none, weights);
+  EXPECT_EQ(fit.points, 0u);
+  EXPECT_EQ(fit.factor, 1);
+}
+
 TEST(ShaderCostModel, PredictionIsTheWeightedSum) {
   CostFeatures features;
   features.vertex_ops[static_cast<int>(OpClass::kFloatArithmetic)] = 10;

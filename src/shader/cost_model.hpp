@@ -136,6 +136,21 @@ core::Result<CostWeights> calibrateCostWeights(std::span<const CostFeatures> fea
                                                std::span<const double> measured_seconds,
                                                std::string version);
 
+// The common factor α that best fits `weights`' predictions to `measured_seconds` (α·predicted
+// against measured, least squared relative error, in closed form: α = Σr / Σr² over the ratios
+// r = predicted / measured), and the spread it leaves (α·r over the points). α = 1 means the
+// weights' absolute scale is right on the machine that measured; scaling every weight by α
+// changes no rank.
+struct CostScaleFit {
+  double factor = 1;
+  double residual = 0;        // Σ (α r − 1)²
+  double smallest_ratio = 0;  // min and max of α r
+  double largest_ratio = 0;
+  size_t points = 0;          // configurations with a measurement
+};
+CostScaleFit fitCostScale(std::span<const CostFeatures> features,
+                          std::span<const double> measured_seconds, const CostWeights& weights);
+
 // The vertex_op_scale in [1, max_scale] that best fits `measured_seconds` with `weights`' other
 // terms: per scale, the best common factor α (the relative fit of α·predicted to measured, in
 // closed form), then the scale with the least squared relative error, on a geometric grid. The
