@@ -458,8 +458,11 @@ int runSimplify(SimplifyFlags& flags) {
   // A file with other attributes keeps the loader's generated normals and tangents as attributes
   // (spot.obj, UVs and no normals, at 10%: epsilon 680 with them, 804 derived again). The image
   // mode and the image error render, so they see derived normals.
-  auto asset =
-      loadWithWarnings(flags.in, {.generate_normals = false, .generate_tangents = false});
+  // Textures are only written back unless something renders: their bytes are kept undecoded
+  // (WaterBottle's four 2048² PNGs: load 0.25 s -> 0.011 s, write 1.9 s -> 0.025 s).
+  auto asset = loadWithWarnings(flags.in, {.decode_textures = flags.wantsImageError(),
+                                           .generate_normals = false,
+                                           .generate_tangents = false});
   if (!asset) return fail(asset.error().message);
   const bool positions_only = asset->mesh.normals.empty() && asset->mesh.tangents.empty() &&
                               asset->mesh.uv0.empty() && asset->mesh.uv1.empty() &&

@@ -1,5 +1,6 @@
 // Small 4x4 matrix and bounds helpers (column-major, OpenGL conventions).
 #include <algorithm>
+#include <cstring>
 
 #include "duolod/core.hpp"
 
@@ -132,6 +133,28 @@ uint64_t hashBytes(const void* data, size_t size, uint64_t seed) {
     h *= 0x100000001b3ull;
   }
   return h;
+}
+
+uint64_t fingerprintImage(const ImageRGBA8& image) {
+  // Each 8-byte word folded in by xor, multiply by an odd constant and xor-shift (the multiply
+  // carries low bits up, the shift brings high bits down); the tail and the size likewise.
+  constexpr uint64_t kMultiplier = 0x9e3779b97f4a7c15ull;
+  auto mix = [](uint64_t h, uint64_t word) {
+    h = (h ^ word) * kMultiplier;
+    return h ^ (h >> 29);
+  };
+  uint64_t h = mix(mix(0x243f6a8885a308d3ull, uint64_t(uint32_t(image.width))),
+                   uint64_t(uint32_t(image.height)));
+  const uint8_t* bytes = image.pixels.data();
+  const size_t size = image.pixels.size(), whole = size / 8 * 8;
+  for (size_t i = 0; i < whole; i += 8) {
+    uint64_t word;
+    std::memcpy(&word, bytes + i, 8);
+    h = mix(h, word);
+  }
+  uint64_t tail = 0;
+  if (size > whole) std::memcpy(&tail, bytes + whole, size - whole);
+  return mix(mix(h, tail), uint64_t(size));
 }
 
 }  // namespace duolod::core

@@ -111,6 +111,76 @@ std::vector<uint8_t> encodePng(const core::ImageRGBA8& image) {
   return out;
 }
 
+namespace {
+// "image/png", "image/jpeg", or empty: the formats glTF takes, by their magic numbers.
+std::string imageMimeType(std::span<const uint8_t> bytes) {
+  static constexpr uint8_t kPng[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  static constexpr uint8_t kJpeg[] = {0xff, 0xd8, 0xff};
+  auto starts = [&](std::span<const uint8_t> magic) {
+    return bytes.size() >= magic.size() && std::equal(magic.begin(), magic.end(), bytes.begin());
+  };
+  return starts(kPng) ? "image/png" : starts(kJpeg) ? "image/jpeg" : "";
+}
+}  // namespace
+
+std::shared_ptr<const core::EncodedImage> keepEncoded(std::span<const uint8_t> bytes,
+                                                      const core::ImageRGBA8& decoded) {
+  std::string mime_type = imageMimeType(bytes);
+  if (mime_type.empty() || decoded.pixels.empty()) return nullptr;
+  auto encoded = std::make_shared<core::EncodedImage>();
+  encoded->bytes.assign(bytes.begin(), bytes.end());
+  encoded->mime_type = std::move(mime_type);
+  encoded->width = decoded.width;
+  encoded->height = decoded.height;
+  encoded->image_fingerprint = core::fingerprintImage(decoded);
+  return encoded;
+}
+
+core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
+    std::span<const uint8_t> bytes, const std::string& name) {
+  std::string mime_type = imageMimeType(bytes);
+  if (mime_type.empty()) return std::shared_ptr<const core::EncodedImage>();
+  if (bytes.size() > static_cast<size_t>(INT32_MAX)) return Error{name + ": image file too large"};
+  int width = 0, height = 0, channels = 0;
+  if (!stbi_info_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width, &height,
+                             &channels) ||
+      width <= 0 || height <= 0)
+    return Error{name + ": cannot read the image's header (" + stbi_failure_reason() + ")"};
+  auto encoded = std::make_shared<core::EncodedImage>();
+  encoded->bytes.assign(bytes.begin(), bytes.end());
+  encoded->mime_type = std::move(mime_type);
+  encoded->width = width;
+  encoded->height = height;
+  return std::shared_ptr<const core::EncodedImage>(std::move(encoded));
+}
+
+core::Result<core::Texture> readTextureFile(const std::string& path, bool srgb, bool decode) {
+  auto bytes = readFileBytes(path);
+  if (!bytes) return bytes.error();
+  core::Texture texture{.name = path, .image = {}, .srgb = srgb};
+  if (!decode) {
+    auto kept = keepUndecoded(*bytes, path);
+    if (!kept) return kept.error();
+    texture.encoded = std::move(kept).value();
+    if (texture.encoded) return texture;
+  }
+  auto image = decodeImage(*bytes, path);
+  if (!image) return image.error();
+  texture.image = std::move(image).value();
+  texture.encoded = keepEncoded(*bytes, texture.image);
+  return texture;
+}
+
+TextureFile textureFile(const core::Texture& texture) {
+  const core::EncodedImage* source = texture.encoded.get();
+  if (source && (texture.image.pixels.empty() ||
+                 core::fingerprintImage(texture.image) == source->image_fingerprint)) {
+    return {source->bytes, source->mime_type, source->mime_type == "image/jpeg" ? ".jpg" : ".png",
+            true};
+  }
+  return {encodePng(texture.image), "image/png", ".png", false};
+}
+
 core::Status writePng(const core::ImageRGBA8& image, const std::string& path) {
   if (image.width <= 0 || image.height <= 0) return Error{path + ": empty image"};
   std::vector<uint8_t> png = encodePng(image);
@@ -132,12 +202,13 @@ void adoptSiblingTexture(core::Asset& asset, const std::string& path, const Load
       fs::path candidate = source.parent_path() / (stem + suffix + extension);
       std::error_code ec;
       if (!fs::is_regular_file(candidate, ec)) continue;
-      auto image = readImage(candidate.string());
-      if (!image) {
-        asset.warnings.push_back(image.error().message);
+      auto texture = readTextureFile(candidate.string(), true, options.decode_textures);
+      if (!texture) {
+        asset.warnings.push_back(texture.error().message);
         return;
       }
-      asset.textures.push_back({candidate.filename().string(), std::move(image.value()), true});
+      texture->name = candidate.filename().string();
+      asset.textures.push_back(std::move(texture).value());
       if (asset.materials.empty()) asset.materials.push_back(core::Material{.name = "default"});
       for (core::Material& material : asset.materials) material.base_color_texture = 0;
       asset.warnings.push_back("no material texture; using " + candidate.filename().string() +

@@ -24,15 +24,18 @@ using core::Vec3;
 using core::Vec4;
 
 struct ImageLoaderContext {
-  bool decode = true;
+  bool load = true;    // LoadOptions::load_textures
+  bool decode = true;  // LoadOptions::decode_textures: false keeps PNG and JPEG bytes undecoded
   const tinygltf::Model* model = nullptr;  // being filled; its buffers are parsed before images
+  // Per image index: the encoded bytes (PNG, JPEG) for the writers to copy (core::EncodedImage).
+  std::vector<std::shared_ptr<const core::EncodedImage>> encoded;
 };
 
 // tinygltf hands us the encoded bytes of each image (embedded or from a file it read).
 bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* err, std::string*,
                          int, int, const unsigned char* bytes, int size, void* user) {
   auto* context = static_cast<ImageLoaderContext*>(user);
-  if (!context->decode) return true;
+  if (!context->load) return true;
   std::string name = image->uri.empty() ? "image " + std::to_string(index) : image->uri;
   // tinygltf 2.7 passes an embedded image's bufferView without checking that it lies inside its
   // buffer; reading it would run past the buffer's end.
@@ -48,10 +51,27 @@ bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* e
       return false;
     }
   }
-  auto decoded = decodeImage(std::span<const uint8_t>(bytes, static_cast<size_t>(size)), name);
+  const std::span<const uint8_t> encoded(bytes, static_cast<size_t>(size));
+  if (!context->decode && index >= 0) {
+    auto kept = keepUndecoded(encoded, name);
+    if (!kept) {
+      if (err) *err += kept.error().message + "\n";
+      return false;
+    }
+    if (*kept) {  // PNG or JPEG: the bytes stand for the texture (readMaterials)
+      if (context->encoded.size() <= size_t(index)) context->encoded.resize(size_t(index) + 1);
+      context->encoded[size_t(index)] = std::move(kept).value();
+      return true;
+    }
+  }
+  auto decoded = decodeImage(encoded, name);
   if (!decoded) {
     if (err) *err += decoded.error().message + "\n";
     return false;
+  }
+  if (index >= 0) {
+    if (context->encoded.size() <= size_t(index)) context->encoded.resize(size_t(index) + 1);
+    context->encoded[size_t(index)] = keepEncoded(encoded, *decoded);
   }
   image->width = decoded->width;
   image->height = decoded->height;
@@ -411,7 +431,9 @@ class GltfFlattener {
        has_colors_ = false;
 };
 
+// `encoded`: per image, the bytes it was decoded from (ImageLoaderContext), for the textures.
 core::Status readMaterials(const tinygltf::Model& model, const std::string& path,
+                           std::span<const std::shared_ptr<const core::EncodedImage>> encoded,
                            core::Asset& asset) {
   std::vector<int> srgb_use(model.textures.size(), 0), linear_use(model.textures.size(), 0);
   auto textureRef = [&](int texture, int tex_coord, const std::string& what, bool srgb,
@@ -497,6 +519,7 @@ core::Status readMaterials(const tinygltf::Model& model, const std::string& path
       texture.image.height = image.height;
       texture.image.pixels = image.image;
     }
+    if (size_t(gt.source) < encoded.size()) texture.encoded = encoded[size_t(gt.source)];
     asset.textures.push_back(std::move(texture));
   }
   return core::okStatus();
@@ -529,7 +552,9 @@ core::Status checkGlbLayout(const std::vector<uint8_t>& bytes, const std::string
 
 core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& options) {
   tinygltf::TinyGLTF loader;
-  ImageLoaderContext context{options.load_textures};
+  ImageLoaderContext context;
+  context.load = options.load_textures;
+  context.decode = options.decode_textures;
   loader.SetImageLoader(loadImageThroughStb, &context);
   loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readWholeFile,
                          &tinygltf::WriteWholeFile, nullptr});
@@ -556,7 +581,7 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   core::Asset asset;
   asset.source_path = path;
   if (!warning.empty()) asset.warnings.push_back(warning);
-  if (auto materials = readMaterials(model, path, asset); !materials) return materials.error();
+  if (auto materials = readMaterials(model, path, context.encoded, asset); !materials) return materials.error();
   GltfFlattener flattener(model, path, asset);
   std::vector<int> roots;
   int scene = model.defaultScene >= 0 ? model.defaultScene : (model.scenes.empty() ? -1 : 0);
@@ -582,7 +607,7 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   if (flattener.usesDefaultMaterial()) asset.materials.push_back(core::Material{.name = "default"});
   if (options.load_textures)
     for (const core::Texture& texture : asset.textures)
-      if (texture.image.pixels.empty() && !texture.name.empty())
+      if (texture.image.pixels.empty() && !texture.encoded && !texture.name.empty())
         return Error{path + ": texture image '" + texture.name + "' could not be loaded"};
   return asset;
 }

@@ -162,21 +162,25 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   json materials = json::array();
   for (const core::Material& m : asset.materials) materials.push_back(materialJson(m));
 
-  // Textures: PNG beside a .gltf, or embedded bufferViews in a .glb.
+  // Textures: files beside a .gltf, or embedded bufferViews in a .glb; the bytes they were read
+  // from while unchanged (textureFile), else PNG.
   json images = json::array(), textures = json::array();
   std::vector<std::pair<std::string, std::vector<uint8_t>>> side_files;
   for (size_t t = 0; t < asset.textures.size(); ++t) {
-    const core::Texture& texture = asset.textures[t];
-    core::ImageRGBA8 image = texture.image;
-    if (image.pixels.empty()) image = {1, 1, {255, 255, 255, 255}};  // keep indices stable
-    std::vector<uint8_t> png = encodePng(image);
+    core::Texture blank;
+    const core::Texture* texture = &asset.textures[t];
+    if (texture->image.pixels.empty() && !texture->encoded) {  // keep indices stable
+      blank.image = {1, 1, {255, 255, 255, 255}};
+      texture = &blank;
+    }
+    TextureFile file = textureFile(*texture);
     if (binary) {
-      images.push_back(
-          {{"bufferView", builder.addView(png.data(), png.size(), 0)}, {"mimeType", "image/png"}});
+      images.push_back({{"bufferView", builder.addView(file.bytes.data(), file.bytes.size(), 0)},
+                        {"mimeType", file.mime_type}});
     } else {
-      std::string name = target.stem().string() + "_texture" + std::to_string(t) + ".png";
+      std::string name = target.stem().string() + "_texture" + std::to_string(t) + file.extension;
       images.push_back({{"uri", name}});
-      side_files.emplace_back((target.parent_path() / name).string(), std::move(png));
+      side_files.emplace_back((target.parent_path() / name).string(), std::move(file.bytes));
     }
     textures.push_back({{"source", t}, {"sampler", 0}});
   }

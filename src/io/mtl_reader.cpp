@@ -255,19 +255,27 @@ class TextureLoader {
                 std::map<std::string, int>& texture_by_key)
       : source_(source), options_(options), asset_(asset), texture_by_key_(texture_by_key) {}
 
-  core::Result<core::ImageRGBA8> loadImage(const TextureRef& ref) {
+  // The file as a texture, its bytes kept for the writers (readTextureFile); not decoded when
+  // `decode` is false and it is a PNG or JPEG.
+  core::Result<core::Texture> loadTexture(const TextureRef& ref, bool srgb, bool decode) {
     std::error_code ec;
     if (!fs::is_regular_file(ref.resolved, ec)) {
       return errorAt(
           source_.mtl_path, ref.line,
           "texture " + quote(ref.written) + " not found (looked for " + ref.resolved + ")");
     }
-    auto image = readImage(ref.resolved);
-    if (!image) {
+    auto texture = readTextureFile(ref.resolved, srgb, decode);
+    if (!texture) {
       return errorAt(source_.mtl_path, ref.line,
-                     "cannot load texture " + quote(ref.written) + ": " + image.error().message);
+                     "cannot load texture " + quote(ref.written) + ": " + texture.error().message);
     }
-    return image;
+    return texture;
+  }
+
+  core::Result<core::ImageRGBA8> loadImage(const TextureRef& ref) {
+    auto texture = loadTexture(ref, false, true);
+    if (!texture) return texture.error();
+    return std::move(texture->image);
   }
 
   // A plain texture (base colour, normal, emissive), shared by path and colour space.
@@ -278,9 +286,9 @@ class TextureLoader {
     }
     core::Texture texture{.name = ref.resolved, .image = {}, .srgb = srgb};
     if (options_.load_textures) {
-      auto image = loadImage(ref);
-      if (!image) return image.error();
-      texture.image = std::move(image).value();
+      auto loaded = loadTexture(ref, srgb, options_.decode_textures);
+      if (!loaded) return loaded.error();
+      texture = std::move(loaded).value();
     }
     return add(key, std::move(texture));
   }

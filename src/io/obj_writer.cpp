@@ -81,7 +81,7 @@ class ObjWriter {
     std::vector<std::string> texture_files(asset_.textures.size());
     for (size_t i = 0; i < asset_.textures.size(); ++i) {
       const core::Texture& texture = asset_.textures[i];
-      if (texture.image.pixels.empty()) {
+      if (texture.image.pixels.empty() && !texture.encoded) {
         // Not decoded: point at the original file, if it is one, relative to the output folder.
         std::error_code ec;
         if (!texture.name.empty() && fs::is_regular_file(texture.name, ec)) {
@@ -91,12 +91,15 @@ class ObjWriter {
         }
         continue;
       }
-      std::string file = stem + "_texture" + std::to_string(i) + ".png";
-      fs::path png_path = obj_path.parent_path() / file;
-      if (auto status = refuseSource(png_path); !status) return status;
-      std::vector<uint8_t> png = encodePng(texture.image);
-      if (png.empty()) return Error{png_path.string() + ": cannot encode texture as PNG"};
-      if (auto status = writeFileAtomic(png_path.string(), std::span<const uint8_t>(png));
+      // The bytes it was read from while unchanged (textureFile), else PNG.
+      TextureFile encoded = textureFile(texture);
+      std::string file = stem + "_texture" + std::to_string(i) + encoded.extension;
+      fs::path image_path = obj_path.parent_path() / file;
+      if (auto status = refuseSource(image_path); !status) return status;
+      if (encoded.bytes.empty())
+        return Error{image_path.string() + ": cannot encode texture as PNG"};
+      if (auto status =
+              writeFileAtomic(image_path.string(), std::span<const uint8_t>(encoded.bytes));
           !status) {
         return status;
       }
