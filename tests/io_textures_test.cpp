@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "duolod/io.hpp"
+#include "duolod/render.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -230,6 +231,52 @@ TEST(TextureFiles, UndecodedTexturesAreSizedAndWrittenBack) {
   auto refused = io::loadAsset(gltf, {.decode_textures = false});
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("rgb.png"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("PNG header"), std::string::npos)
+      << refused.error().message;
+}
+
+// An undecoded texture cannot be drawn: the renderer says so instead of drawing it untextured.
+TEST(TextureFiles, RendererRefusesUndecodedTextures) {
+  fs::path dir = test::scratchDir("undecoded_render");
+  writeBytes(dir / "rgb.png", rgbPng());
+  writeBytes(dir / "photo.jpg", jpeg());
+  const std::string gltf = writeTexturedGltf(dir);
+  auto undecoded = io::loadAsset(gltf, {.decode_textures = false});
+  auto decoded = io::loadAsset(gltf);
+  ASSERT_TRUE(undecoded) << undecoded.error().message;
+  ASSERT_TRUE(decoded) << decoded.error().message;
+  auto renderer = render::Renderer::create();
+  ASSERT_TRUE(renderer) << renderer.error().message;
+  auto refused = (*renderer)->uploadAsset(*undecoded);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("without decoding"), std::string::npos)
+      << refused.error().message;
+  EXPECT_TRUE((*renderer)->uploadAsset(*decoded));
+}
+
+// A source texture that carries the name an output texture would get is not overwritten.
+TEST(TextureFiles, OutputTexturesDoNotReplaceTheSources) {
+  fs::path dir = test::scratchDir("texture_clash");
+  const std::vector<uint8_t> png = rgbPng(), jpg = jpeg();
+  writeBytes(dir / "rgb.png", png);
+  writeBytes(dir / "photo.jpg", jpg);
+  auto asset = io::loadAsset(writeTexturedGltf(dir));
+  ASSERT_TRUE(asset) << asset.error().message;
+  ASSERT_TRUE(io::writeObj(*asset, (dir / "first.obj").string()));  // new files beside it: fine
+  // An OBJ whose texture is named first_texture0.png, written out as first.obj beside itself...
+  auto obj = io::loadAsset((dir / "first.obj").string());
+  ASSERT_TRUE(obj) << obj.error().message;
+  const std::vector<uint8_t> before = fileBytes(dir / "first_texture0.png");
+  core::Asset edited = *obj;
+  edited.textures[0].image.pixels[0] ^= 0xff;
+  edited.source_path = (dir / "first_copy.obj").string();  // ...from a copy of it, say
+  auto refused = io::writeObj(edited, (dir / "first.obj").string());
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("beside the source asset"), std::string::npos)
+      << refused.error().message;
+  EXPECT_EQ(fileBytes(dir / "first_texture0.png"), before);
+  fs::path elsewhere = test::scratchDir("texture_clash_out");
+  EXPECT_TRUE(io::writeObj(edited, (elsewhere / "first.obj").string()));
 }
 
 // The real asset: WaterBottle's four 2048² PNGs come out byte for byte, in a .glb no larger than

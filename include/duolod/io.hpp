@@ -16,10 +16,11 @@ namespace duolod::io {
 
 struct LoadOptions {
   bool load_textures = true;      // decode texture images (missing image files are an error)
-  // With load_textures: false reads each PNG or JPEG texture's bytes and size without decoding
-  // it (Texture::encoded, Texture::image left empty), for assets whose textures are only written
-  // back (`duolod simplify` without rendering: WaterBottle loads in 0.011 s instead of 0.25 s).
-  // Such textures cannot be drawn. Other formats are decoded all the same.
+  // Applies when load_textures is true. Set to false, it reads each PNG or JPEG texture's bytes
+  // and size without decoding it (Texture::encoded, Texture::image left empty), for assets whose
+  // textures are only written back (`duolod simplify` without rendering: WaterBottle loads in
+  // 0.011 s instead of 0.25 s). Such textures cannot be drawn (render::Renderer::uploadAsset
+  // refuses them). Other formats are decoded all the same.
   bool decode_textures = true;
   bool generate_normals = true;   // when the file has none
   bool generate_tangents = true;  // when the file has none but has normals and uv0

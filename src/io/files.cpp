@@ -144,8 +144,11 @@ core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
   int width = 0, height = 0, channels = 0;
   if (!stbi_info_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width, &height,
                              &channels) ||
-      width <= 0 || height <= 0)
-    return Error{name + ": cannot read the image's header (" + stbi_failure_reason() + ")"};
+      width <= 0 || height <= 0) {
+    const char* reason = stbi_failure_reason();
+    return Error{name + ": cannot read the " + (mime_type == "image/png" ? "PNG" : "JPEG") +
+                 " header" + (reason ? std::string(" (") + reason + ")" : std::string())};
+  }
   auto encoded = std::make_shared<core::EncodedImage>();
   encoded->bytes.assign(bytes.begin(), bytes.end());
   encoded->mime_type = std::move(mime_type);

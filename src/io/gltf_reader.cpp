@@ -581,7 +581,8 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   core::Asset asset;
   asset.source_path = path;
   if (!warning.empty()) asset.warnings.push_back(warning);
-  if (auto materials = readMaterials(model, path, context.encoded, asset); !materials) return materials.error();
+  if (auto materials = readMaterials(model, path, context.encoded, asset); !materials)
+    return materials.error();
   GltfFlattener flattener(model, path, asset);
   std::vector<int> roots;
   int scene = model.defaultScene >= 0 ? model.defaultScene : (model.scenes.empty() ? -1 : 0);

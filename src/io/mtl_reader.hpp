@@ -46,8 +46,8 @@ core::Material defaultMaterial(std::string name);
 // Converts a parsed material, adding its textures to asset.textures (shared between materials by
 // path and colour space). Images are decoded only when options.load_textures (and, for PNG and
 // JPEG files, options.decode_textures: otherwise their bytes alone, Texture::encoded); without
-// load_textures the Texture entries carry the path in `name` and an empty image. A missing or undecodable texture
-// file is an Error naming the MTL file and line.
+// load_textures the Texture entries carry the path in `name` and an empty image. A missing or
+// undecodable texture file is an Error naming the MTL file and line.
 core::Result<core::Material> buildMaterial(const MtlMaterial& source, const LoadOptions& options,
                                            core::Asset& asset,
                                            std::map<std::string, int>& texture_by_key);

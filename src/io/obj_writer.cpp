@@ -96,6 +96,7 @@ class ObjWriter {
       std::string file = stem + "_texture" + std::to_string(i) + encoded.extension;
       fs::path image_path = obj_path.parent_path() / file;
       if (auto status = refuseSource(image_path); !status) return status;
+      if (auto status = refuseBesideSource(image_path); !status) return status;
       if (encoded.bytes.empty())
         return Error{image_path.string() + ": cannot encode texture as PNG"};
       if (auto status =
@@ -159,6 +160,19 @@ class ObjWriter {
   }
 
  private:
+  // As the glTF writer's side files: a texture file must not replace anything beside the source
+  // asset (one of its own textures may carry the name this output's textures get).
+  core::Status refuseBesideSource(const fs::path& output) const {
+    if (asset_.source_path.empty()) return core::okStatus();
+    std::error_code ec;
+    if (fs::exists(output, ec) &&
+        samePath(fs::absolute(output, ec).parent_path(),
+                 fs::absolute(asset_.source_path, ec).parent_path()))
+      return Error{output.string() + ": would replace a file beside the source asset; write "
+                   "elsewhere"};
+    return core::okStatus();
+  }
+
   core::Status refuseSource(const fs::path& output) const {
     if (!asset_.source_path.empty() && samePath(output, asset_.source_path)) {
       return Error{output.string() + ": refusing to overwrite the file the asset was read from"};

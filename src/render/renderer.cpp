@@ -351,6 +351,12 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
     return Error{asset.source_path + ": " + uploaded.error().message};
   }
   for (const core::Texture& texture : asset.textures) {
+    if (texture.image.pixels.empty() && texture.encoded) {  // io::LoadOptions::decode_textures
+      State::release(gpu);
+      return Error{asset.source_path + ": texture " + texture.name +
+                   " was loaded without decoding it (LoadOptions::decode_textures = false): "
+                   "load the asset with decoded textures to draw it"};
+    }
     GLuint id = 0;
     if (!texture.image.pixels.empty()) {
       const core::ImageRGBA8& image = texture.image;

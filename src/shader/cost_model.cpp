@@ -425,9 +425,9 @@ double fitVertexOpScale(std::span<const CostFeatures> features,
 // over all 110 points of the three shaders 1.16-1.71, because a larger scale shifts whole assets
 // against each other (the per-op weights were fitted without it). 2 keeps the pooled Spearman
 // above 0.95 and noise_phong's at 0.99 (bench/RESULTS.md, cost model section).
-// Version "llvmpipe-2026-11-24d" = version c with every weight times 0.0911, the common factor
-// (fitCostScale) of three idle runs of the command above on this project's reference machine
-// (2 cores, load < 1; 0.0911, 0.0921, 0.0893). Versions b and c were measured with the machine
+// Version "llvmpipe-2026-11-24d" = version c with every weight times 0.0911, the median of the
+// common factors (fitCostScale) of three idle runs of the command above on this project's
+// reference machine (2 cores, load < 1.3: 0.0911, 0.0921, 0.0893). Versions b and c were measured with the machine
 // shared (load average ~25 on 2 cores), which left the ranks usable but every absolute cost
 // 8-14x too high: `generate` printed 30.2 ms per draw for Spot's original at 256 px against a
 // measured 2.49 ms. One factor changes no rank, so no search's choice changes; in a fourth idle
