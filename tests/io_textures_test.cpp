@@ -254,7 +254,8 @@ TEST(TextureFiles, RendererRefusesUndecodedTextures) {
   EXPECT_TRUE((*renderer)->uploadAsset(*decoded));
 }
 
-// A source texture that carries the name an output texture would get is not overwritten.
+// A file the asset was read from is never replaced, also where it carries the name an output's
+// texture gets; an earlier output beside the source is (writing the same output twice works).
 TEST(TextureFiles, OutputTexturesDoNotReplaceTheSources) {
   fs::path dir = test::scratchDir("texture_clash");
   const std::vector<uint8_t> png = rgbPng(), jpg = jpeg();
@@ -262,21 +263,48 @@ TEST(TextureFiles, OutputTexturesDoNotReplaceTheSources) {
   writeBytes(dir / "photo.jpg", jpg);
   auto asset = io::loadAsset(writeTexturedGltf(dir));
   ASSERT_TRUE(asset) << asset.error().message;
-  ASSERT_TRUE(io::writeObj(*asset, (dir / "first.obj").string()));  // new files beside it: fine
-  // An OBJ whose texture is named first_texture0.png, written out as first.obj beside itself...
-  auto obj = io::loadAsset((dir / "first.obj").string());
-  ASSERT_TRUE(obj) << obj.error().message;
-  const std::vector<uint8_t> before = fileBytes(dir / "first_texture0.png");
-  core::Asset edited = *obj;
-  edited.textures[0].image.pixels[0] ^= 0xff;
-  edited.source_path = (dir / "first_copy.obj").string();  // ...from a copy of it, say
-  auto refused = io::writeObj(edited, (dir / "first.obj").string());
-  ASSERT_FALSE(refused);
-  EXPECT_NE(refused.error().message.find("beside the source asset"), std::string::npos)
-      << refused.error().message;
-  EXPECT_EQ(fileBytes(dir / "first_texture0.png"), before);
-  fs::path elsewhere = test::scratchDir("texture_clash_out");
-  EXPECT_TRUE(io::writeObj(edited, (elsewhere / "first.obj").string()));
+  // The images are source files even when textures are not loaded (nothing read them).
+  auto bare = io::loadAsset(writeTexturedGltf(dir), {.load_textures = false});
+  ASSERT_TRUE(bare) << bare.error().message;
+  for (const char* image : {"rgb.png", "photo.jpg"})
+    EXPECT_FALSE(io::refuseSourceFile(*bare, (dir / image).string())) << image;
+  EXPECT_FALSE(io::refuseSourceFile(*bare, (dir / "tri.bin").string()));
+  EXPECT_TRUE(io::refuseSourceFile(*bare, (dir / "out.gltf").string()));
+  for (int run = 0; run < 2; ++run) {  // beside the source, twice: the second replaces the first
+    SCOPED_TRACE(run);
+    auto gltf = io::writeGltf(*asset, (dir / "out.gltf").string());
+    EXPECT_TRUE(gltf) << gltf.error().message;
+    auto obj = io::writeObj(*asset, (dir / "out.obj").string());
+    EXPECT_TRUE(obj) << obj.error().message;
+  }
+  // An OBJ whose texture file is named first_texture0.png, written as first.obj beside itself.
+  writeBytes(dir / "first_texture0.png", png);
+  std::ofstream(dir / "lib.mtl") << "newmtl m\nmap_Kd first_texture0.png\n";
+  std::ofstream(dir / "src.obj") << "mtllib lib.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                    "vt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+  for (bool decode : {true, false}) {
+    SCOPED_TRACE(decode);
+    auto source = io::loadAsset((dir / "src.obj").string(), {.decode_textures = decode});
+    ASSERT_TRUE(source) << source.error().message;
+    ASSERT_EQ(source->textures.size(), 1u);
+    core::Asset edited = *source;
+    if (decode) edited.textures[0].image.pixels[0] ^= 0xff;
+    for (const char* output : {"first.obj", "first.gltf"}) {
+      auto refused = output == std::string("first.obj")
+                         ? io::writeObj(edited, (dir / output).string())
+                         : io::writeGltf(edited, (dir / output).string());
+      ASSERT_FALSE(refused) << output;
+      EXPECT_NE(refused.error().message.find("first_texture0.png: is a file the asset was read from"),
+                std::string::npos)
+          << refused.error().message;
+      EXPECT_EQ(fileBytes(dir / "first_texture0.png"), png);
+    }
+    // Nor the .mtl it was read from (lib.mtl), nor the .obj itself.
+    EXPECT_FALSE(io::writeObj(edited, (dir / "lib.obj").string()));
+    EXPECT_FALSE(io::writeObj(edited, (dir / "." / "src.obj").string()));
+    fs::path elsewhere = test::scratchDir("texture_clash_out");
+    EXPECT_TRUE(io::writeObj(edited, (elsewhere / "first.obj").string()));
+  }
 }
 
 // The real asset: WaterBottle's four 2048² PNGs come out byte for byte, in a .glb no larger than

@@ -237,6 +237,9 @@ uint64_t fingerprintImage(const ImageRGBA8& image);
 // An asset: one mesh (all primitives flattened into submeshes), its materials and textures.
 struct Asset {
   std::string source_path;
+  // Every file it was read from or names (the source, a .gltf's buffers and images, an .obj's
+  // .mtl files and textures): the writers never replace one of them (io::refuseSourceFile).
+  std::vector<std::string> source_files;
   Mesh mesh;
   std::vector<Material> materials;
   std::vector<Texture> textures;

@@ -42,8 +42,9 @@ core::Result<core::Asset> readObj(const std::string& path, const LoadOptions& op
 core::Result<core::Asset> readPly(const std::string& path, const LoadOptions& options);
 core::Result<core::Asset> readOff(const std::string& path, const LoadOptions& options);
 
-// Writers. Output is written atomically (temporary file in the same folder, then rename) and never
-// over the file the asset was read from. writeGltf picks .gltf (+ .bin and textures beside it)
+// Writers. Output is written atomically (temporary file in the same folder, then rename) and no
+// file written (the document, .bin, .mtl, textures) replaces one the asset was read from
+// (refuseSourceFile). writeGltf picks .gltf (+ .bin and textures beside it)
 // or .glb (everything embedded) by extension. Textures are written by textureFile: the PNG or
 // JPEG bytes they were read from while unchanged, else PNG.
 core::Status writeGltf(const core::Asset& asset, const std::string& path);
@@ -95,6 +96,10 @@ std::string lodJsonText(const LodJsonDocument& document);
 // Checks what the runtime relies on (levels present, switch distances increasing, coverages in
 // [0, 1] decreasing) and writes atomically.
 core::Status writeLodJson(const LodJsonDocument& document, const std::string& path);
+
+// An error when `output` is one of the files `asset` was read from (Asset::source_files or its
+// source_path, however spelled): what every writer checks before it writes a file.
+core::Status refuseSourceFile(const core::Asset& asset, const std::string& output);
 
 // Images.
 core::Result<core::ImageRGBA8> readImage(const std::string& path);  // PNG, JPEG, ... via stb

@@ -212,6 +212,7 @@ void adoptSiblingTexture(core::Asset& asset, const std::string& path, const Load
       }
       texture->name = candidate.filename().string();
       asset.textures.push_back(std::move(texture).value());
+      asset.source_files.push_back(candidate.string());
       if (asset.materials.empty()) asset.materials.push_back(core::Material{.name = "default"});
       for (core::Material& material : asset.materials) material.base_color_texture = 0;
       asset.warnings.push_back("no material texture; using " + candidate.filename().string() +
@@ -262,7 +263,24 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
       !mesh.uv0.empty())
     core::computeTangents(mesh);
   asset.source_path = path;
+  asset.source_files.push_back(path);
   return loaded;
+}
+
+core::Status refuseSourceFile(const core::Asset& asset, const std::string& output) {
+  std::error_code ec;
+  const bool exists = fs::exists(output, ec);
+  const fs::path canonical = fs::weakly_canonical(output, ec);
+  auto same = [&](const std::string& source) {
+    if (source.empty()) return false;
+    std::error_code source_ec;
+    if (exists && fs::exists(source, source_ec)) return fs::equivalent(output, source, source_ec);
+    return fs::weakly_canonical(source, source_ec) == canonical;
+  };
+  if (same(asset.source_path) ||
+      std::any_of(asset.source_files.begin(), asset.source_files.end(), same))
+    return Error{output + ": is a file the asset was read from; refusing to replace it"};
+  return core::okStatus();
 }
 
 }  // namespace duolod::io

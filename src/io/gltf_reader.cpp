@@ -84,8 +84,10 @@ bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* e
 
 // tinygltf's own ReadWholeFile sizes its buffer with tellg(), which on a folder is a huge value: a
 // buffer or image uri naming a folder aborted with bad_alloc. Read through readFileBytes instead.
+// `user`: the list of files read (Asset::source_files).
 bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path,
-                   void*) {
+                   void* user) {
+  static_cast<std::vector<std::string>*>(user)->push_back(path);
   auto bytes = readFileBytes(path);
   if (bytes && bytes->empty()) bytes = Error{path + ": file is empty"};
   if (!bytes) {
@@ -556,8 +558,9 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   context.load = options.load_textures;
   context.decode = options.decode_textures;
   loader.SetImageLoader(loadImageThroughStb, &context);
+  std::vector<std::string> files_read;
   loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readWholeFile,
-                         &tinygltf::WriteWholeFile, nullptr});
+                         &tinygltf::WriteWholeFile, &files_read});
   tinygltf::Model model;
   std::string error, warning;
   bool binary = false;
@@ -580,6 +583,13 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   }
   core::Asset asset;
   asset.source_path = path;
+  // The files read (the document, its buffers, its images when textures are loaded) and the
+  // image files it names in any case: the writers never replace them.
+  asset.source_files = std::move(files_read);
+  for (const tinygltf::Image& image : model.images)
+    if (!image.uri.empty() && !image.uri.starts_with("data:"))
+      asset.source_files.push_back(
+          (std::filesystem::path(path).parent_path() / image.uri).lexically_normal().string());
   if (!warning.empty()) asset.warnings.push_back(warning);
   if (auto materials = readMaterials(model, path, context.encoded, asset); !materials)
     return materials.error();

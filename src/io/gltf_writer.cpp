@@ -94,19 +94,11 @@ json materialJson(const core::Material& m) {
   return out;
 }
 
-bool sameFile(const std::string& a, const std::string& b) {
-  if (a.empty() || b.empty()) return false;
-  std::error_code ec;
-  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
-  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
-}
-
 // Writes `meshes` (one node each) with the asset's materials and textures. With `screen_coverage`
 // non-empty, node 0 chains the others through MSFT_lod and only node 0 is in the scene.
 core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::Mesh> meshes,
                                std::span<const double> screen_coverage, const std::string& path) {
-  if (sameFile(path, asset.source_path))
-    return Error{path + ": refusing to overwrite the asset's own source file"};
+  if (auto refused = refuseSourceFile(asset, path); !refused) return refused;
   for (size_t i = 0; i < meshes.size(); ++i)
     if (auto valid = core::validateMesh(meshes[i]); !valid)
       return Error{path + ": cannot write an invalid mesh" +
@@ -228,17 +220,11 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   }
   std::string bin_name = target.stem().string() + ".bin";
   document["buffers"] = {{{"byteLength", builder.bin_.size()}, {"uri", bin_name}}};
-  // Side files must not replace anything beside the source asset (its own .bin or textures).
+  // Side files must not replace any file the asset was read from (its own .bin or textures,
+  // which may carry these names); an earlier output's are replaced.
   side_files.emplace_back((target.parent_path() / bin_name).string(), std::move(builder.bin_));
-  if (!asset.source_path.empty()) {
-    std::error_code ec;
-    fs::path source_folder = fs::weakly_canonical(fs::path(asset.source_path).parent_path(), ec);
-    for (const auto& [file, bytes] : side_files)
-      if (fs::exists(file, ec) &&
-          fs::weakly_canonical(fs::path(file).parent_path(), ec) == source_folder)
-        return Error{path + ": would replace " + file +
-                     " beside the source asset; write elsewhere"};
-  }
+  for (const auto& [file, bytes] : side_files)
+    if (auto refused = refuseSourceFile(asset, file); !refused) return refused;
   for (const auto& [file, bytes] : side_files)
     if (auto written = writeFileAtomic(file, bytes); !written) return written;
   return writeFileAtomic(path, document.dump(2));

@@ -280,6 +280,7 @@ class TextureLoader {
 
   // A plain texture (base colour, normal, emissive), shared by path and colour space.
   core::Result<int> single(const TextureRef& ref, bool srgb) {
+    asset_.source_files.push_back(ref.resolved);  // read or not: never to be replaced
     std::string key = ref.resolved + (srgb ? "|srgb" : "|linear");
     if (auto found = texture_by_key_.find(key); found != texture_by_key_.end()) {
       return found->second;
@@ -302,6 +303,8 @@ class TextureLoader {
     if (auto found = texture_by_key_.find(key); found != texture_by_key_.end()) {
       return found->second;
     }
+    for (const TextureRef* ref : {roughness, metallic})
+      if (ref) asset_.source_files.push_back(ref->resolved);  // read or not: never to be replaced
     std::string name = roughness ? roughness->resolved : std::string();
     if (metallic && (!roughness || metallic->resolved != roughness->resolved)) {
       name += (name.empty() ? "" : "+") + metallic->resolved;

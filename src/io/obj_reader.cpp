@@ -322,6 +322,7 @@ class ObjParser {
       }
       auto bytes = text::readInputFile(mtl_path);
       if (!bytes) return bytes.error();
+      asset_.source_files.push_back(mtl_path);
       if (auto status =
               mtl::parseMtl(mtl_path, text::asText(*bytes), mtl_materials_, asset_.warnings);
           !status) {

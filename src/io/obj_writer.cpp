@@ -30,14 +30,6 @@ void appendFloats(std::string& out, std::string_view keyword, std::initializer_l
   out += '\n';
 }
 
-bool samePath(const fs::path& a, const fs::path& b) {
-  std::error_code ec_a, ec_b;
-  fs::path canonical_a = fs::weakly_canonical(a, ec_a);
-  fs::path canonical_b = fs::weakly_canonical(b, ec_b);
-  if (ec_a || ec_b) return a.lexically_normal() == b.lexically_normal();
-  return canonical_a == canonical_b;
-}
-
 // usemtl/newmtl take the rest of the line, so names may hold spaces, but not line breaks, and an
 // empty or repeated name would merge materials on reading back.
 std::vector<std::string> uniqueMaterialNames(const std::vector<core::Material>& materials) {
@@ -96,7 +88,6 @@ class ObjWriter {
       std::string file = stem + "_texture" + std::to_string(i) + encoded.extension;
       fs::path image_path = obj_path.parent_path() / file;
       if (auto status = refuseSource(image_path); !status) return status;
-      if (auto status = refuseBesideSource(image_path); !status) return status;
       if (encoded.bytes.empty())
         return Error{image_path.string() + ": cannot encode texture as PNG"};
       if (auto status =
@@ -160,24 +151,10 @@ class ObjWriter {
   }
 
  private:
-  // As the glTF writer's side files: a texture file must not replace anything beside the source
-  // asset (one of its own textures may carry the name this output's textures get).
-  core::Status refuseBesideSource(const fs::path& output) const {
-    if (asset_.source_path.empty()) return core::okStatus();
-    std::error_code ec;
-    if (fs::exists(output, ec) &&
-        samePath(fs::absolute(output, ec).parent_path(),
-                 fs::absolute(asset_.source_path, ec).parent_path()))
-      return Error{output.string() + ": would replace a file beside the source asset; write "
-                   "elsewhere"};
-    return core::okStatus();
-  }
-
+  // No file written may replace one the asset was read from (the .obj, its .mtl or textures,
+  // which may carry the names this output's files get).
   core::Status refuseSource(const fs::path& output) const {
-    if (!asset_.source_path.empty() && samePath(output, asset_.source_path)) {
-      return Error{output.string() + ": refusing to overwrite the file the asset was read from"};
-    }
-    return core::okStatus();
+    return refuseSourceFile(asset_, output.string());
   }
 
   void appendMaterial(std::string& mtl, const core::Material& material, const std::string& name,
