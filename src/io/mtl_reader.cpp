@@ -258,24 +258,19 @@ class TextureLoader {
   // The file as a texture, its bytes kept for the writers (readTextureFile); not decoded when
   // `decode` is false and it is a PNG or JPEG.
   core::Result<core::Texture> loadTexture(const TextureRef& ref, bool srgb, bool decode) {
-    std::error_code ec;
-    if (!fs::is_regular_file(ref.resolved, ec)) {
-      return errorAt(
-          source_.mtl_path, ref.line,
-          "texture " + quote(ref.written) + " not found (looked for " + ref.resolved + ")");
-    }
+    if (auto found = checkExists(ref); !found) return found.error();
     auto texture = readTextureFile(ref.resolved, srgb, decode);
-    if (!texture) {
-      return errorAt(source_.mtl_path, ref.line,
-                     "cannot load texture " + quote(ref.written) + ": " + texture.error().message);
-    }
+    if (!texture) return cannotLoad(ref, texture.error());
     return texture;
   }
 
+  // The decoded image alone (for the metallic-roughness composition, which is a new image: no
+  // file bytes to keep).
   core::Result<core::ImageRGBA8> loadImage(const TextureRef& ref) {
-    auto texture = loadTexture(ref, false, true);
-    if (!texture) return texture.error();
-    return std::move(texture->image);
+    if (auto found = checkExists(ref); !found) return found.error();
+    auto image = readImage(ref.resolved);
+    if (!image) return cannotLoad(ref, image.error());
+    return image;
   }
 
   // A plain texture (base colour, normal, emissive), shared by path and colour space.
@@ -354,6 +349,21 @@ class TextureLoader {
     asset_.textures.push_back(std::move(texture));
     texture_by_key_[key] = index;
     return index;
+  }
+
+  core::Status checkExists(const TextureRef& ref) const {
+    std::error_code ec;
+    if (!fs::is_regular_file(ref.resolved, ec)) {
+      return errorAt(
+          source_.mtl_path, ref.line,
+          "texture " + quote(ref.written) + " not found (looked for " + ref.resolved + ")");
+    }
+    return core::okStatus();
+  }
+
+  core::Error cannotLoad(const TextureRef& ref, const core::Error& error) const {
+    return errorAt(source_.mtl_path, ref.line,
+                   "cannot load texture " + quote(ref.written) + ": " + error.message);
   }
 
   const MtlMaterial& source_;
