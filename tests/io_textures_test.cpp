@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <random>
 #include <nlohmann/json.hpp>
 
 #include "duolod/io.hpp"
@@ -235,6 +236,119 @@ TEST(TextureFiles, UndecodedTexturesAreSizedAndWrittenBack) {
       << refused.error().message;
 }
 
+// Undecoded loading checks a PNG's chunk CRCs and a JPEG's segments; a damaged file is decoded
+// after all, so it is refused (or accepted) as in a decoded load, never copied through unread.
+TEST(TextureFiles, DamagedUndecodedTexturesAreDecodedToBeJudged) {
+  fs::path dir = test::scratchDir("undecoded_damaged");
+  const std::vector<uint8_t> png = rgbPng(), jpg = jpeg();
+  const std::string gltf = writeTexturedGltf(dir);
+  writeBytes(dir / "photo.jpg", jpg);
+  const auto load = [&](const std::vector<uint8_t>& rgb, const std::vector<uint8_t>& photo) {
+    writeBytes(dir / "rgb.png", rgb);
+    writeBytes(dir / "photo.jpg", photo);
+    return io::loadAsset(gltf, {.decode_textures = false});
+  };
+  {  // intact: both kept undecoded
+    auto asset = load(png, jpg);
+    ASSERT_TRUE(asset) << asset.error().message;
+    EXPECT_TRUE(asset->textures[0].image.pixels.empty());
+    EXPECT_TRUE(asset->textures[1].image.pixels.empty());
+  }
+  // The PNG cut inside its image data: a decoded load refuses it, and so does this one.
+  std::vector<uint8_t> cut(png.begin(), png.end() - 20);
+  writeBytes(dir / "rgb.png", cut);
+  auto refused_decoded = io::loadAsset(gltf);
+  auto refused = load(cut, jpg);
+  ASSERT_FALSE(refused_decoded);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("rgb.png"), std::string::npos) << refused.error().message;
+  // A wrong CRC on the header chunk only: stb reads the pixels all the same, so the texture is
+  // accepted decoded, as a decoded load would.
+  std::vector<uint8_t> bad_crc = png;
+  bad_crc[8 + 8 + 13] ^= 0x5a;  // IHDR's CRC
+  auto decoded_instead = load(bad_crc, jpg);
+  ASSERT_TRUE(decoded_instead) << decoded_instead.error().message;
+  EXPECT_EQ(decoded_instead->textures[0].image.width, 8);
+  EXPECT_EQ(decoded_instead->textures[0].image.pixels.size(), 8u * 8 * 4);
+  // Random damage and cuts never read outside the bytes (run under ASan) and, when the check
+  // passes, leave a file stb still reads the size of.
+  std::mt19937 random(7);
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<uint8_t> bytes = trial % 2 ? png : jpg;
+    const size_t flips = random() % 4;
+    for (size_t f = 0; f < flips; ++f) bytes[random() % bytes.size()] = uint8_t(random());
+    if (trial % 3 == 0) bytes.resize(random() % bytes.size() + 1);
+    auto kept = io::keepUndecoded(bytes, "damaged");
+    if (kept && *kept) {
+      EXPECT_GT((*kept)->width, 0);
+    }
+  }
+  // A JPEG cut before its end (no EOI): decoded to be judged, and stb refuses it.
+  std::vector<uint8_t> cut_jpeg(jpg.begin(), jpg.end() - 2);
+  ASSERT_FALSE(load(png, cut_jpeg));
+  EXPECT_NE(load(png, cut_jpeg).error().message.find("photo.jpg"), std::string::npos)
+      << load(png, cut_jpeg).error().message;
+}
+
+// One image used by two textures (colour and emission) is written once, in .gltf, .glb and
+// .obj; a texture whose pixels were edited gets its own file.
+TEST(TextureFiles, AnImageSharedByTexturesIsWrittenOnce) {
+  fs::path dir = test::scratchDir("shared_image");
+  const std::vector<uint8_t> png = rgbPng();
+  writeBytes(dir / "rgb.png", png);
+  writeBytes(dir / "photo.jpg", jpeg());
+  const std::string gltf = writeTexturedGltf(dir);
+  json doc = json::parse(std::ifstream(gltf));
+  doc["textures"][1]["source"] = 0;
+  std::ofstream(gltf) << doc.dump();
+  for (bool decode : {true, false}) {
+    SCOPED_TRACE(decode ? "decoded" : "undecoded");
+    auto asset = io::loadAsset(gltf, {.decode_textures = decode});
+    ASSERT_TRUE(asset) << asset.error().message;
+    ASSERT_EQ(asset->textures.size(), 2u);
+    fs::path out = test::scratchDir(decode ? "shared_image_out" : "shared_image_out_undecoded");
+    ASSERT_TRUE(io::writeGltf(*asset, (out / "a.gltf").string()));
+    json written = json::parse(std::ifstream(out / "a.gltf"));
+    EXPECT_EQ(written["images"].size(), 1u);
+    ASSERT_EQ(written["textures"].size(), 2u);
+    EXPECT_EQ(written["textures"][0]["source"], 0);
+    EXPECT_EQ(written["textures"][1]["source"], 0);
+    EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
+    EXPECT_FALSE(fs::exists(out / "a_texture1.png"));
+    ASSERT_TRUE(io::writeGltf(*asset, (out / "a.glb").string()));
+    auto glb = io::loadAsset((out / "a.glb").string());
+    ASSERT_TRUE(glb) << glb.error().message;
+    ASSERT_EQ(glb->textures.size(), 2u);
+    EXPECT_EQ(glb->textures[0].image.pixels, glb->textures[1].image.pixels);
+    const std::vector<uint8_t> glb_bytes = fileBytes(out / "a.glb");  // glTF 2.0 §4.4
+    ASSERT_GT(glb_bytes.size(), 20u);
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, glb_bytes.data() + 12, 4);
+    ASSERT_LE(20 + size_t(json_length), glb_bytes.size());
+    json glb_json = json::parse(glb_bytes.begin() + 20, glb_bytes.begin() + 20 + json_length);
+    EXPECT_EQ(glb_json["images"].size(), 1u);
+    EXPECT_EQ(glb_json["textures"][1]["source"], 0);
+    ASSERT_TRUE(io::writeObj(*asset, (out / "b.obj").string()));
+    EXPECT_EQ(fileBytes(out / "b_texture0.png"), png);
+    EXPECT_FALSE(fs::exists(out / "b_texture1.png"));
+    std::ifstream mtl(out / "b.mtl");
+    const std::string mtl_text((std::istreambuf_iterator<char>(mtl)), {});
+    EXPECT_NE(mtl_text.find("map_Kd b_texture0.png"), std::string::npos) << mtl_text;
+    EXPECT_NE(mtl_text.find("map_Ke b_texture0.png"), std::string::npos) << mtl_text;
+  }
+  // An edited copy is its own image.
+  auto asset = io::loadAsset(gltf);
+  ASSERT_TRUE(asset) << asset.error().message;
+  asset->textures[1].image.pixels[0] ^= 0xff;
+  fs::path out = test::scratchDir("shared_image_edited");
+  ASSERT_TRUE(io::writeGltf(*asset, (out / "a.gltf").string()));
+  json written = json::parse(std::ifstream(out / "a.gltf"));
+  EXPECT_EQ(written["images"].size(), 2u);
+  EXPECT_EQ(written["textures"][1]["source"], 1);
+  EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
+  EXPECT_TRUE(fs::exists(out / "a_texture1.png"));
+}
+
 // An undecoded texture cannot be drawn: the renderer says so instead of drawing it untextured.
 TEST(TextureFiles, RendererRefusesUndecodedTextures) {
   fs::path dir = test::scratchDir("undecoded_render");
@@ -331,6 +445,13 @@ TEST(TextureFiles, WaterBottleTexturesAreCopied) {
   }
   ASSERT_TRUE(io::writeGltf(*asset, (out / "bottle.glb").string()));
   EXPECT_LT(fs::file_size(out / "bottle.glb"), source_bytes + 400 * 1024);
+  // Real files pass the undecoded load's chunk check (none is decoded after all).
+  auto undecoded = io::loadAsset(source, {.decode_textures = false});
+  ASSERT_TRUE(undecoded) << undecoded.error().message;
+  for (const core::Texture& texture : undecoded->textures) {
+    EXPECT_TRUE(texture.image.pixels.empty()) << texture.name;
+    EXPECT_TRUE(texture.encoded) << texture.name;
+  }
 }
 
 }  // namespace

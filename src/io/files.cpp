@@ -4,6 +4,7 @@
 #include <stb_image_write.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -136,6 +137,92 @@ std::shared_ptr<const core::EncodedImage> keepEncoded(std::span<const uint8_t> b
   return encoded;
 }
 
+namespace {
+uint32_t bigEndian32(const uint8_t* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
+// CRC-32 as PNG defines it (ISO 3309 polynomial, reflected; PNG spec §5.5), a table a byte.
+uint32_t pngCrc(std::span<const uint8_t> bytes) {
+  static const auto table = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t n = 0; n < 256; ++n) {
+      uint32_t c = n;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
+      t[n] = c;
+    }
+    return t;
+  }();
+  uint32_t crc = 0xffffffffu;
+  for (uint8_t b : bytes) crc = table[(crc ^ b) & 0xff] ^ (crc >> 8);
+  return crc ^ 0xffffffffu;
+}
+
+// Whether a PNG's chunks are whole and intact: IHDR first, at least one IDAT, IEND, and every
+// chunk's CRC right (PNG spec §5.3). The CRCs are what catches damaged image data without
+// inflating it: 20 ms for WaterBottle's four PNGs (8.8 MB), where decoding them takes 0.24 s.
+bool pngChunksIntact(std::span<const uint8_t> bytes) {
+  size_t at = 8;  // after the signature
+  bool first = true, has_data = false;
+  while (bytes.size() - at >= 12) {
+    const uint32_t length = bigEndian32(&bytes[at]);
+    if (length > 0x7fffffffu || length > bytes.size() - at - 12) return false;
+    const uint8_t* type = &bytes[at + 4];
+    if (pngCrc(bytes.subspan(at + 4, 4 + size_t(length))) != bigEndian32(type + 4 + length))
+      return false;
+    if (first && std::memcmp(type, "IHDR", 4) != 0) return false;
+    first = false;
+    if (std::memcmp(type, "IDAT", 4) == 0) has_data = true;
+    if (std::memcmp(type, "IEND", 4) == 0) return has_data;
+    at += 12 + size_t(length);
+  }
+  return false;  // cut short before IEND
+}
+
+// Whether a JPEG's marker segments are whole (ITU T.81 Annex B): SOI, a frame header (SOFn) before
+// the first scan, every segment's length inside the file, the entropy-coded data of each scan
+// followed by a marker, and EOI at the end. JPEG carries no checksum: damage inside a scan's
+// data is found only by decoding it.
+bool jpegSegmentsIntact(std::span<const uint8_t> bytes) {
+  size_t at = 2;  // after SOI
+  bool frame = false;
+  while (at < bytes.size()) {
+    if (bytes[at] != 0xff) return false;
+    while (at < bytes.size() && bytes[at] == 0xff) ++at;  // fill bytes
+    if (at == bytes.size()) return false;
+    const uint8_t marker = bytes[at++];
+    if (marker == 0xd9) return frame;                                 // EOI
+    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) continue;  // no length
+    if (marker == 0x00 || marker == 0xd8) return false;
+    if (bytes.size() - at < 2) return false;
+    const size_t length = size_t(bytes[at]) << 8 | bytes[at + 1];
+    if (length < 2 || length > bytes.size() - at) return false;
+    const bool sof = marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 &&
+                     marker != 0xcc;
+    frame = frame || sof;
+    at += length;
+    if (marker == 0xda) {  // SOS: entropy-coded data up to the next marker that is not a stuffed
+                           // zero or a restart
+      if (!frame) return false;
+      for (;;) {
+        const uint8_t* next = static_cast<const uint8_t*>(
+            std::memchr(bytes.data() + at, 0xff, bytes.size() - at));
+        if (!next) return false;
+        at = size_t(next - bytes.data());
+        if (at + 1 >= bytes.size()) return false;
+        const uint8_t following = bytes[at + 1];
+        if (following == 0x00 || (following >= 0xd0 && following <= 0xd7) || following == 0xff) {
+          at += following == 0xff ? 1 : 2;
+          continue;
+        }
+        break;
+      }
+    }
+  }
+  return false;
+}
+}  // namespace
+
 core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
     std::span<const uint8_t> bytes, const std::string& name) {
   std::string mime_type = imageMimeType(bytes);
@@ -149,6 +236,10 @@ core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
     return Error{name + ": cannot read the " + (mime_type == "image/png" ? "PNG" : "JPEG") +
                  " header" + (reason ? std::string(" (") + reason + ")" : std::string())};
   }
+  // A file whose structure is damaged is decoded after all, so that it is accepted or refused
+  // exactly as when every texture is decoded (stb reads some PNGs with a wrong CRC).
+  const bool intact = mime_type == "image/png" ? pngChunksIntact(bytes) : jpegSegmentsIntact(bytes);
+  if (!intact) return std::shared_ptr<const core::EncodedImage>();
   auto encoded = std::make_shared<core::EncodedImage>();
   encoded->bytes.assign(bytes.begin(), bytes.end());
   encoded->mime_type = std::move(mime_type);

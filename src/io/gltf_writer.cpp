@@ -156,8 +156,11 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
 
   // Textures: files beside a .gltf, or embedded bufferViews in a .glb; the bytes they were read
   // from while unchanged (textureFile), else PNG.
+  // Textures whose files would be equal byte for byte (one source image used as colour and as
+  // emission, say) share one image, written once.
   json images = json::array(), textures = json::array();
   std::vector<std::pair<std::string, std::vector<uint8_t>>> side_files;
+  std::vector<TextureFile> image_files;
   for (size_t t = 0; t < asset.textures.size(); ++t) {
     core::Texture blank;
     const core::Texture* texture = &asset.textures[t];
@@ -166,15 +169,23 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
       texture = &blank;
     }
     TextureFile file = textureFile(*texture);
-    if (binary) {
-      images.push_back({{"bufferView", builder.addView(file.bytes.data(), file.bytes.size(), 0)},
-                        {"mimeType", file.mime_type}});
-    } else {
-      std::string name = target.stem().string() + "_texture" + std::to_string(t) + file.extension;
-      images.push_back({{"uri", name}});
-      side_files.emplace_back((target.parent_path() / name).string(), std::move(file.bytes));
+    auto same = std::find_if(image_files.begin(), image_files.end(), [&](const TextureFile& f) {
+      return f.mime_type == file.mime_type && f.bytes == file.bytes;
+    });
+    const size_t image = size_t(same - image_files.begin());
+    if (same == image_files.end()) {
+      if (binary) {
+        images.push_back({{"bufferView", builder.addView(file.bytes.data(), file.bytes.size(), 0)},
+                          {"mimeType", file.mime_type}});
+      } else {
+        std::string name =
+            target.stem().string() + "_texture" + std::to_string(image) + file.extension;
+        images.push_back({{"uri", name}});
+        side_files.emplace_back((target.parent_path() / name).string(), file.bytes);
+      }
+      image_files.push_back(std::move(file));
     }
-    textures.push_back({{"source", t}, {"sampler", 0}});
+    textures.push_back({{"source", image}, {"sampler", 0}});
   }
 
   json document = {

@@ -2,6 +2,7 @@
 // Advanced Visualizer manual, Appendix B1) with the Exocortex PBR extension (Pr, Pm, Ke, map_Pr,
 // map_Pm, norm), so that readObj reads back what is written here. Textures with decoded images
 // are written as PNG beside the .obj.
+#include <algorithm>
 #include <charconv>
 #include <filesystem>
 #include <set>
@@ -70,7 +71,9 @@ class ObjWriter {
     std::string stem = obj_path.stem().string();
 
     // Textures first, so the MTL can name their files.
+    // Textures whose files would be equal byte for byte share one file, written once.
     std::vector<std::string> texture_files(asset_.textures.size());
+    std::vector<std::pair<TextureFile, std::string>> written;
     for (size_t i = 0; i < asset_.textures.size(); ++i) {
       const core::Texture& texture = asset_.textures[i];
       if (texture.image.pixels.empty() && !texture.encoded) {
@@ -85,6 +88,13 @@ class ObjWriter {
       }
       // The bytes it was read from while unchanged (textureFile), else PNG.
       TextureFile encoded = textureFile(texture);
+      auto same = std::find_if(written.begin(), written.end(), [&](const auto& w) {
+        return w.first.mime_type == encoded.mime_type && w.first.bytes == encoded.bytes;
+      });
+      if (same != written.end()) {
+        texture_files[i] = same->second;
+        continue;
+      }
       std::string file = stem + "_texture" + std::to_string(i) + encoded.extension;
       fs::path image_path = obj_path.parent_path() / file;
       if (auto status = refuseSource(image_path); !status) return status;
@@ -96,6 +106,7 @@ class ObjWriter {
         return status;
       }
       texture_files[i] = file;
+      written.emplace_back(std::move(encoded), file);
     }
 
     std::vector<std::string> names = uniqueMaterialNames(asset_.materials);
