@@ -142,25 +142,38 @@ uint32_t bigEndian32(const uint8_t* p) {
   return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
 }
 
-// CRC-32 as PNG defines it (ISO 3309 polynomial, reflected; PNG spec §5.5), a table a byte.
+// CRC-32 as PNG defines it (ISO 3309 polynomial, reflected; PNG spec §5.5), eight bytes a step
+// ("slicing by 8": table k advances a byte's remainder by k more bytes): 0.4 ms a MB, against
+// 2.2 ms a MB a byte at a time (a tenth of an undecoded WaterBottle simplify).
 uint32_t pngCrc(std::span<const uint8_t> bytes) {
-  static const auto table = [] {
-    std::array<uint32_t, 256> t{};
+  static const auto tables = [] {
+    std::array<std::array<uint32_t, 256>, 8> t{};
     for (uint32_t n = 0; n < 256; ++n) {
       uint32_t c = n;
       for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-      t[n] = c;
+      t[0][n] = c;
     }
+    for (uint32_t n = 0; n < 256; ++n)
+      for (size_t k = 1; k < 8; ++k) t[k][n] = t[0][t[k - 1][n] & 0xff] ^ (t[k - 1][n] >> 8);
     return t;
   }();
   uint32_t crc = 0xffffffffu;
-  for (uint8_t b : bytes) crc = table[(crc ^ b) & 0xff] ^ (crc >> 8);
+  const uint8_t* p = bytes.data();
+  size_t left = bytes.size();
+  for (; left >= 8; left -= 8, p += 8) {
+    const uint32_t low = crc ^ (uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
+                                uint32_t(p[3]) << 24);
+    crc = tables[7][low & 0xff] ^ tables[6][(low >> 8) & 0xff] ^ tables[5][(low >> 16) & 0xff] ^
+          tables[4][low >> 24] ^ tables[3][p[4]] ^ tables[2][p[5]] ^ tables[1][p[6]] ^
+          tables[0][p[7]];
+  }
+  for (; left > 0; --left, ++p) crc = tables[0][(crc ^ *p) & 0xff] ^ (crc >> 8);
   return crc ^ 0xffffffffu;
 }
 
 // Whether a PNG's chunks are whole and intact: IHDR first, at least one IDAT, IEND, and every
 // chunk's CRC right (PNG spec §5.3). The CRCs are what catches damaged image data without
-// inflating it: 20 ms for WaterBottle's four PNGs (8.8 MB), where decoding them takes 0.24 s.
+// inflating it: 3.5 ms for WaterBottle's four PNGs (8.8 MB), where decoding them takes 0.24 s.
 bool pngChunksIntact(std::span<const uint8_t> bytes) {
   size_t at = 8;  // after the signature
   bool first = true, has_data = false;
