@@ -115,6 +115,45 @@ TEST(ComputeTangents, MirroredUHasNegativeHandedness) {
   }
 }
 
+// A mirrored UV layout: two quads side by side, u = x on the left and u = 2 - x on the right (the
+// texture mirrored at x = 1), v = y. The two vertices on the mirror line are shared by both sides,
+// whose tangents point opposite ways (+x, w = +1 on the left; -x, w = -1 on the right): they are
+// split, one copy per side, as MikkTSpace does. Without the split their tangent sums cancel.
+TEST(ComputeTangents, MirrorLineVerticesAreSplit) {
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0}};
+  mesh.indices = {0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4};
+  mesh.submeshes = {{0, 12, 0}};
+  mesh.normals.assign(6, Vec3{0, 0, 1});
+  for (Vec3 p : mesh.positions) mesh.uv0.push_back({p.x <= 1 ? p.x : 2 - p.x, p.y});
+  EXPECT_EQ(core::computeTangents(mesh), 2u);
+  ASSERT_EQ(mesh.vertexCount(), 8u);
+  ASSERT_EQ(mesh.normals.size(), 8u);
+  ASSERT_EQ(mesh.uv0.size(), 8u);
+  ASSERT_EQ(mesh.tangents.size(), 8u);
+  ASSERT_TRUE(core::validateMesh(mesh));
+  for (size_t t = 0; t < 4; ++t) {
+    const bool left = t < 2;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh.indices[t * 3 + k];
+      SCOPED_TRACE(testing::Message() << "triangle " << t << " vertex " << v);
+      const Vec4 tangent = mesh.tangents[v];
+      expectVecNear({tangent.x, tangent.y, tangent.z}, {left ? 1.0f : -1.0f, 0, 0}, 1e-6f);
+      EXPECT_EQ(tangent.w, left ? 1.0f : -1.0f);
+    }
+  }
+  // The copies sit where their originals do, with the same attributes.
+  for (uint32_t copy : {6u, 7u}) {
+    const Vec3 p = mesh.positions[copy];
+    EXPECT_EQ(p.x, 1.0f);
+    EXPECT_EQ(mesh.uv0[copy].x, 1.0f);
+    EXPECT_EQ(mesh.uv0[copy].y, p.y);
+  }
+  // Again on the result: nothing left to split.
+  EXPECT_EQ(core::computeTangents(mesh), 0u);
+  EXPECT_EQ(mesh.vertexCount(), 8u);
+}
+
 // The quad as two triangles with their own three vertices each (6 vertices, 2 shared positions).
 Mesh unsharedQuad() {
   Mesh mesh;

@@ -254,6 +254,42 @@ TEST(ObjReader, MtlTexturesWithoutDecoding) {
   EXPECT_EQ(asset.textures.size(), 4u);
 }
 
+// Tangents generated at load split the mirror line of a mirrored UV layout (two quads, u = x on
+// the left and 2 - x on the right) only where a normal map will shade with them: without one the
+// copies would be seams for nothing.
+TEST(ObjReader, GeneratedTangentsSplitMirrorLinesOnlyUnderANormalMap) {
+  std::filesystem::path dir = test::scratchDir("mirrored");
+  const std::string geometry =
+      "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n"
+      "vt 0 0\nvt 1 0\nvt 0 0\nvt 0 1\nvt 1 1\nvt 0 1\n"
+      "f 1/1 2/2 5/5 4/4\nf 2/2 3/3 6/6 5/5\n";
+  std::ofstream(dir / "plain.mtl") << "newmtl a\nmap_Kd colour.png\n";
+  std::ofstream(dir / "bumpy.mtl") << "newmtl a\nmap_Kd colour.png\nnorm normal.png\n";
+  for (const char* name : {"plain", "bumpy"}) {
+    std::ofstream(dir / (std::string(name) + ".obj"))
+        << "mtllib " << name << ".mtl\nusemtl a\n" << geometry;
+  }
+  io::LoadOptions options;
+  options.load_textures = false;
+  auto plain = io::loadAsset((dir / "plain.obj").string(), options);
+  auto bumpy = io::loadAsset((dir / "bumpy.obj").string(), options);
+  ASSERT_TRUE(plain) << plain.error().message;
+  ASSERT_TRUE(bumpy) << bumpy.error().message;
+  EXPECT_FALSE(core::usesNormalMap(*plain));
+  EXPECT_TRUE(core::usesNormalMap(*bumpy));
+  EXPECT_EQ(plain->mesh.vertexCount(), 6u);
+  ASSERT_EQ(bumpy->mesh.vertexCount(), 8u);
+  ASSERT_EQ(bumpy->mesh.tangents.size(), 8u);
+  for (size_t t = 0; t < 4; ++t) {  // the left quad's two triangles first
+    const float side = t < 2 ? 1.0f : -1.0f;
+    for (int k = 0; k < 3; ++k) {
+      const core::Vec4 tangent = bumpy->mesh.tangents[bumpy->mesh.indices[t * 3 + k]];
+      EXPECT_NEAR(tangent.x, side, 1e-5f) << t;
+      EXPECT_EQ(tangent.w, -side) << t;  // OBJ's v runs up, glTF's (ours) down: v flipped
+    }
+  }
+}
+
 TEST(ObjReader, MissingMtlFileIsAWarning) {
   std::string path = writeScratchFile("nomtl.obj",
                                       "mtllib does_not_exist.mtl\n"

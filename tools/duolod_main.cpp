@@ -469,9 +469,11 @@ int runSimplify(SimplifyFlags& flags) {
                               asset->mesh.colors.empty() && !flags.simplify_generated_normals;
   const bool derived_normals = asset->mesh.normals.empty();
   const bool derived_tangents = asset->mesh.tangents.empty();
+  const bool normal_mapped = core::usesNormalMap(*asset);
   auto derive = [&](core::Mesh& mesh) {
     if (derived_normals) core::computeNormals(mesh);
-    if (derived_tangents && !mesh.normals.empty() && !mesh.uv0.empty()) core::computeTangents(mesh);
+    if (derived_tangents && !mesh.normals.empty() && !mesh.uv0.empty())
+      core::computeTangents(mesh, normal_mapped);
   };
   // What a renderer sees (the loader's defaults): the asset itself, or for a file of positions
   // only a copy with derived normals.

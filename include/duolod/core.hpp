@@ -158,8 +158,13 @@ Sphere computeBoundingSphere(const Mesh& mesh);
 void computeNormals(Mesh& mesh);
 // Per-vertex tangents from UV derivatives in the MikkTSpace convention (tangent along +u, w the
 // handedness so that bitangent = w * cross(normal, tangent)), angle-weighted, Gram-Schmidt
-// orthogonalized against the normal. Requires normals and uv0.
-void computeTangents(Mesh& mesh);
+// orthogonalized against the normal. Requires normals and uv0 (otherwise does nothing). As
+// MikkTSpace, a vertex shared by triangles whose UV mapping keeps the turning sense and by
+// mirrored ones (the mirror line of a symmetric layout) is split in two, one per side: the
+// mirrored triangles get a copy of it (unless `split_mirrored` is false: the split only matters
+// to a normal map, and each copy is a seam the simplifier must keep; see usesNormalMap). Returns
+// the number of vertices so added.
+size_t computeTangents(Mesh& mesh, bool split_mirrored = true);
 // Merges vertices whose every attribute is bitwise equal; returns the number removed.
 size_t weldVertices(Mesh& mesh);
 // Removes triangles with repeated indices or zero area; returns the number removed.
@@ -245,6 +250,10 @@ struct Asset {
   std::vector<Texture> textures;
   std::vector<std::string> warnings;  // non-fatal problems found while loading
 };
+
+// Whether a submesh's material has a normal texture: the tangents then shade, and their mirror
+// lines must be split (computeTangents).
+bool usesNormalMap(const Asset& asset);
 
 // ---------------------------------------------------------------------------------------------
 // Logging and progress. The CLI installs sinks; the library never writes to stdout itself.

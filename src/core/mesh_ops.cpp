@@ -205,9 +205,56 @@ void computeNormals(Mesh& mesh) {
   }
 }
 
-void computeTangents(Mesh& mesh) {
+namespace {
+// The UV mapping's orientation on a triangle: +1 where it keeps the triangle's turning sense,
+// -1 where it mirrors it (MikkTSpace's sign of the signed UV area), 0 where it is degenerate.
+int uvOrientation(const Mesh& mesh, size_t t) {
+  const Vec2 a = mesh.uv0[mesh.indices[t]], b = mesh.uv0[mesh.indices[t + 1]],
+             c = mesh.uv0[mesh.indices[t + 2]];
+  const float det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+  return std::fabs(det) < 1e-20f ? 0 : det > 0 ? 1 : -1;
+}
+
+// A vertex that triangles of both UV orientations share (the mirror line of a mirrored UV
+// layout) has no one tangent frame: its tangents from either side point opposite ways and cancel.
+// MikkTSpace gives each side its own vertex; so does this: the mirrored triangles' corners move
+// to a copy of the vertex (every stream copied). Returns the number of copies.
+size_t splitMirroredVertices(Mesh& mesh) {
   const size_t n = mesh.vertexCount();
-  if (mesh.normals.size() != n || mesh.uv0.size() != n) return;
+  std::vector<uint8_t> seen(n, 0);  // bit 0: a kept-orientation triangle, bit 1: a mirrored one
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const int orientation = uvOrientation(mesh, t);
+    if (orientation == 0) continue;
+    for (int k = 0; k < 3; ++k) seen[mesh.indices[t + k]] |= orientation > 0 ? 1 : 2;
+  }
+  std::vector<uint32_t> copy_of(n, UINT32_MAX);
+  size_t copies = 0;
+  for (size_t v = 0; v < n; ++v)
+    if (seen[v] == 3) copy_of[v] = uint32_t(n + copies++);
+  if (copies == 0) return 0;
+  auto extend = [&](auto& stream) {
+    if (stream.size() != n) return;
+    stream.resize(n + copies);
+    for (size_t v = 0; v < n; ++v)
+      if (copy_of[v] != UINT32_MAX) stream[copy_of[v]] = stream[v];
+  };
+  extend(mesh.positions), extend(mesh.normals), extend(mesh.tangents), extend(mesh.uv0),
+      extend(mesh.uv1), extend(mesh.colors);
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    if (uvOrientation(mesh, t) >= 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& index = mesh.indices[t + k];
+      if (index < n && copy_of[index] != UINT32_MAX) index = copy_of[index];
+    }
+  }
+  return copies;
+}
+}  // namespace
+
+size_t computeTangents(Mesh& mesh, bool split_mirrored) {
+  if (mesh.normals.size() != mesh.vertexCount() || mesh.uv0.size() != mesh.vertexCount()) return 0;
+  const size_t split = split_mirrored ? splitMirroredVertices(mesh) : 0;
+  const size_t n = mesh.vertexCount();
   std::vector<Vec3> tangent_sum(n), bitangent_sum(n);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     uint32_t i[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
@@ -244,6 +291,15 @@ void computeTangents(Mesh& mesh) {
     float handedness = dot(cross(normal, t), bitangent_sum[v]) < 0 ? -1.0f : 1.0f;
     mesh.tangents[v] = {t.x, t.y, t.z, handedness};
   }
+  return split;
+}
+
+bool usesNormalMap(const Asset& asset) {
+  for (const Submesh& submesh : asset.mesh.submeshes)
+    if (submesh.material < asset.materials.size() &&
+        asset.materials[submesh.material].normal_texture >= 0)
+      return true;
+  return false;
 }
 
 size_t weldVertices(Mesh& mesh) {
