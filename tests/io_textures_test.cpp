@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <stb_image_write.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -283,6 +284,20 @@ TEST(TextureFiles, DamagedUndecodedTexturesAreDecodedToBeJudged) {
       EXPECT_GT((*kept)->width, 0);
     }
   }
+  // Well-formed but of a kind stb does not read: an unknown critical PNG chunk (right CRC) after
+  // IHDR, a JPEG with an empty JPG0 (0xF0) segment before its scan (after the frame header, which
+  // is as far as the header read goes). Decoded to be judged, and refused.
+  std::vector<uint8_t> unknown_chunk(png.begin(), png.begin() + 33);  // signature + IHDR
+  const uint8_t abcd[] = {0, 0, 0, 0, 'A', 'B', 'C', 'D', 0xdb, 0x17, 0x20, 0xa5};  // CRC("ABCD")
+  unknown_chunk.insert(unknown_chunk.end(), std::begin(abcd), std::end(abcd));
+  unknown_chunk.insert(unknown_chunk.end(), png.begin() + 33, png.end());
+  EXPECT_FALSE(load(unknown_chunk, jpg));
+  std::vector<uint8_t> extension = jpg;
+  const uint8_t sos[] = {0xff, 0xda};
+  auto scan = std::search(extension.begin(), extension.end(), std::begin(sos), std::end(sos));
+  ASSERT_NE(scan, extension.end());
+  extension.insert(scan, {0xff, 0xf0, 0x00, 0x02});
+  EXPECT_FALSE(load(png, extension));
   // A JPEG cut before its end (no EOI): decoded to be judged, and stb refuses it.
   std::vector<uint8_t> cut_jpeg(jpg.begin(), jpg.end() - 2);
   ASSERT_FALSE(load(png, cut_jpeg));

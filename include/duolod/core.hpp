@@ -251,8 +251,8 @@ struct Asset {
   std::vector<std::string> warnings;  // non-fatal problems found while loading
 };
 
-// Whether a submesh's material has a normal texture: the tangents then shade, and their mirror
-// lines must be split (computeTangents).
+// Whether any submesh's material has a normal texture: the tangents then shade, and their mirror
+// lines must be split (computeTangents; for the whole mesh, whichever submesh has it).
 bool usesNormalMap(const Asset& asset);
 
 // ---------------------------------------------------------------------------------------------

@@ -181,12 +181,14 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
         std::string name =
             target.stem().string() + "_texture" + std::to_string(image) + file.extension;
         images.push_back({{"uri", name}});
-        side_files.emplace_back((target.parent_path() / name).string(), file.bytes);
+        side_files.emplace_back((target.parent_path() / name).string(), std::vector<uint8_t>{});
       }
       image_files.push_back(std::move(file));
     }
     textures.push_back({{"source", image}, {"sampler", 0}});
   }
+  for (size_t i = 0; i < side_files.size(); ++i)  // moved, once no more textures compare
+    side_files[i].second = std::move(image_files[i].bytes);
 
   json document = {
       {"asset", {{"version", "2.0"}, {"generator", "duolod " DUOLOD_VERSION}}},
