@@ -362,6 +362,16 @@ TEST(TextureFiles, AnImageSharedByTexturesIsWrittenOnce) {
   EXPECT_EQ(written["textures"][1]["source"], 1);
   EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
   EXPECT_TRUE(fs::exists(out / "a_texture1.png"));
+  // .obj files are numbered as written: textures 0 and 1 share one file, an edited third copy
+  // is the second file, not _texture2.
+  auto three = io::loadAsset(gltf);
+  ASSERT_TRUE(three) << three.error().message;
+  three->textures.push_back(three->textures[0]);
+  three->textures[2].image.pixels[0] ^= 0xff;
+  ASSERT_TRUE(io::writeObj(*three, (out / "b.obj").string()));
+  EXPECT_EQ(fileBytes(out / "b_texture0.png"), png);
+  EXPECT_TRUE(fs::exists(out / "b_texture1.png"));
+  EXPECT_FALSE(fs::exists(out / "b_texture2.png"));
 }
 
 // An undecoded texture cannot be drawn: the renderer says so instead of drawing it untextured.

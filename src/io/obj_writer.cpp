@@ -95,7 +95,8 @@ class ObjWriter {
         texture_files[i] = same->second;
         continue;
       }
-      std::string file = stem + "_texture" + std::to_string(i) + encoded.extension;
+      // Numbered by the files written, so that shared and unwritten textures leave no gaps.
+      std::string file = stem + "_texture" + std::to_string(written.size()) + encoded.extension;
       fs::path image_path = obj_path.parent_path() / file;
       if (auto status = refuseSource(image_path); !status) return status;
       if (encoded.bytes.empty())
