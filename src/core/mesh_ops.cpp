@@ -222,9 +222,11 @@ int uvOrientation(const Mesh& mesh, size_t t) {
 size_t splitMirroredVertices(Mesh& mesh) {
   const size_t n = mesh.vertexCount();
   std::vector<uint8_t> seen(n, 0);  // bit 0: a kept-orientation triangle, bit 1: a mirrored one
+  std::vector<uint8_t> mirrored(mesh.indices.size() / 3, 0);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     const int orientation = uvOrientation(mesh, t);
     if (orientation == 0) continue;
+    mirrored[t / 3] = orientation < 0;
     for (int k = 0; k < 3; ++k) seen[mesh.indices[t + k]] |= orientation > 0 ? 1 : 2;
   }
   std::vector<uint32_t> copy_of(n, UINT32_MAX);
@@ -241,7 +243,7 @@ size_t splitMirroredVertices(Mesh& mesh) {
   extend(mesh.positions), extend(mesh.normals), extend(mesh.tangents), extend(mesh.uv0),
       extend(mesh.uv1), extend(mesh.colors);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    if (uvOrientation(mesh, t) >= 0) continue;
+    if (!mirrored[t / 3]) continue;
     for (int k = 0; k < 3; ++k) {
       uint32_t& index = mesh.indices[t + k];
       if (index < n && copy_of[index] != UINT32_MAX) index = copy_of[index];

@@ -155,9 +155,8 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   for (const core::Material& m : asset.materials) materials.push_back(materialJson(m));
 
   // Textures: files beside a .gltf, or embedded bufferViews in a .glb; the bytes they were read
-  // from while unchanged (textureFile), else PNG.
-  // Textures whose files would be equal byte for byte (one source image used as colour and as
-  // emission, say) share one image, written once.
+  // from while unchanged (textureFile), else PNG. Textures whose files would be equal byte for
+  // byte (one source image used as colour and as emission, say) share one image, written once.
   json images = json::array(), textures = json::array();
   std::vector<std::pair<std::string, std::vector<uint8_t>>> side_files;
   std::vector<TextureFile> image_files;
