@@ -154,6 +154,48 @@ TEST(ComputeTangents, MirrorLineVerticesAreSplit) {
   EXPECT_EQ(mesh.vertexCount(), 8u);
 }
 
+// Per submesh: the same mirrored layout twice, the copy beside it (x + 3) as a second submesh,
+// which also has a triangle on the first's mirror line (vertices 4 and 5, mirrored like the right
+// quad). Only the flagged submesh's mirror line is split; the other submesh's triangles keep the
+// vertices they share with it.
+TEST(ComputeTangents, OnlyTheFlaggedSubmeshesAreSplit) {
+  Mesh mesh;
+  for (float dx : {0.0f, 3.0f})
+    for (Vec3 p : {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{2, 0, 0}, Vec3{0, 1, 0}, Vec3{1, 1, 0},
+                   Vec3{2, 1, 0}})
+      mesh.positions.push_back({p.x + dx, p.y, p.z});
+  mesh.positions.push_back({1.5f, 2, 0});  // 12: the extra triangle's own corner
+  mesh.indices = {0, 1, 4,  0, 4,  3, 1, 2, 5,  1, 5,  4,    // submesh 0
+                  6, 7, 10, 6, 10, 9, 7, 8, 11, 7, 11, 10,   // submesh 1
+                  4, 5, 12};                                 // submesh 1, on submesh 0's line
+  mesh.submeshes = {{0, 12, 0}, {12, 15, 1}};
+  mesh.normals.assign(13, Vec3{0, 0, 1});
+  for (Vec3 p : mesh.positions) {
+    const float x = p.x >= 3 ? p.x - 3 : p.x;
+    mesh.uv0.push_back({x <= 1 ? x : 2 - x, p.y});
+  }
+  const Mesh input = mesh;
+  EXPECT_EQ(core::computeTangents(mesh, std::vector<bool>{true, false}), 2u);
+  ASSERT_EQ(mesh.vertexCount(), 15u);
+  ASSERT_TRUE(core::validateMesh(mesh));
+  // Submesh 0 as in MirrorLineVerticesAreSplit: its right quad moved to the copies 13 and 14.
+  EXPECT_EQ(mesh.indices[6], 13u);
+  EXPECT_EQ(mesh.indices[11], 14u);
+  for (size_t t = 0; t < 4; ++t)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(mesh.tangents[mesh.indices[t * 3 + k]].x, t < 2 ? 1.0f : -1.0f, 1e-6f) << t;
+  // Submesh 1 untouched: its own line unsplit, its extra triangle still on vertex 4.
+  for (size_t i = 12; i < input.indices.size(); ++i) EXPECT_EQ(mesh.indices[i], input.indices[i]);
+  // Flagging every submesh splits the second line too, and the extra triangle (mirrored) joins
+  // vertex 4's mirrored copy.
+  Mesh all = input;
+  EXPECT_EQ(core::computeTangents(all, std::vector<bool>{true, true}), 4u);
+  EXPECT_EQ(all.indices[24], all.indices[11]);
+  Mesh none = input;
+  EXPECT_EQ(core::computeTangents(none, std::vector<bool>{false, false}), 0u);
+  EXPECT_EQ(none.vertexCount(), 13u);
+}
+
 // The quad as two triangles with their own three vertices each (6 vertices, 2 shared positions).
 Mesh unsharedQuad() {
   Mesh mesh;

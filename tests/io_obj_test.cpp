@@ -288,6 +288,21 @@ TEST(ObjReader, GeneratedTangentsSplitMirrorLinesOnlyUnderANormalMap) {
       EXPECT_EQ(tangent.w, -side) << t;  // OBJ's v runs up, glTF's (ours) down: v flipped
     }
   }
+  // Per submesh: the same layout twice in one file, the second copy (x + 3) under a material
+  // without a normal map, splits the first copy's line only.
+  std::ofstream(dir / "mixed.mtl") << "newmtl bumpy\nmap_Kd colour.png\nnorm normal.png\n"
+                                   << "newmtl plain\nmap_Kd colour.png\n";
+  std::ofstream(dir / "mixed.obj")
+      << "mtllib mixed.mtl\n"
+      << "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n"
+      << "vt 0 0\nvt 1 0\nvt 0 0\nvt 0 1\nvt 1 1\nvt 0 1\n"
+      << "v 3 0 0\nv 4 0 0\nv 5 0 0\nv 3 1 0\nv 4 1 0\nv 5 1 0\n"
+      << "usemtl bumpy\nf 1/1 2/2 5/5 4/4\nf 2/2 3/3 6/6 5/5\n"
+      << "usemtl plain\nf 7/1 8/2 11/5 10/4\nf 8/2 9/3 12/6 11/5\n";
+  auto mixed = io::loadAsset((dir / "mixed.obj").string(), options);
+  ASSERT_TRUE(mixed) << mixed.error().message;
+  EXPECT_EQ(core::normalMappedSubmeshes(*mixed), (std::vector<bool>{true, false}));
+  EXPECT_EQ(mixed->mesh.vertexCount(), 14u);
 }
 
 TEST(ObjReader, MissingMtlFileIsAWarning) {

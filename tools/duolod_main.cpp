@@ -469,7 +469,7 @@ int runSimplify(SimplifyFlags& flags) {
                               asset->mesh.colors.empty() && !flags.simplify_generated_normals;
   const bool derived_normals = asset->mesh.normals.empty();
   const bool derived_tangents = asset->mesh.tangents.empty();
-  const bool normal_mapped = core::usesNormalMap(*asset);
+  const std::vector<bool> normal_mapped = core::normalMappedSubmeshes(*asset);
   auto derive = [&](core::Mesh& mesh) {
     if (derived_normals) core::computeNormals(mesh);
     if (derived_tangents && !mesh.normals.empty() && !mesh.uv0.empty())

@@ -165,6 +165,10 @@ void computeNormals(Mesh& mesh);
 // to a normal map, and each copy is a seam the simplifier must keep; see usesNormalMap). Returns
 // the number of vertices so added.
 size_t computeTangents(Mesh& mesh, bool split_mirrored = true);
+// The same, splitting the mirror lines of the flagged submeshes only (by submesh index, as
+// normalMappedSubmeshes gives them; a mesh without submeshes is submesh 0). Other triangles keep
+// the vertices they share with a split line.
+size_t computeTangents(Mesh& mesh, const std::vector<bool>& split_submeshes);
 // Merges vertices whose every attribute is bitwise equal; returns the number removed.
 size_t weldVertices(Mesh& mesh);
 // Removes triangles with repeated indices or zero area; returns the number removed.
@@ -251,8 +255,10 @@ struct Asset {
   std::vector<std::string> warnings;  // non-fatal problems found while loading
 };
 
-// Whether any submesh's material has a normal texture: the tangents then shade, and their mirror
-// lines must be split (computeTangents; for the whole mesh, whichever submesh has it).
+// Per submesh (by index), whether its material has a normal texture: its tangents then shade,
+// and its mirror lines must be split (computeTangents).
+std::vector<bool> normalMappedSubmeshes(const Asset& asset);
+// Whether any submesh's material has a normal texture.
 bool usesNormalMap(const Asset& asset);
 
 // ---------------------------------------------------------------------------------------------

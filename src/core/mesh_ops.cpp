@@ -218,12 +218,15 @@ int uvOrientation(const Mesh& mesh, size_t t) {
 // A vertex that triangles of both UV orientations share (the mirror line of a mirrored UV
 // layout) has no one tangent frame: its tangents from either side point opposite ways and cancel.
 // MikkTSpace gives each side its own vertex; so does this: the mirrored triangles' corners move
-// to a copy of the vertex (every stream copied). Returns the number of copies.
-size_t splitMirroredVertices(Mesh& mesh) {
+// to a copy of the vertex (every stream copied). Only the triangles flagged in `in_scope` take
+// part: a vertex that other triangles share keeps serving them. Returns the number of copies.
+size_t splitMirroredVertices(Mesh& mesh, const std::vector<uint8_t>& in_scope) {
   const size_t n = mesh.vertexCount();
+  const size_t triangles = mesh.indices.size() / 3;
   std::vector<uint8_t> seen(n, 0);  // bit 0: a kept-orientation triangle, bit 1: a mirrored one
-  std::vector<uint8_t> mirrored(mesh.indices.size() / 3, 0);
+  std::vector<uint8_t> mirrored(triangles, 0);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    if (!in_scope[t / 3]) continue;
     const int orientation = uvOrientation(mesh, t);
     if (orientation == 0) continue;
     mirrored[t / 3] = orientation < 0;
@@ -251,11 +254,11 @@ size_t splitMirroredVertices(Mesh& mesh) {
   }
   return copies;
 }
-}  // namespace
 
-size_t computeTangents(Mesh& mesh, bool split_mirrored) {
+// The tangent frames themselves, once the mirror lines in `split_scope` (per triangle) are split.
+size_t computeTangentsSplitting(Mesh& mesh, const std::vector<uint8_t>& split_scope) {
   if (mesh.normals.size() != mesh.vertexCount() || mesh.uv0.size() != mesh.vertexCount()) return 0;
-  const size_t split = split_mirrored ? splitMirroredVertices(mesh) : 0;
+  const size_t split = splitMirroredVertices(mesh, split_scope);
   const size_t n = mesh.vertexCount();
   std::vector<Vec3> tangent_sum(n), bitangent_sum(n);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
@@ -295,13 +298,38 @@ size_t computeTangents(Mesh& mesh, bool split_mirrored) {
   }
   return split;
 }
+}  // namespace
+
+std::vector<bool> normalMappedSubmeshes(const Asset& asset) {
+  std::vector<bool> mapped;
+  mapped.reserve(asset.mesh.submeshes.size());
+  for (const Submesh& submesh : asset.mesh.submeshes)
+    mapped.push_back(submesh.material < asset.materials.size() &&
+                     asset.materials[submesh.material].normal_texture >= 0);
+  return mapped;
+}
+
+size_t computeTangents(Mesh& mesh, bool split_mirrored) {
+  return computeTangentsSplitting(mesh, std::vector<uint8_t>(mesh.triangleCount(), split_mirrored));
+}
+
+size_t computeTangents(Mesh& mesh, const std::vector<bool>& split_submeshes) {
+  const size_t triangles = mesh.triangleCount();
+  std::vector<uint8_t> in_scope(triangles, 0);
+  if (mesh.submeshes.empty() && !split_submeshes.empty() && split_submeshes[0])
+    in_scope.assign(triangles, 1);
+  for (size_t s = 0; s < mesh.submeshes.size() && s < split_submeshes.size(); ++s) {
+    if (!split_submeshes[s]) continue;
+    const size_t first = std::min<size_t>(triangles, mesh.submeshes[s].first_index / 3);
+    const size_t end = std::min(triangles, first + mesh.submeshes[s].index_count / 3);
+    std::fill(in_scope.begin() + first, in_scope.begin() + end, 1);
+  }
+  return computeTangentsSplitting(mesh, in_scope);
+}
 
 bool usesNormalMap(const Asset& asset) {
-  for (const Submesh& submesh : asset.mesh.submeshes)
-    if (submesh.material < asset.materials.size() &&
-        asset.materials[submesh.material].normal_texture >= 0)
-      return true;
-  return false;
+  const std::vector<bool> mapped = normalMappedSubmeshes(asset);
+  return std::find(mapped.begin(), mapped.end(), true) != mapped.end();
 }
 
 size_t weldVertices(Mesh& mesh) {
