@@ -237,8 +237,9 @@ TEST(TextureFiles, UndecodedTexturesAreSizedAndWrittenBack) {
       << refused.error().message;
 }
 
-// Undecoded loading checks a PNG's chunk CRCs and a JPEG's segments; a damaged file is decoded
-// after all, so it is refused (or accepted) as in a decoded load, never copied through unread.
+// Undecoded loading checks a PNG's chunk CRCs and decodes a JPEG (no checksum) to check it; a
+// damaged file is decoded after all, so it is refused (or accepted) as in a decoded load, never
+// copied through unread.
 TEST(TextureFiles, DamagedUndecodedTexturesAreDecodedToBeJudged) {
   fs::path dir = test::scratchDir("undecoded_damaged");
   const std::vector<uint8_t> png = rgbPng(), jpg = jpeg();
@@ -303,6 +304,36 @@ TEST(TextureFiles, DamagedUndecodedTexturesAreDecodedToBeJudged) {
   ASSERT_FALSE(load(png, cut_jpeg));
   EXPECT_NE(load(png, cut_jpeg).error().message.find("photo.jpg"), std::string::npos)
       << load(png, cut_jpeg).error().message;
+  // One byte of the scan data changed (never to a marker) in a busier 48x48 photo: the segments
+  // stay whole, so only decoding can tell. Every change stb refuses is left to be decoded (and
+  // so refused); the others are kept undecoded. Some of each must occur.
+  std::vector<uint8_t> busy_rgb, busy;
+  for (int i = 0; i < 48 * 48 * 3; ++i) busy_rgb.push_back(uint8_t((i * 37) ^ (i / 144 * 91)));
+  stbi_write_jpg_to_func(appendTo, &busy, 48, 48, 3, busy_rgb.data(), 90);
+  const std::vector<uint8_t>& photo = busy;
+  const size_t scan_start = size_t(
+      std::search(photo.begin(), photo.end(), std::begin(sos), std::end(sos)) - photo.begin());
+  ASSERT_LT(scan_start + 4, photo.size());
+  const size_t scan_data = scan_start + 2 + (size_t(photo[scan_start + 2]) << 8 | photo[scan_start + 3]);
+  ASSERT_LT(scan_data + 16, photo.size());
+  size_t refused_by_stb = 0, kept_undecoded = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    std::vector<uint8_t> bytes = photo;
+    const size_t at = scan_data + random() % (photo.size() - 2 - scan_data);
+    if (bytes[at] == 0xff || (at > 0 && bytes[at - 1] == 0xff)) continue;  // a marker or stuffing
+    bytes[at] = uint8_t(bytes[at] ^ (1 + random() % 0xfe));
+    if (bytes[at] == 0xff) continue;
+    auto kept = io::keepUndecoded(bytes, "scan");
+    ASSERT_TRUE(kept) << kept.error().message;
+    if (!io::decodeImage(bytes, "scan")) {
+      ++refused_by_stb;
+      EXPECT_FALSE(*kept) << "byte " << at << ": stb refuses it, yet it was kept undecoded";
+    } else if (*kept) {
+      ++kept_undecoded;
+    }
+  }
+  EXPECT_GT(refused_by_stb, 0u);
+  EXPECT_GT(kept_undecoded, 0u);
 }
 
 // One image used by two textures (colour and emission) is written once, in .gltf, .glb and

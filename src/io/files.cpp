@@ -245,6 +245,16 @@ bool jpegSegmentsIntact(std::span<const uint8_t> bytes) {
   }
   return false;
 }
+
+// Whether stb decodes the file as decodeImage asks it to (the pixels are dropped).
+bool decodes(std::span<const uint8_t> bytes) {
+  int width = 0, height = 0, channels = 0;
+  stbi_uc* pixels = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width,
+                                          &height, &channels, 4);
+  const bool decoded = pixels != nullptr;
+  stbi_image_free(pixels);
+  return decoded;
+}
 }  // namespace
 
 core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
@@ -261,10 +271,16 @@ core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
                  " header" + (reason ? std::string(" (") + reason + ")" : std::string())};
   }
   // A file whose structure is damaged or unusual is decoded after all, so that it is accepted or
-  // refused as when every texture is decoded (stb reads some PNGs with a wrong CRC). What the
-  // check cannot see (a JPEG's table contents and scan data, a PNG's zlib stream under right
-  // CRCs) goes through undecoded.
-  const bool intact = mime_type == "image/png" ? pngChunksIntact(bytes) : jpegSegmentsIntact(bytes);
+  // refused as when every texture is decoded (stb reads some PNGs with a wrong CRC). A PNG's
+  // chunks carry CRCs, which is as far as it is checked (its zlib stream under right CRCs goes
+  // through unread). A JPEG carries no checksum, and damage to its tables or scan data shows only
+  // when decoding: stb refused about half of 200 one-byte changes to a scan, which the segment
+  // check passed. So a JPEG is decoded here too, and its pixels dropped: 10-20 ms for a 2048²
+  // photo, against the PNG encoding that keeping the bytes saves, and one image's pixels in
+  // memory at a time (bench/RESULTS.md, session 26).
+  const bool intact = mime_type == "image/png"
+                          ? pngChunksIntact(bytes)
+                          : jpegSegmentsIntact(bytes) && decodes(bytes);
   if (!intact) return std::shared_ptr<const core::EncodedImage>();
   auto encoded = std::make_shared<core::EncodedImage>();
   encoded->bytes.assign(bytes.begin(), bytes.end());
