@@ -162,8 +162,8 @@ void computeNormals(Mesh& mesh);
 // MikkTSpace, a vertex shared by triangles whose UV mapping keeps the turning sense and by
 // mirrored ones (the mirror line of a symmetric layout) is split in two, one per side: the
 // mirrored triangles get a copy of it (unless `split_mirrored` is false: the split only matters
-// to a normal map, and each copy is a seam the simplifier must keep; see usesNormalMap). Returns
-// the number of vertices so added.
+// to a normal map, and each copy is a seam the simplifier must keep; see the overload below).
+// Returns the number of vertices so added.
 size_t computeTangents(Mesh& mesh, bool split_mirrored = true);
 // The same, splitting the mirror lines of the flagged submeshes only (by submesh index, as
 // normalMappedSubmeshes gives them; a mesh without submeshes is submesh 0). Other triangles keep
