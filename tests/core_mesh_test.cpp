@@ -155,10 +155,10 @@ TEST(ComputeTangents, MirrorLineVerticesAreSplit) {
 }
 
 // Per submesh: the same mirrored layout twice, the copy beside it (x + 3) as a second submesh,
-// which also has a triangle on the first's mirror line (vertices 4 and 5, mirrored like the right
-// quad). Only the flagged submesh's mirror line is split; the other submesh's triangles keep the
-// vertices they share with it.
-TEST(ComputeTangents, OnlyTheFlaggedSubmeshesAreSplit) {
+// which also has a triangle on the first's mirror line (on vertices 4 and 5, mirrored like the
+// right quad). Only the lines that a flagged submesh uses are split, and every mirrored triangle
+// on them, whatever its submesh, moves to the copies.
+TEST(ComputeTangents, OnlyTheFlaggedSubmeshesLinesAreSplit) {
   Mesh mesh;
   for (float dx : {0.0f, 3.0f})
     for (Vec3 p : {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{2, 0, 0}, Vec3{0, 1, 0}, Vec3{1, 1, 0},
@@ -175,25 +175,59 @@ TEST(ComputeTangents, OnlyTheFlaggedSubmeshesAreSplit) {
     mesh.uv0.push_back({x <= 1 ? x : 2 - x, p.y});
   }
   const Mesh input = mesh;
-  EXPECT_EQ(core::computeTangents(mesh, std::vector<bool>{true, false}), 2u);
+  EXPECT_EQ(core::computeTangentsPerSubmesh(mesh, {true, false}), 2u);
   ASSERT_EQ(mesh.vertexCount(), 15u);
   ASSERT_TRUE(core::validateMesh(mesh));
-  // Submesh 0 as in MirrorLineVerticesAreSplit: its right quad moved to the copies 13 and 14.
+  // Submesh 0 as in MirrorLineVerticesAreSplit: its right quad moved to the copies 13 and 14, and
+  // so did the other submesh's mirrored triangle on vertex 4.
   EXPECT_EQ(mesh.indices[6], 13u);
   EXPECT_EQ(mesh.indices[11], 14u);
+  EXPECT_EQ(mesh.indices[24], 14u);
   for (size_t t = 0; t < 4; ++t)
     for (int k = 0; k < 3; ++k)
       EXPECT_NEAR(mesh.tangents[mesh.indices[t * 3 + k]].x, t < 2 ? 1.0f : -1.0f, 1e-6f) << t;
-  // Submesh 1 untouched: its own line unsplit, its extra triangle still on vertex 4.
-  for (size_t i = 12; i < input.indices.size(); ++i) EXPECT_EQ(mesh.indices[i], input.indices[i]);
-  // Flagging every submesh splits the second line too, and the extra triangle (mirrored) joins
-  // vertex 4's mirrored copy.
+  EXPECT_NEAR(mesh.tangents[14].x, -1.0f, 1e-6f);
+  // Submesh 1's own line (vertices 7 and 10) is not split.
+  for (size_t i = 12; i < 24; ++i) EXPECT_EQ(mesh.indices[i], input.indices[i]) << i;
+  // Flagging every submesh splits the second line too; flagging none splits nothing.
   Mesh all = input;
-  EXPECT_EQ(core::computeTangents(all, std::vector<bool>{true, true}), 4u);
+  EXPECT_EQ(core::computeTangentsPerSubmesh(all, {true, true}), 4u);
   EXPECT_EQ(all.indices[24], all.indices[11]);
   Mesh none = input;
-  EXPECT_EQ(core::computeTangents(none, std::vector<bool>{false, false}), 0u);
+  EXPECT_EQ(core::computeTangentsPerSubmesh(none, {false, false}), 0u);
   EXPECT_EQ(none.vertexCount(), 13u);
+  // Only the second submesh flagged: its own line (7 and 10) and, of the first's line, vertex 4,
+  // which its extra triangle uses (both orientations meet there), not vertex 1.
+  Mesh second = input;
+  EXPECT_EQ(core::computeTangentsPerSubmesh(second, {false, true}), 3u);
+  EXPECT_EQ(second.indices[9], 1u);
+  EXPECT_EQ(second.indices[11], second.indices[24]);
+  EXPECT_NE(second.indices[11], 4u);
+}
+
+// A mirror line that is also a material border: the left quad (kept orientation) is normal
+// mapped, the right one (mirrored) is not. The line is split whichever side is flagged, so that
+// the flagged side's frames do not cancel; the unflagged side takes the copies.
+TEST(ComputeTangents, AMirrorLineOnAMaterialBorderIsSplit) {
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 0}};
+  mesh.indices = {0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 4};
+  mesh.submeshes = {{0, 6, 0}, {6, 6, 1}};
+  mesh.normals.assign(6, Vec3{0, 0, 1});
+  for (Vec3 p : mesh.positions) mesh.uv0.push_back({p.x <= 1 ? p.x : 2 - p.x, p.y});
+  for (const std::vector<bool>& flags : {std::vector<bool>{true, false},
+                                         std::vector<bool>{false, true}}) {
+    Mesh split = mesh;
+    EXPECT_EQ(core::computeTangentsPerSubmesh(split, flags), 2u);
+    for (size_t t = 0; t < 4; ++t)
+      for (int k = 0; k < 3; ++k) {
+        const Vec4 tangent = split.tangents[split.indices[t * 3 + k]];
+        EXPECT_NEAR(tangent.x, t < 2 ? 1.0f : -1.0f, 1e-6f) << t;
+        EXPECT_EQ(tangent.w, t < 2 ? 1.0f : -1.0f) << t;
+      }
+  }
+  Mesh unflagged = mesh;
+  EXPECT_EQ(core::computeTangentsPerSubmesh(unflagged, {false, false}), 0u);
 }
 
 // The quad as two triangles with their own three vertices each (6 vertices, 2 shared positions).

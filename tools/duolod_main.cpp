@@ -473,7 +473,7 @@ int runSimplify(SimplifyFlags& flags) {
   auto derive = [&](core::Mesh& mesh) {
     if (derived_normals) core::computeNormals(mesh);
     if (derived_tangents && !mesh.normals.empty() && !mesh.uv0.empty())
-      core::computeTangents(mesh, normal_mapped);
+      core::computeTangentsPerSubmesh(mesh, normal_mapped);
   };
   // What a renderer sees (the loader's defaults): the asset itself, or for a file of positions
   // only a copy with derived normals.

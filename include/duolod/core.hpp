@@ -165,10 +165,11 @@ void computeNormals(Mesh& mesh);
 // to a normal map, and each copy is a seam the simplifier must keep; see the overload below).
 // Returns the number of vertices so added.
 size_t computeTangents(Mesh& mesh, bool split_mirrored = true);
-// The same, splitting the mirror lines of the flagged submeshes only (by submesh index, as
-// normalMappedSubmeshes gives them; a mesh without submeshes is submesh 0). Other triangles keep
-// the vertices they share with a split line.
-size_t computeTangents(Mesh& mesh, const std::vector<bool>& split_submeshes);
+// The same, splitting only the mirror-line vertices that the flagged submeshes use (by submesh
+// index, as normalMappedSubmeshes gives them; a mesh without submeshes is submesh 0). Every
+// triangle's UV orientation counts, so a mirror line on the border between a flagged and another
+// submesh is split too, and the mirrored triangles of any submesh move to the copies.
+size_t computeTangentsPerSubmesh(Mesh& mesh, const std::vector<bool>& split_submeshes);
 // Merges vertices whose every attribute is bitwise equal; returns the number removed.
 size_t weldVertices(Mesh& mesh);
 // Removes triangles with repeated indices or zero area; returns the number removed.

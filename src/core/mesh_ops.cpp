@@ -218,24 +218,28 @@ int uvOrientation(const Mesh& mesh, size_t t) {
 // A vertex that triangles of both UV orientations share (the mirror line of a mirrored UV
 // layout) has no one tangent frame: its tangents from either side point opposite ways and cancel.
 // MikkTSpace gives each side its own vertex; so does this: the mirrored triangles' corners move
-// to a copy of the vertex (every stream copied). Only the triangles flagged in `in_scope` take
-// part: a vertex that other triangles share keeps serving them. Returns the number of copies.
+// to a copy of the vertex (every stream copied). Only vertices that a triangle flagged in
+// `in_scope` uses are split (elsewhere no tangent shades, and a copy would only be a seam), but
+// every triangle's orientation counts, and every mirrored triangle moves to the copy: a mirror
+// line on a material border is split, and its triangles on either side see one frame. Returns
+// the number of copies.
 size_t splitMirroredVertices(Mesh& mesh, const std::vector<uint8_t>& in_scope) {
   const size_t n = mesh.vertexCount();
   const size_t triangles = mesh.indices.size() / 3;
-  std::vector<uint8_t> seen(n, 0);  // bit 0: a kept-orientation triangle, bit 1: a mirrored one
+  // bit 0: a kept-orientation triangle, bit 1: a mirrored one, bit 2: a triangle in scope
+  std::vector<uint8_t> seen(n, 0);
   std::vector<uint8_t> mirrored(triangles, 0);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    if (!in_scope[t / 3]) continue;
+    const uint8_t scope = in_scope[t / 3] ? 4 : 0;
     const int orientation = uvOrientation(mesh, t);
-    if (orientation == 0) continue;
     mirrored[t / 3] = orientation < 0;
-    for (int k = 0; k < 3; ++k) seen[mesh.indices[t + k]] |= orientation > 0 ? 1 : 2;
+    const uint8_t side = orientation > 0 ? 1 : orientation < 0 ? 2 : 0;
+    for (int k = 0; k < 3; ++k) seen[mesh.indices[t + k]] |= side | scope;
   }
   std::vector<uint32_t> copy_of(n, UINT32_MAX);
   size_t copies = 0;
   for (size_t v = 0; v < n; ++v)
-    if (seen[v] == 3) copy_of[v] = uint32_t(n + copies++);
+    if (seen[v] == 7) copy_of[v] = uint32_t(n + copies++);
   if (copies == 0) return 0;
   auto extend = [&](auto& stream) {
     if (stream.size() != n) return;
@@ -313,7 +317,7 @@ size_t computeTangents(Mesh& mesh, bool split_mirrored) {
   return computeTangentsSplitting(mesh, std::vector<uint8_t>(mesh.triangleCount(), split_mirrored));
 }
 
-size_t computeTangents(Mesh& mesh, const std::vector<bool>& split_submeshes) {
+size_t computeTangentsPerSubmesh(Mesh& mesh, const std::vector<bool>& split_submeshes) {
   const size_t triangles = mesh.triangleCount();
   std::vector<uint8_t> in_scope(triangles, 0);
   if (mesh.submeshes.empty() && !split_submeshes.empty() && split_submeshes[0])

@@ -394,7 +394,7 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
   if (options.generate_normals && mesh.normals.empty()) core::computeNormals(mesh);
   if (options.generate_tangents && mesh.tangents.empty() && !mesh.normals.empty() &&
       !mesh.uv0.empty())
-    core::computeTangents(mesh, core::normalMappedSubmeshes(asset));
+    core::computeTangentsPerSubmesh(mesh, core::normalMappedSubmeshes(asset));
   asset.source_path = path;
   asset.source_files.push_back(path);
   return loaded;
