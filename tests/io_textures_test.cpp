@@ -305,8 +305,8 @@ TEST(TextureFiles, DamagedUndecodedTexturesAreDecodedToBeJudged) {
   EXPECT_NE(load(png, cut_jpeg).error().message.find("photo.jpg"), std::string::npos)
       << load(png, cut_jpeg).error().message;
   // One byte of the scan data changed (never to a marker) in a busier 48x48 photo: the segments
-  // stay whole, so only decoding can tell. Every change stb refuses is left to be decoded (and
-  // so refused); the others are kept undecoded. Some of each must occur.
+  // stay whole, so only decoding can tell. Every change stb refuses is refused (with decodeImage's
+  // message), the others are kept undecoded. Some of each must occur.
   std::vector<uint8_t> busy_rgb, busy;
   for (int i = 0; i < 48 * 48 * 3; ++i) busy_rgb.push_back(uint8_t((i * 37) ^ (i / 144 * 91)));
   stbi_write_jpg_to_func(appendTo, &busy, 48, 48, 3, busy_rgb.data(), 90);
@@ -323,13 +323,16 @@ TEST(TextureFiles, DamagedUndecodedTexturesAreDecodedToBeJudged) {
     if (bytes[at] == 0xff || (at > 0 && bytes[at - 1] == 0xff)) continue;  // a marker or stuffing
     bytes[at] = uint8_t(bytes[at] ^ (1 + random() % 0xfe));
     if (bytes[at] == 0xff) continue;
-    auto kept = io::keepUndecoded(bytes, "scan");
-    ASSERT_TRUE(kept) << kept.error().message;
-    if (!io::decodeImage(bytes, "scan")) {
+    auto kept = io::keepUndecoded(bytes, "scan.jpg");
+    if (!io::decodeImage(bytes, "scan.jpg")) {
       ++refused_by_stb;
-      EXPECT_FALSE(*kept) << "byte " << at << ": stb refuses it, yet it was kept undecoded";
-    } else if (*kept) {
-      ++kept_undecoded;
+      // The segments are whole, so it is refused at once, as a decoded load would.
+      ASSERT_FALSE(kept) << "byte " << at << ": stb refuses it, yet it was not refused";
+      EXPECT_NE(kept.error().message.find("scan.jpg: cannot decode image"), std::string::npos)
+          << kept.error().message;
+    } else {
+      ASSERT_TRUE(kept) << kept.error().message;
+      if (*kept) ++kept_undecoded;
     }
   }
   EXPECT_GT(refused_by_stb, 0u);

@@ -111,10 +111,10 @@ std::vector<uint8_t> encodePng(const core::ImageRGBA8& image);
 std::shared_ptr<const core::EncodedImage> keepEncoded(std::span<const uint8_t> bytes,
                                                       const core::ImageRGBA8& decoded);
 // The bytes of a PNG or JPEG file with the size its header gives, no pixels kept; null for other
-// formats, for a PNG whose chunks are damaged (a CRC wrong, cut short) and for a JPEG that stb
-// does not decode (a JPEG has no checksum: it is decoded to be checked): the caller decodes those
-// instead, to accept or refuse them as decoding does. An error when the header cannot be read
-// (`name` says which file).
+// formats and for a PNG or JPEG whose chunks or segments are damaged (a CRC wrong, cut short):
+// the caller decodes those instead, to accept or refuse them as decoding does. A JPEG has no
+// checksum, so one with whole segments is decoded here to be checked. An error (`name` says which
+// file) when the header cannot be read or stb does not decode such a JPEG.
 core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
     std::span<const uint8_t> bytes, const std::string& name);
 // A texture file read, its bytes kept (keepEncoded); decoded unless `decode` is false and it is

@@ -246,14 +246,15 @@ bool jpegSegmentsIntact(std::span<const uint8_t> bytes) {
   return false;
 }
 
-// Whether stb decodes the file as decodeImage asks it to (the pixels are dropped).
-bool decodes(std::span<const uint8_t> bytes) {
+// Whether stb decodes the file as decodeImage asks it to (the pixels are dropped); if not, the
+// error decodeImage would give.
+core::Status decodes(std::span<const uint8_t> bytes, const std::string& name) {
   int width = 0, height = 0, channels = 0;
   stbi_uc* pixels = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width,
                                           &height, &channels, 4);
-  const bool decoded = pixels != nullptr;
+  if (!pixels) return Error{name + ": cannot decode image (" + stbi_failure_reason() + ")"};
   stbi_image_free(pixels);
-  return decoded;
+  return core::okStatus();
 }
 }  // namespace
 
@@ -278,10 +279,12 @@ core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
   // check passed. So a JPEG is decoded here too, and its pixels dropped: 10-20 ms for a 2048²
   // photo, against the PNG encoding that keeping the bytes saves, and one image's pixels in
   // memory at a time (bench/RESULTS.md, session 26).
-  const bool intact = mime_type == "image/png"
-                          ? pngChunksIntact(bytes)
-                          : jpegSegmentsIntact(bytes) && decodes(bytes);
+  const bool intact = mime_type == "image/png" ? pngChunksIntact(bytes) : jpegSegmentsIntact(bytes);
   if (!intact) return std::shared_ptr<const core::EncodedImage>();
+  if (mime_type == "image/jpeg") {  // refused here rather than decoded a second time
+    core::Status decoded = decodes(bytes, name);
+    if (!decoded) return decoded.error();
+  }
   auto encoded = std::make_shared<core::EncodedImage>();
   encoded->bytes.assign(bytes.begin(), bytes.end());
   encoded->mime_type = std::move(mime_type);
