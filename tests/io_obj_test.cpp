@@ -275,8 +275,8 @@ TEST(ObjReader, GeneratedTangentsSplitMirrorLinesOnlyUnderANormalMap) {
   auto bumpy = io::loadAsset((dir / "bumpy.obj").string(), options);
   ASSERT_TRUE(plain) << plain.error().message;
   ASSERT_TRUE(bumpy) << bumpy.error().message;
-  EXPECT_FALSE(core::usesNormalMap(*plain));
-  EXPECT_TRUE(core::usesNormalMap(*bumpy));
+  EXPECT_EQ(core::normalMappedSubmeshes(*plain), std::vector<bool>{false});
+  EXPECT_EQ(core::normalMappedSubmeshes(*bumpy), std::vector<bool>{true});
   EXPECT_EQ(plain->mesh.vertexCount(), 6u);
   ASSERT_EQ(bumpy->mesh.vertexCount(), 8u);
   ASSERT_EQ(bumpy->mesh.tangents.size(), 8u);

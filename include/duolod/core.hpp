@@ -259,8 +259,6 @@ struct Asset {
 // Per submesh (by index), whether its material has a normal texture: its tangents then shade,
 // and its mirror lines must be split (computeTangents).
 std::vector<bool> normalMappedSubmeshes(const Asset& asset);
-// Whether any submesh's material has a normal texture.
-bool usesNormalMap(const Asset& asset);
 
 // ---------------------------------------------------------------------------------------------
 // Logging and progress. The CLI installs sinks; the library never writes to stdout itself.

@@ -331,11 +331,6 @@ size_t computeTangentsPerSubmesh(Mesh& mesh, const std::vector<bool>& split_subm
   return computeTangentsSplitting(mesh, in_scope);
 }
 
-bool usesNormalMap(const Asset& asset) {
-  const std::vector<bool> mapped = normalMappedSubmeshes(asset);
-  return std::find(mapped.begin(), mapped.end(), true) != mapped.end();
-}
-
 size_t weldVertices(Mesh& mesh) {
   const size_t n = mesh.vertexCount();
   if (n == 0) return 0;

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <unistd.h>
 
@@ -79,18 +80,33 @@ core::Status writeFileAtomic(const std::string& path, std::string_view text) {
       path, std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
-core::Result<core::ImageRGBA8> decodeImage(std::span<const uint8_t> bytes, const std::string& name) {
+namespace {
+// stb's RGBA pixels of an image file, freed with the value.
+struct StbPixels {
+  std::unique_ptr<stbi_uc, void (*)(void*)> data{nullptr, stbi_image_free};
+  int width = 0, height = 0;
+};
+
+core::Result<StbPixels> decodeWithStb(std::span<const uint8_t> bytes, const std::string& name) {
   if (bytes.empty()) return Error{name + ": empty image"};
   if (bytes.size() > static_cast<size_t>(INT32_MAX)) return Error{name + ": image file too large"};
-  int width = 0, height = 0, channels = 0;
-  stbi_uc* pixels = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width,
-                                          &height, &channels, 4);
-  if (!pixels) return Error{name + ": cannot decode image (" + stbi_failure_reason() + ")"};
+  StbPixels decoded;
+  int channels = 0;
+  decoded.data.reset(stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()),
+                                           &decoded.width, &decoded.height, &channels, 4));
+  if (!decoded.data) return Error{name + ": cannot decode image (" + stbi_failure_reason() + ")"};
+  return decoded;
+}
+}  // namespace
+
+core::Result<core::ImageRGBA8> decodeImage(std::span<const uint8_t> bytes, const std::string& name) {
+  auto decoded = decodeWithStb(bytes, name);
+  if (!decoded) return decoded.error();
   core::ImageRGBA8 image;
-  image.width = width;
-  image.height = height;
-  image.pixels.assign(pixels, pixels + static_cast<size_t>(width) * height * 4);
-  stbi_image_free(pixels);
+  image.width = decoded->width;
+  image.height = decoded->height;
+  const stbi_uc* pixels = decoded->data.get();
+  image.pixels.assign(pixels, pixels + static_cast<size_t>(image.width) * image.height * 4);
   return image;
 }
 
@@ -246,16 +262,6 @@ bool jpegSegmentsIntact(std::span<const uint8_t> bytes) {
   return false;
 }
 
-// Whether stb decodes the file as decodeImage asks it to (the pixels are dropped); if not, the
-// error decodeImage would give.
-core::Status decodes(std::span<const uint8_t> bytes, const std::string& name) {
-  int width = 0, height = 0, channels = 0;
-  stbi_uc* pixels = stbi_load_from_memory(bytes.data(), static_cast<int>(bytes.size()), &width,
-                                          &height, &channels, 4);
-  if (!pixels) return Error{name + ": cannot decode image (" + stbi_failure_reason() + ")"};
-  stbi_image_free(pixels);
-  return core::okStatus();
-}
 }  // namespace
 
 core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
@@ -281,8 +287,8 @@ core::Result<std::shared_ptr<const core::EncodedImage>> keepUndecoded(
   // memory at a time (bench/RESULTS.md, session 26).
   const bool intact = mime_type == "image/png" ? pngChunksIntact(bytes) : jpegSegmentsIntact(bytes);
   if (!intact) return std::shared_ptr<const core::EncodedImage>();
-  if (mime_type == "image/jpeg") {  // refused here rather than decoded a second time
-    core::Status decoded = decodes(bytes, name);
+  if (mime_type == "image/jpeg") {  // pixels dropped at once; refused here, not decoded twice
+    auto decoded = decodeWithStb(bytes, name);
     if (!decoded) return decoded.error();
   }
   auto encoded = std::make_shared<core::EncodedImage>();
