@@ -4,6 +4,7 @@
 // loads, every level's shaders in four forms, the autoLOD shader and the report. Every kept level
 // must pass its bound on the held-out views and lights, or be the original (flagged).
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 
@@ -49,6 +50,29 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
     EXPECT_EQ(level.shader_summary.find("computed in the vertex stage"), std::string::npos)
         << level.shader_summary;
   }
+
+  // lod.json lists the autoLOD shader's files and parameters, each parameter (a level's or the
+  // autoLOD shader's) under the name its GLSL ES source declares: ES has no locations.
+  const nlohmann::json root = nlohmann::json::parse(test::readText((out / "lod.json").string()));
+  ASSERT_TRUE(root.contains("autolod")) << root.dump(2);
+  EXPECT_EQ(root["autolod"]["uniform"], "autoLOD");
+  EXPECT_EQ(root["autolod"]["location"], 39);
+  EXPECT_EQ(root["autolod"]["files"]["glsles300_frag"], "autolod.frag.es.glsl");
+  size_t listed = 0;
+  auto expectDeclared = [&](const nlohmann::json& parameters, const std::string& source) {
+    const std::string text = test::readText((out / source).string());
+    for (const nlohmann::json& parameter : parameters) {
+      ++listed;
+      EXPECT_TRUE(test::contains(text, " " + parameter["name"].get<std::string>() + ";"))
+          << source << " does not declare " << parameter["name"];
+    }
+  };
+  for (const nlohmann::json& level : root["levels"])
+    expectDeclared(level["shader"]["parameters"],
+                   level["shader"]["files"]["glsles300_frag"].get<std::string>());
+  // The autoLOD shader holds every level: it has parameters exactly when some level has.
+  EXPECT_EQ(listed > 0, !root["autolod"]["parameters"].empty());
+  expectDeclared(root["autolod"]["parameters"], "autolod.frag.es.glsl");
 
   // The held-out table: "NO" marks a simplified level over its bound (a bug).
   EXPECT_NE(run.out.find("held-out"), std::string::npos) << run.out;

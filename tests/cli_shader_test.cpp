@@ -61,6 +61,41 @@ TEST(CliShaderTest, GeneticSearchWritesLevelsAutoLodAndSummary) {
   EXPECT_LT(levels[0]["rendered_error"].get<double>(), 0.05);
   expectLevelFiles(out, "autolod");
   EXPECT_TRUE(test::contains(test::readText(out / "autolod.frag.glsl"), "autoLOD"));
+  // --no-timing: no time was measured, so none is reported (0 would read as free).
+  for (size_t k = 0; k < levels.size(); ++k) {
+    EXPECT_TRUE(levels[k]["measured_seconds"].is_null()) << k;
+    EXPECT_TRUE(levels[k]["time_ratio"].is_null()) << k;
+  }
+  // Every parameter the summary lists is declared under that name in each cross-compiled form:
+  // GLSL ES and HLSL have no locations, so the name is how a program finds it (the autoLOD
+  // shader's carry their level's suffix; SPIRV-Cross rewrites names with "__").
+  size_t parameters_checked = 0;
+  auto expectDeclared = [&](const nlohmann::json& parameters, const std::string& files) {
+    for (const nlohmann::json& parameter : parameters) {
+      const std::string name = parameter["name"].get<std::string>();
+      for (const char* form : {".frag.glsl", ".frag.es.glsl", ".frag.hlsl"})
+        EXPECT_TRUE(test::contains(test::readText(out / (files + form)), " " + name + ";"))
+            << files << form << " does not declare " << name;
+      ++parameters_checked;
+    }
+  };
+  for (const nlohmann::json& level : levels)
+    expectDeclared(level["parameters"], level["files"].get<std::string>());
+  expectDeclared(summary["autolod"]["parameters"], "autolod");
+  EXPECT_GE(parameters_checked, 2u) << "the search kept no level with a parameter";
+  // The table's rule column is whole UTF-8 (a cut "→" was two bytes of three) and names each
+  // rule once.
+  EXPECT_FALSE(test::contains(run.out, "moving to parameter: moving to parameter")) << run.out;
+  for (size_t i = 0; i < run.out.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(run.out[i]);
+    if (c < 0x80) continue;
+    const size_t length = c >= 0xF0 ? 4 : c >= 0xE0 ? 3 : c >= 0xC0 ? 2 : 0;
+    ASSERT_GT(length, 0u) << "stray continuation byte at " << i << ":\n" << run.out;
+    ASSERT_LE(i + length, run.out.size()) << run.out;
+    for (size_t j = 1; j < length; ++j)
+      ASSERT_EQ(static_cast<unsigned char>(run.out[i + j]) & 0xC0, 0x80) << "cut at " << i;
+    i += length - 1;
+  }
   EXPECT_EQ(summary["autolod"]["thresholds"].size(), levels.size());
   const nlohmann::json& counters = summary["counters"];
   EXPECT_GT(counters["variants_predicted"].get<int>(), 1);

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <type_traits>
+#include <vector>
 
 #include "duolod/core.hpp"
 
@@ -33,6 +35,22 @@ Mesh flatQuad() {
   mesh.indices = {0, 1, 2, 0, 2, 3};
   mesh.submeshes = {{0, 6, 0}};
   return mesh;
+}
+
+// The README's library example dereferences a returned Result in place
+// (`compileProgram(*render::loadShaderPair("pbr"))`): on a temporary the value is moved out, and
+// a const Result reads.
+TEST(CoreResult, DereferencesTemporariesAndConstResults) {
+  auto make = [](int n) { return core::Result<std::vector<int>>(std::vector<int>(size_t(n), 7)); };
+  std::vector<int> moved = *make(3);
+  EXPECT_EQ(moved, (std::vector<int>{7, 7, 7}));
+  static_assert(std::is_same_v<decltype(*make(1)), std::vector<int>&&>);
+  const core::Result<std::vector<int>> kept = make(2);
+  EXPECT_EQ((*kept).size(), 2u);
+  static_assert(std::is_same_v<decltype(*kept), const std::vector<int>&>);
+  const core::Result<int> failed = core::Error{"no"};
+  EXPECT_FALSE(failed);
+  EXPECT_EQ(failed.error().message, "no");
 }
 
 TEST(ComputeNormals, FlatQuadIsPlusZEverywhere) {

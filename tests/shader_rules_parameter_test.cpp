@@ -192,6 +192,18 @@ void main() {
 }
 
 // The reference shaders: how many sites, and every sampled application validates; a few link.
+// The middle of the names rules give new uniforms and varyings: one '_' for each run of other
+// characters and none at the ends, since GLSL reserves "__" and SPIRV-Cross rewrites such names
+// (the summary's "uAverage__316_40" was declared as uAverage_316_40).
+TEST(IdentifierFrom, NoDoubleOrOuterUnderscores) {
+  EXPECT_EQ(identifierFrom("%316"), "316");
+  EXPECT_EQ(identifierFrom("outColor"), "outColor");
+  EXPECT_EQ(identifierFrom("a.b->c"), "a_b_c");
+  EXPECT_EQ(identifierFrom("__x__y__"), "x_y");
+  EXPECT_EQ(identifierFrom("%"), "value");
+  EXPECT_EQ(identifierFrom(""), "value");
+}
+
 class MoveToParameterReference : public RendererFixture,
                                  public ::testing::WithParamInterface<const char*> {};
 

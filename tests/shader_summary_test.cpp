@@ -18,14 +18,14 @@ TEST(ShaderSummary, OriginalWhenNoSite) { EXPECT_EQ(summarizeSites({}), "origina
 TEST(ShaderSummary, GroupsSitesByWhatTheyDo) {
   std::vector<RuleSite> sites = {
       site(RuleKind::kOperationRemoval, "fragment gradientNoise: mul(gk1, %505) → %505"),
-      site(RuleKind::kPerVertex, "per-vertex: %923 computed in the vertex stage and interpolated"),
+      site(RuleKind::kPerVertex, "fragment: %923 computed in the vertex stage and interpolated"),
       site(RuleKind::kOperationRemoval, "vertex fbm: mul(%177, frequency) → frequency"),
       site(RuleKind::kLoopTruncation, "fragment: fbm loop: 4 → 2 iterations"),
-      site(RuleKind::kPerVertex, "per-vertex: radiance computed in the vertex stage and interpolated"),
+      site(RuleKind::kPerVertex, "fragment: radiance computed in the vertex stage and interpolated"),
       site(RuleKind::kOperationRemoval, "fragment gradientNoise: add(a, b) → a"),
       site(RuleKind::kTextureAverage, "fragment: uBaseColorTexture sample → its average colour"),
       site(RuleKind::kTextureMip, "fragment: uNormalTexture sample → 2 mip level(s) coarser"),
-      site(RuleKind::kMoveToParameter, "moving to parameter: n → its average over the domain"),
+      site(RuleKind::kMoveToParameter, "fragment: n → its average over the domain"),
   };
   EXPECT_EQ(summarizeSites(sites),
             "fbm loop: 4 → 2 iterations; uBaseColorTexture → average colour; uNormalTexture 2 mip "

@@ -928,15 +928,28 @@ struct ShaderFlags {
   }
 };
 
-// "operation removal: ... (+3 more)": the first rule of a variant and how many follow.
+// "operation removal: ... (+3 more)": the first rule of a variant and how many follow, cut or
+// padded to `width` characters.
 std::string rulesInWords(const std::vector<shader::RuleSite>& sites, size_t width) {
   std::string text = shader::describeSites(sites);
   if (sites.size() > 1) {
     std::string first = shader::describeSites({sites.front()});
     text = first + " (+" + std::to_string(sites.size() - 1) + " more)";
   }
-  if (text.size() > width) text = text.substr(0, width - 3) + "...";
-  return text;
+  // Width in characters, cut between UTF-8 sequences (the rules' words hold "→", 3 bytes).
+  auto isContinuation = [](char c) { return (static_cast<unsigned char>(c) & 0xC0) == 0x80; };
+  size_t characters = 0, cut = text.size();
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (isContinuation(text[i])) continue;
+    if (characters == width - 3) cut = std::min(cut, i);
+    if (++characters > width) {
+      text = text.substr(0, cut) + "...";
+      characters = width;
+      break;
+    }
+  }
+  // Padded to the column here: printf's %-52s would count bytes.
+  return text + std::string(width - std::min(characters, width), ' ');
 }
 
 int runShader(ShaderFlags& flags) {
@@ -991,7 +1004,7 @@ int runShader(ShaderFlags& flags) {
   for (size_t k = 0; k < report->variants.size(); ++k) {
     const shader::ShaderLodVariant& variant = report->variants[k];
     std::string ratio = options.measure_time ? formatNumber(variant.time_ratio) : "-";
-    std::printf("%-6zu %-52s %14.4g %10s %10.4g\n", k,
+    std::printf("%-6zu %s %14.4g %10s %10.4g\n", k,
                 rulesInWords(variant.search.sites, 52).c_str(), variant.search.predicted_cost * 1e3,
                 ratio.c_str(), variant.search.rendered_error.value_or(-1));
   }

@@ -40,6 +40,9 @@ class [[nodiscard]] Result {
   T* operator->() { return &value(); }
   const T* operator->() const { return &value(); }
   T& operator*() & { return value(); }
+  const T& operator*() const& { return value(); }
+  // On a temporary (`*loadShaderPair("pbr")` passed straight on) the value is moved out.
+  T&& operator*() && { return std::move(*this).value(); }
   const Error& error() const { return std::get<Error>(state_); }
 
  private:

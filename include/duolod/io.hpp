@@ -91,6 +91,16 @@ struct LodJsonDocument {
   std::string views = "sphere";                     // training views: "sphere" or "upright"
   std::string optimizer, cost_source, cost_unit;   // e.g. "separate", "measured", "ms"
   std::vector<LodJsonLevel> levels;
+  // Olano's single LOD shader (autolod.*): `uniform` at `location` set to k runs level k; its
+  // parameters are every level's, under the names the shader declares (which may differ from the
+  // level's own files: a clash moved or renamed them).
+  struct AutoLod {
+    std::vector<std::pair<std::string, std::string>> files;  // kind -> file name
+    std::string uniform = "autoLOD";
+    int location = 39;
+    std::vector<LodJsonLevel::Parameter> parameters;
+  };
+  std::optional<AutoLod> autolod;
 };
 std::string lodJsonText(const LodJsonDocument& document);
 // Checks what the runtime relies on (levels present, switch distances increasing, coverages in

@@ -36,14 +36,22 @@ core::Status checkDocument(const LodJsonDocument& document, const std::string& p
 }  // namespace
 
 std::string lodJsonText(const LodJsonDocument& document) {
+  auto filesJson = [](const std::vector<std::pair<std::string, std::string>>& files) {
+    ordered_json object = ordered_json::object();
+    for (const auto& [kind, file] : files) object[kind] = file;
+    return object;
+  };
+  auto parametersJson = [](const std::vector<LodJsonLevel::Parameter>& parameters) {
+    ordered_json array = ordered_json::array();
+    for (const LodJsonLevel::Parameter& parameter : parameters)
+      array.push_back(
+          {{"name", parameter.name}, {"location", parameter.location}, {"value", parameter.value}});
+    return array;
+  };
   ordered_json levels = ordered_json::array();
   for (const LodJsonLevel& level : document.levels) {
-    ordered_json files = ordered_json::object();
-    for (const auto& [kind, file] : level.shader_files) files[kind] = file;
-    ordered_json parameters = ordered_json::array();
-    for (const LodJsonLevel::Parameter& parameter : level.shader_parameters)
-      parameters.push_back(
-          {{"name", parameter.name}, {"location", parameter.location}, {"value", parameter.value}});
+    ordered_json files = filesJson(level.shader_files);
+    ordered_json parameters = parametersJson(level.shader_parameters);
     levels.push_back({
         {"level", level.level},
         {"distance", level.distance},
@@ -90,6 +98,11 @@ std::string lodJsonText(const LodJsonDocument& document) {
       {"cost", {{"source", document.cost_source}, {"unit", document.cost_unit}}},
       {"levels", levels},
   };
+  if (const auto& autolod = document.autolod)
+    root["autolod"] = {{"files", filesJson(autolod->files)},
+                       {"uniform", autolod->uniform},
+                       {"location", autolod->location},
+                       {"parameters", parametersJson(autolod->parameters)}};
   return root.dump(2) + "\n";
 }
 

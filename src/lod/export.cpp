@@ -130,10 +130,18 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   if (!autolod) return autolod.error();
   auto autolod_words = shader::emitProgram(autolod->program, /*optimize=*/false);
   if (!autolod_words) return autolod_words.error();
-  if (auto files =
-          shader::writeShaderFiles(autolod_words->vertex, autolod_words->fragment, out, "autolod");
-      !files)
-    return files.error();
+  auto autolod_files =
+      shader::writeShaderFiles(autolod_words->vertex, autolod_words->fragment, out, "autolod");
+  if (!autolod_files) return autolod_files.error();
+  io::LodJsonDocument::AutoLod& autolod_entry = document.autolod.emplace();
+  autolod_entry.files = std::move(*autolod_files);
+  autolod_entry.location = static_cast<int>(autolod->autolod_location);
+  for (const shader::ParameterValue& parameter : autolod->program.parameters)
+    autolod_entry.parameters.push_back(
+        {.name = parameter.name,
+         .location = static_cast<int>(parameter.location),
+         .value = std::vector<float>(parameter.value.begin(),
+                                     parameter.value.begin() + parameter.components)});
 
   if (auto ok = io::writeLodJson(document, (out / "lod.json").string()); !ok) return ok;
   return writeReport(result.report, (out / "report.html").string());

@@ -698,6 +698,16 @@ core::Result<AutoLodShader> buildAutoLodShader(std::span<const ShaderProgram> le
   if (!fragment) return fragment.error();
   result.program.vertex = std::move(*vertex);
   result.program.fragment = std::move(*fragment);
+  // Each parameter under the name the merged stages give its uniform: imported globals took
+  // their level's suffix ("uAverage_x_40_lod2"), and by-name lookups in the cross-compiled GLSL
+  // ES and HLSL (which have no locations) must find what the summary and lod.json list.
+  for (const Module* stage : {&result.program.vertex, &result.program.fragment}) {  // fragment last: its name wins
+    ir::DefUse uses(*stage);
+    for (const ir::LooseUniform& uniform : ir::looseUniforms(*stage, uses))
+      for (ParameterValue& parameter : result.program.parameters)
+        if (uniform.location && *uniform.location == parameter.location && !uniform.name.empty())
+          parameter.name = uniform.name;
+  }
   result.vertex_stage_of_level = vertex_of_level;
   result.distinct_vertex_stages = static_cast<int>(vertex_stages.size());
   return result;

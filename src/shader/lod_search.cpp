@@ -150,6 +150,10 @@ core::Status writeProgramFiles(const ShaderProgram& program, const fs::path& dir
   return core::okStatus();
 }
 
+nlohmann::json positiveOrNull(double value) {
+  return value > 0 ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
 nlohmann::json parametersJson(const std::vector<ParameterValue>& parameters) {
   nlohmann::json list = nlohmann::json::array();
   for (const ParameterValue& parameter : parameters)
@@ -190,9 +194,12 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
                       {"rules", rules},
                       {"predicted_cost", variant.search.predicted_cost},
                       {"predicted_error", variant.search.predicted_error},
-                      {"rendered_error", variant.search.rendered_error.value_or(-1.0)},
-                      {"measured_seconds", variant.measured_seconds},
-                      {"time_ratio", variant.time_ratio},
+                      {"rendered_error", variant.search.rendered_error
+                                             ? nlohmann::json(*variant.search.rendered_error)
+                                             : nlohmann::json(nullptr)},
+                      // null, not 0, when not measured (--no-timing): 0 would read as free
+                      {"measured_seconds", positiveOrNull(variant.measured_seconds)},
+                      {"time_ratio", positiveOrNull(variant.time_ratio)},
                       {"parameters", parametersJson(variant.search.program->parameters)}});
   }
   if (auto ok = writeProgramFiles(report.autolod.program, out, "autolod"); !ok) return ok;

@@ -52,7 +52,7 @@ std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
     site.kind = RuleKind::kMoveToParameter;
     site.stage = Stage::kFragment;
     site.target = value;
-    site.description = "moving to parameter: " + describeComputedValue(fragment, uses, value) +
+    site.description = "fragment: " + describeComputedValue(fragment, uses, value) +
                        " → its average over the domain";
     sites.push_back(std::move(site));
   }

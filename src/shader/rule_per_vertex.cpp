@@ -521,7 +521,7 @@ std::vector<RuleSite> findPerVertexSites(const ShaderProgram& program, const Rul
     site.kind = RuleKind::kPerVertex;
     site.stage = Stage::kFragment;
     site.target = value;
-    site.description = "per-vertex: " + describeComputedValue(program.fragment, uses, value) +
+    site.description = "fragment: " + describeComputedValue(program.fragment, uses, value) +
                        " computed in the vertex stage and interpolated";
     sites.push_back(std::move(site));
   }

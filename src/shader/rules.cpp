@@ -117,8 +117,15 @@ std::string functionName(const ir::Module& module, size_t function_index) {
 
 std::string identifierFrom(const std::string& text) {
   std::string result;
-  for (char c : text) result += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return result;
+  for (char c : text) {
+    const bool letter_or_digit = std::isalnum(static_cast<unsigned char>(c)) != 0;
+    if (letter_or_digit)
+      result += c;
+    else if (!result.empty() && result.back() != '_')
+      result += '_';
+  }
+  while (!result.empty() && result.back() == '_') result.pop_back();
+  return result.empty() ? "value" : result;
 }
 
 std::string valueTargetUnsuitability(const ir::Module& fragment, const ir::DefUse& uses,

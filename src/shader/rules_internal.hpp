@@ -67,8 +67,11 @@ std::string valueName(const ir::Module& module, ir::Id id);
 std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id);
 // The source-level name of function `function_index` ("fbm" for glslang's "fbm(vf3;").
 std::string functionName(const ir::Module& module, size_t function_index);
-// `text` with every character that is not a letter or digit replaced by '_': names of the
-// uniforms and varyings rules add, readable after cross-compilation.
+// `text` with every run of characters that are not letters or digits replaced by one '_', none at
+// either end ("value" if nothing is left): the middle of the names of the uniforms and varyings
+// rules add ("uAverage_" + it + "_40"). GLSL reserves names with "__", which SPIRV-Cross
+// therefore rewrites, so a name with one would not be the name in the cross-compiled source that
+// the summary and lod.json list ("%316" gave "uAverage__316_40", declared as uAverage_316_40).
 std::string identifierFrom(const std::string& text);
 
 // Why fragment `value` cannot be the target of a value rule (moving to parameter, per-vertex) by

@@ -83,10 +83,10 @@ std::string summarizeSites(std::span<const RuleSite> sites) {
                            between(site.description, "→ ", " mip") + " mip level(s) coarser");
         break;
       case RuleKind::kPerVertex:
-        per_vertex.push_back(between(site.description, "per-vertex: ", " computed in"));
+        per_vertex.push_back(between(withoutStage(site.description), "", " computed in"));
         break;
       case RuleKind::kMoveToParameter:
-        parameters.push_back(between(site.description, "moving to parameter: ", " → its average"));
+        parameters.push_back(between(withoutStage(site.description), "", " → its average"));
         break;
       case RuleKind::kOperationRemoval: {
         // "<stage> <function>: op(a, b) → a"
