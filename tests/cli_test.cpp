@@ -158,6 +158,80 @@ TEST(Cli, RenderRefusesToOverwriteItsInput) {
   }
 }
 
+// Nor any other file the run reads: a texture found beside the asset, the bindings, the shader;
+// and a name that is not .png is refused (the render is PNG data whatever the name).
+TEST(Cli, RenderRefusesToOverwriteAnyFileItReads) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  fs::path dir = test::scratchDir("render_inputs");
+  for (const char* file : {"spot.obj", "spot_texture.png"})
+    fs::copy_file(fs::path(spot).parent_path() / file, dir / file,
+                  fs::copy_options::overwrite_existing);
+  const std::string obj = (dir / "spot.obj").string();
+  const std::string texture = (dir / "spot_texture.png").string();
+  const std::string bindings = (dir / "bindings.json").string();
+  std::ofstream(bindings) << "{\"attributes\": {\"normal\": 2}}";
+  const std::string vert = (dir / "flat.vert").string(), frag = (dir / "flat.frag").string();
+  fs::copy_file(test::sourcePath("shaders/constant.vert"), vert, fs::copy_options::overwrite_existing);
+  fs::copy_file(test::sourcePath("shaders/constant.frag"), frag, fs::copy_options::overwrite_existing);
+  const std::vector<std::string> base = {"render", obj, "--pixels", "16", "--view", "0",
+                                         "--force", "--bindings", bindings};
+  for (const std::string& victim : {texture, bindings, frag}) {
+    const std::string before = test::readText(victim);
+    std::vector<std::string> args = base;
+    args.insert(args.end(), {"--vert", vert, "--frag", frag, "--out", victim});
+    test::CommandRun run = runCli(args);
+    EXPECT_EQ(run.exit_code, 1) << victim << ": " << run.err;
+    EXPECT_TRUE(test::contains(run.err, "refusing")) << run.err;
+    EXPECT_EQ(test::readText(victim), before) << victim << " was replaced";
+  }
+  const std::string jpg = (dir / "render.jpg").string();
+  std::vector<std::string> args = base;
+  args.insert(args.end(), {"--out", jpg});
+  test::CommandRun run = runCli(args);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(test::contains(run.err, ".png")) << run.err;
+  EXPECT_FALSE(fs::exists(jpg));
+}
+
+// Flag values out of range are usage errors naming the flag, before any file is read.
+TEST(Cli, OutOfRangeFlagsNameTheFlag) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"render", "missing.obj", "--pixels", "32", "--fov", "-10", "--out", "x.png"}, "--fov"},
+      {{"render", "missing.obj", "--pixels", "32", "--fov", "nan", "--out", "x.png"}, "--fov"},
+      {{"render", "missing.obj", "--pixels", "32", "--screen-height", "0", "--out", "x.png"},
+       "--screen-height"},
+      {{"render", "missing.obj", "--pixels", "0", "--out", "x.png"}, "--pixels"},
+      {{"render", "missing.obj", "--distance", "-1", "--out", "x.png"}, "--distance"},
+      {{"render", "missing.obj", "--pixels", "32", "--view", "-1", "--out", "x.png"}, "--view"},
+      {{"error", "a.obj", "b.obj", "--pixels", "32", "--q", "nan"}, "--q"},
+      {{"error", "a.obj", "b.obj", "--pixels", "32", "--e-max", "-1"}, "--e-max"},
+      {{"simplify", "a.obj", "b.glb", "--ratio", "0.5", "--pixels", "0"}, "--pixels"},
+      {{"generate", "a.obj", "--candidates", "0", "--out", "g"}, "--candidates"},
+      {{"generate", "a.obj", "--candidates", "-1", "--out", "g"}, "--candidates"},
+      {{"generate", "a.obj", "--seed", "-5", "--out", "g"}, "--seed"},
+      {{"generate", "a.obj", "--merge-gain", "nan", "--out", "g"}, "--merge-gain"},
+      {{"generate", "a.obj", "--shader-levels", "-1", "--out", "g"}, "--shader-levels"},
+      {{"shader", "a.obj", "--pixels", "32", "--population", "1", "--out", "s"}, "--population"},
+      {{"render", "missing.obj", "--pixels", "32", "--fov", "abc", "--out", "x.png"}, "--fov"},
+  };
+  for (const auto& [args, flag] : cases) {
+    test::CommandRun run = runCli(args);
+    EXPECT_EQ(run.exit_code, 2) << args[1] << " " << flag << ": " << run.err;
+    EXPECT_TRUE(test::contains(run.err, "duolod: error: " + flag + ":")) << run.err;
+  }
+  // Contradictory generate flags, and an unknown command, are named too.
+  test::CommandRun both =
+      runCli({"generate", "missing.obj", "--d-near", "0.5", "--near-pixels", "100", "--out", "g"});
+  EXPECT_EQ(both.exit_code, 1);
+  EXPECT_TRUE(test::contains(both.err, "--d-near or --near-pixels")) << both.err;
+  test::CommandRun unknown = runCli({"bogus"});
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_TRUE(test::contains(unknown.err, "unknown command 'bogus'")) << unknown.err;
+  test::CommandRun empty_out = runCli({"shader", "missing.obj", "--pixels", "32", "--out", ""});
+  EXPECT_EQ(empty_out.exit_code, 1) << empty_out.err;
+  EXPECT_TRUE(test::contains(empty_out.err, "--out: empty path")) << empty_out.err;
+}
+
 TEST(Cli, RenderWithAShaderThatFailsToCompile) {
   fs::path dir = test::scratchDir("shader");
   std::string quad = writeQuad(dir);

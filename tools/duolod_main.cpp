@@ -25,6 +25,35 @@ namespace {
 namespace fs = std::filesystem;
 using namespace duolod;
 
+// A numeric flag's check, run on the text before CLI11 converts it: unlike CLI::Range it refuses
+// NaN and infinities, and a negative value for an unsigned option (which the conversion would
+// wrap around to a huge one). `need` completes "must be ...", e.g. "in (0, 180)".
+CLI::Validator numberWhere(const std::string& need, std::function<bool(double)> acceptable) {
+  return CLI::Validator(
+      [need, acceptable](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
+        if (!std::isfinite(value) || !acceptable(value))
+          return "must be " + need + ", got " + text;
+        return {};
+      },
+      need);
+}
+CLI::Validator atLeast(double low) {
+  char text[32];
+  std::snprintf(text, sizeof text, ">= %.10g", low);
+  return numberWhere(text, [low](double v) { return v >= low; });
+}
+CLI::Validator positive() {
+  return numberWhere("> 0", [](double v) { return v > 0; });
+}
+CLI::Validator between(double low, double high) {  // inclusive
+  char text[48];
+  std::snprintf(text, sizeof text, "in [%.10g, %.10g]", low, high);
+  return numberWhere(text, [low, high](double v) { return v >= low && v <= high; });
+}
+
 int fail(const std::string& message) {
   std::fprintf(stderr, "duolod: error: %s\n", message.c_str());
   return 1;
@@ -56,13 +85,18 @@ struct ShadingFlags {
     command->add_option("--vert", vert, "vertex shader (GLSL 450); needs --frag");
     command->add_option("--frag", frag, "fragment shader (GLSL 450); needs --vert");
     command->add_option("--bindings", bindings,
-                        "JSON file mapping the shader's inputs (see shaders/INTERFACE.md)");
+                        "JSON file moving the shader interface's attribute locations, block and "
+                        "texture bindings, e.g. {\"attributes\": {\"normal\": 2}} (README, "
+                        "Formats)");
     command->add_option("--device", device,
                         "EGL device index; -1 = Mesa surfaceless (llvmpipe without a GPU)")
+        ->check(atLeast(-1))
         ->capture_default_str();
     command->add_option("--fov", fov_y_deg, "display vertical field of view, degrees")
+        ->check(numberWhere("in (0, 180)", [](double v) { return v > 0 && v < 180; }))
         ->capture_default_str();
     command->add_option("--screen-height", screen_height, "display height in pixels")
+        ->check(between(1, 65536))
         ->capture_default_str();
   }
 
@@ -180,13 +214,22 @@ float resolveDistance(const ShadingFlags& flags, const core::Sphere& sphere) {
   return sphere.radius / std::sin(half_angle);
 }
 
+std::string lowerExtension(const std::string& path);
+
 int runRender(const std::string& path, ShadingFlags& flags, int view, int light, int supersample,
               const std::string& out, bool force) {
   if ((flags.distance > 0) == (flags.pixels > 0))
     return fail("give exactly one of --distance D or --pixels N");
-  if (auto ok = checkOutputPath(out, {path}, force); !ok) return fail(ok.error().message);
+  // Never over a file this run reads: the asset, the shader files and the bindings (below: the
+  // asset's own .bin, .mtl and textures).
+  std::vector<std::string> inputs = {path, flags.vert, flags.frag, flags.bindings};
+  if (flags.vert.empty()) inputs.insert(inputs.end(), {flags.shader + ".vert", flags.shader + ".frag"});
+  if (auto ok = checkOutputPath(out, inputs, force); !ok) return fail(ok.error().message);
+  if (lowerExtension(out) != ".png") return fail(out + ": the render is written as PNG: name it .png");
   auto asset = loadWithWarnings(path);
   if (!asset) return fail(asset.error().message);
+  // The asset's own files: its .bin, .mtl and textures, those found beside it included.
+  if (auto ok = io::refuseSourceFile(*asset, out); !ok) return fail(ok.error().message);
   auto session = openSession(flags);
   if (!session) return fail(session.error().message);
   auto& renderer = *session->renderer;
@@ -358,9 +401,9 @@ struct SimplifyFlags {
     shading.add(command);
     command->add_option("--distance", shading.distance,
                         "camera distance (asset units): image mode's distance, and reports the "
-                        "image error there");
+                        "image error there")->check(positive());
     command->add_option("--pixels", shading.pixels,
-                        "alternatively: the distance at which the object spans N pixels");
+                        "alternatively: the distance at which the object spans N pixels")->check(between(1, 16384));
     command->add_flag("--force", force, "replace OUT if it exists");
   }
 
@@ -652,6 +695,26 @@ struct GenerateFlags {
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
   bool no_sort_prefetch = false;
   int jobs = 0;
+  CLI::Option *near_pixels_option = nullptr, *far_pixels_option = nullptr;
+
+  // Flag combinations, checked before any file is read.
+  core::Status check() const {
+    const metric::BoundConfig& bound = options.levels.bound;
+    if (bound.d_near > 0 && near_pixels_option->count() > 0)
+      return core::Error{"give --d-near or --near-pixels, not both (--near-pixels places d_near)"};
+    if (bound.d_far > 0 && far_pixels_option->count() > 0)
+      return core::Error{"give --d-far or --far-pixels, not both (--far-pixels places d_far)"};
+    if (bound.d_near > 0 && bound.d_far > 0 && !(bound.d_near < bound.d_far))
+      return core::Error{"--d-near (" + std::to_string(bound.d_near) +
+                         ") must be less than --d-far (" + std::to_string(bound.d_far) + ")"};
+    if (bound.d_near == 0 && bound.d_far == 0 &&
+        !(options.near_footprint_px > options.far_footprint_px))
+      return core::Error{"--near-pixels (" + std::to_string(options.near_footprint_px) +
+                         ") must be more than --far-pixels (" +
+                         std::to_string(options.far_footprint_px) +
+                         "): the object looks smaller farther away"};
+    return core::okStatus();
+  }
 
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
@@ -676,7 +739,7 @@ struct GenerateFlags {
                         "(one quadric record, fast)")
         ->check(CLI::IsMember({"image", "quadric"}))
         ->capture_default_str();
-    command->add_option("--levels", options.levels.level_count, "number of distance levels N")
+    command->add_option("--levels", options.levels.level_count, "number of distance levels N")->check(atLeast(1))
         ->capture_default_str();
     command
         ->add_option("--level-spacing", level_spacing,
@@ -684,30 +747,34 @@ struct GenerateFlags {
                      "ratios of projected size, so level 1 begins nearer")
         ->check(CLI::IsMember({"linear", "geometric"}))
         ->capture_default_str();
-    command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
+    command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")->check(atLeast(0))
         ->capture_default_str();
-    command->add_option("--q", options.levels.bound.q, "quality falloff Q (eq. 4)")
+    command->add_option("--q", options.levels.bound.q, "quality falloff Q (eq. 4)")->check(between(0, 1))
         ->capture_default_str();
     command->add_option("--d-near", options.levels.bound.d_near,
-                        "nearest level's distance (0: where the object spans --near-pixels)");
+                        "nearest level's distance (0: where the object spans --near-pixels)")
+        ->capture_default_str()->check(atLeast(0));
     command->add_option("--d-far", options.levels.bound.d_far,
-                        "farthest level's distance (0: where the object spans --far-pixels)");
-    command->add_option("--near-pixels", options.near_footprint_px)->capture_default_str();
-    command->add_option("--far-pixels", options.far_footprint_px)->capture_default_str();
-    command->add_option("--candidates", options.mesh_candidates, "mesh candidates K per level")
+                        "farthest level's distance (0: where the object spans --far-pixels)")
+        ->capture_default_str()->check(atLeast(0));
+    near_pixels_option = command->add_option("--near-pixels", options.near_footprint_px,
+                        "with --d-near 0: d_near is where the object spans this many pixels")->check(atLeast(1))->capture_default_str();
+    far_pixels_option = command->add_option("--far-pixels", options.far_footprint_px,
+                        "with --d-far 0: d_far is where the object spans this many pixels")->check(atLeast(1))->capture_default_str();
+    command->add_option("--candidates", options.mesh_candidates, "mesh candidates K per level")->check(between(1, 1000000))
         ->capture_default_str();
     command->add_option("--shader-levels", options.shader_search_levels,
-                        "levels whose meshes get a GP shader search")
+                        "levels whose meshes get a GP shader search")->check(atLeast(0))
         ->capture_default_str();
     command->add_option("--shader-meshes", options.shader_search_meshes,
-                        "meshes per such level searched")
+                        "meshes per such level searched")->check(atLeast(1))
         ->capture_default_str();
-    command->add_option("--population", options.population)->capture_default_str();
-    command->add_option("--generations", options.generations)->capture_default_str();
-    command->add_option("--seed", options.seed)->capture_default_str();
-    command->add_option("--time-tolerance", options.time_tolerance, "T of Algorithm 2")
+    command->add_option("--population", options.population, "GP population size")->check(atLeast(2))->capture_default_str();
+    command->add_option("--generations", options.generations, "GP generations")->check(atLeast(0))->capture_default_str();
+    command->add_option("--seed", options.seed, "GP random seed")->check(atLeast(0))->capture_default_str();
+    command->add_option("--time-tolerance", options.time_tolerance, "T of Algorithm 2")->check(atLeast(0))
         ->capture_default_str();
-    command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")->capture_default_str();
+    command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")->check(atLeast(0))->capture_default_str();
     command->add_option("--bound-margin", options.bound_margin,
                         "searches aim at (1 - margin) x the error bound, so views and lights "
                         "outside the training domain stay within it")
@@ -793,6 +860,7 @@ class ProgressLine {
 
 int runGenerate(GenerateFlags& flags) {
   auto start = std::chrono::steady_clock::now();
+  if (auto valid = flags.check(); !valid) return fail(valid.error().message);
   auto asset = loadWithWarnings(flags.in);
   if (!asset) return fail(asset.error().message);
   auto source = flags.shading.source();
@@ -904,19 +972,19 @@ struct ShaderFlags {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
     shading.add(command);
     command->add_option("--distance", shading.distance,
-                        "camera distance from the bounding-sphere centre, in asset units");
+                        "camera distance from the bounding-sphere centre, in asset units")->check(positive());
     command->add_option("--pixels", shading.pixels,
-                        "alternatively: the distance at which the object spans N pixels");
+                        "alternatively: the distance at which the object spans N pixels")->check(between(1, 16384));
     command->add_option("--search", search, "gp (genetic programming, NSGA-II) or greedy (He et al.)")
         ->check(CLI::IsMember({"gp", "greedy"}))
         ->capture_default_str();
-    command->add_option("--seed", seed, "GP random seed")->capture_default_str();
-    command->add_option("--generations", generations, "GP generations")->capture_default_str();
-    command->add_option("--population", population, "GP population size")->capture_default_str();
-    command->add_option("--steps", greedy_steps, "greedy: most rules applied")->capture_default_str();
+    command->add_option("--seed", seed, "GP random seed")->check(atLeast(0))->capture_default_str();
+    command->add_option("--generations", generations, "GP generations")->check(atLeast(0))->capture_default_str();
+    command->add_option("--population", population, "GP population size")->check(atLeast(2))->capture_default_str();
+    command->add_option("--steps", greedy_steps, "greedy: most rules applied")->check(atLeast(1))->capture_default_str();
     command->add_option("--candidates", greedy_candidates,
                         "greedy: sites scored per step, spread evenly over all sites (0: every "
-                        "site; noise_phong offers ~650, each one a compile and two renders)")
+                        "site; noise_phong offers ~650, each one a compile and two renders)")->check(atLeast(1))
         ->capture_default_str();
     command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
     command->add_flag("--no-compile-ahead", no_compile_ahead,
@@ -959,6 +1027,7 @@ int runShader(ShaderFlags& flags) {
       flags.greedy_candidates < 0)
     return fail("shader: --generations must be >= 0, --population >= 2, --steps >= 1, "
                 "--candidates >= 0");
+  if (flags.out.empty()) return fail("--out: empty path; give the folder to write into");
   auto source = flags.shading.source();
   if (!source) return fail(source.error().message);
   std::error_code ec;
@@ -1044,13 +1113,13 @@ int main(int argc, char** argv) {
   render_cmd->add_option("asset", render_path, "glTF/GLB/OBJ/PLY/OFF file")->required();
   render_flags.add(render_cmd);
   render_cmd->add_option("--distance", render_flags.distance,
-                         "camera distance from the bounding-sphere centre, in asset units");
+                         "camera distance from the bounding-sphere centre, in asset units")->check(positive());
   render_cmd->add_option("--pixels", render_flags.pixels,
-                         "alternatively: the distance at which the object spans N pixels");
-  render_cmd->add_option("--view", render_view, "one view 0-19 (default: all, as a contact sheet)");
-  render_cmd->add_option("--light", render_light, "light 0-4")->capture_default_str();
+                         "alternatively: the distance at which the object spans N pixels")->check(between(1, 16384));
+  render_cmd->add_option("--view", render_view, "one view 0-19 (default: all, as a contact sheet)")->check(between(0, 19));
+  render_cmd->add_option("--light", render_light, "light 0-4")->check(between(0, 4))->capture_default_str();
   render_cmd->add_option("--supersample", render_supersample,
-                         "k: render k×k larger and box-filter (the reference of eq. 1)")
+                         "k: render k×k larger and box-filter (the reference of eq. 1)")->check(between(1, 16))
       ->capture_default_str();
   render_cmd->add_option("--out", render_out, "PNG to write")->required();
   render_cmd->add_flag("--force", render_force, "replace --out if it exists");
@@ -1064,14 +1133,14 @@ int main(int argc, char** argv) {
   error_cmd->add_option("asset_a", error_a, "the original (reference) asset")->required();
   error_cmd->add_option("asset_b", error_b, "the approximation")->required();
   error_flags.add(error_cmd);
-  error_cmd->add_option("--distance", error_flags.distance, "camera distance, asset units");
-  error_cmd->add_option("--pixels", error_flags.pixels, "alternatively: footprint in pixels");
-  error_cmd->add_option("--supersample", error_supersample, "reference supersampling k")
+  error_cmd->add_option("--distance", error_flags.distance, "camera distance, asset units")->check(positive());
+  error_cmd->add_option("--pixels", error_flags.pixels, "alternatively: footprint in pixels")->check(between(1, 16384));
+  error_cmd->add_option("--supersample", error_supersample, "reference supersampling k")->check(between(1, 16))
       ->capture_default_str();
-  error_cmd->add_option("--e-max", bound.e_max, "maximum per-pixel error (eq. 4)")->capture_default_str();
-  error_cmd->add_option("--q", bound.q, "quality falloff Q (eq. 4)")->capture_default_str();
-  error_cmd->add_option("--d-near", bound.d_near, "nearest LOD distance (eq. 4)")->capture_default_str();
-  error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")->capture_default_str();
+  error_cmd->add_option("--e-max", bound.e_max, "maximum per-pixel error (eq. 4)")->check(atLeast(0))->capture_default_str();
+  error_cmd->add_option("--q", bound.q, "quality falloff Q (eq. 4)")->check(between(0, 1))->capture_default_str();
+  error_cmd->add_option("--d-near", bound.d_near, "nearest LOD distance (eq. 4)")->check(positive())->capture_default_str();
+  error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")->check(positive())->capture_default_str();
 
   SimplifyFlags simplify_flags;
   CLI::App* simplify_cmd = app.add_subcommand(
@@ -1089,7 +1158,27 @@ int main(int argc, char** argv) {
       "shader", "Simplify an asset's shader for a distance: Pareto variants and an autoLOD shader");
   shader_flags.add(shader_cmd);
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // CLI11's own messages in duolod's form; exit code 2, as for usage errors by convention.
+    std::string message = e.what();
+    if (argc > 1 && argv[1][0] != '-' && app.get_subcommands().empty()) {
+      message = std::string("unknown command '") + argv[1] + "'; the commands are";
+      for (const CLI::App* command : app.get_subcommands({}))
+        message += " " + command->get_name();
+    }
+    std::fprintf(stderr, "duolod: error: %s\n(run 'duolod%s%s --help' for the options)\n",
+                 message.c_str(), app.get_subcommands().empty() ? "" : " ",
+                 app.get_subcommands().empty() ? "" : app.get_subcommands()[0]->get_name().c_str());
+    return 2;
+  }
 
   if (*info) return runInfo(info_path);
   if (*render_cmd)

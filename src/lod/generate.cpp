@@ -1382,9 +1382,52 @@ core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& 
 
 }  // namespace
 
+namespace {
+
+// The options' ranges, before any work: a count of 0 mesh candidates left the shader search
+// reading the first candidate's error from an empty list. (The bound's and the display's
+// parameters are checked where the levels are placed: distanceLevels.)
+core::Status checkGenerateOptions(const GenerateOptions& options) {
+  auto finiteAtLeast = [](double value, double low) { return std::isfinite(value) && value >= low; };
+  struct Check {
+    bool holds;
+    const char* what;
+  };
+  const Check checks[] = {
+      {options.mesh_candidates >= 1 && options.mesh_candidates <= 1000000,
+       "mesh_candidates must be in [1, 1000000]"},
+      {options.shader_search_levels >= 0, "shader_search_levels must be >= 0"},
+      {options.shader_search_meshes >= 1, "shader_search_meshes must be >= 1"},
+      {options.population >= 2, "population must be >= 2"},
+      {options.generations >= 0, "generations must be >= 0"},
+      {options.max_shader_candidates >= 1, "max_shader_candidates must be >= 1"},
+      {options.average_resolution >= 1, "average_resolution must be >= 1"},
+      {options.near_footprint_px >= 1 && options.far_footprint_px >= 1,
+       "near_footprint_px and far_footprint_px must be >= 1"},
+      {finiteAtLeast(options.levels.bound.d_near, 0) && finiteAtLeast(options.levels.bound.d_far, 0),
+       "d_near and d_far must be finite and >= 0 (0: placed by the footprints)"},
+      {finiteAtLeast(options.time_tolerance, 0), "time_tolerance must be finite and >= 0"},
+      {finiteAtLeast(options.merge_min_gain, 0), "merge_min_gain must be finite and >= 0"},
+      {options.supersample >= 1 && options.supersample <= 16, "supersample must be in [1, 16]"},
+      {finiteAtLeast(options.bound_margin, 0) && options.bound_margin < 1,
+       "bound_margin must be in [0, 1)"},
+      {finiteAtLeast(options.bisection_stop, 0) && options.bisection_stop <= 1,
+       "bisection_stop must be in [0, 1]"},
+      {options.interleaved_top_fraction > 0 && options.interleaved_top_fraction <= 1,
+       "interleaved_top_fraction must be in (0, 1]"},
+      {options.interleaved_generations >= 1, "interleaved_generations must be >= 1"},
+  };
+  for (const Check& check : checks)
+    if (!check.holds) return core::Error{std::string("generate: ") + check.what};
+  return core::okStatus();
+}
+
+}  // namespace
+
 core::Result<GenerateResult> generateLod(const core::Asset& asset, const render::GlslSource& shader,
                                          const GenerateOptions& options) {
   if (asset.mesh.indices.empty()) return core::Error{"generate: the asset has no triangles"};
+  if (auto valid = checkGenerateOptions(options); !valid) return valid.error();
   Generator generator(asset, options);
   return generator.run(shader);
 }
