@@ -214,6 +214,35 @@ TEST(CliSimplify, RefusesToOverwriteItsInput) {
   EXPECT_EQ(test::readText(sphere), before);
 }
 
+// A file the output would write beside it (.bin, .mtl) that exists is not replaced without
+// --force, and nothing is written; an output folder that does not exist, or is a file, is refused
+// before the input is even loaded.
+TEST(CliSimplify, FilesBesideTheOutputAndItsFolderAreChecked) {
+  fs::path dir = test::scratchDir("beside");
+  std::string sphere = writeSphere(dir);
+  for (const char* kept : {"out.bin", "out.mtl"}) {
+    std::ofstream(dir / kept) << "precious";
+    const std::string out = (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
+    test::CommandRun run = runCli({"simplify", sphere, out, "--ratio", "0.5"});
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    EXPECT_TRUE(test::contains(run.err, std::string(kept) + ": already exists")) << run.err;
+    EXPECT_EQ(test::readText(dir / kept), "precious");
+    EXPECT_FALSE(fs::exists(out));
+    test::CommandRun forced = runCli({"simplify", sphere, out, "--ratio", "0.5", "--force"});
+    EXPECT_EQ(forced.exit_code, 0) << forced.err;
+    EXPECT_NE(test::readText(dir / kept), "precious");
+  }
+  for (const std::string& out : {(dir / "nowhere" / "out.glb").string(), sphere + "/out.glb"}) {
+    test::CommandRun run = runCli({"simplify", sphere, out, "--ratio", "0.5"});
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    EXPECT_TRUE(test::contains(run.err, out.find("nowhere") != std::string::npos
+                                            ? "does not exist"
+                                            : "is not a folder"))
+        << run.err;
+    EXPECT_FALSE(test::contains(run.out, "load")) << "loaded before checking: " << run.out;
+  }
+}
+
 // Each bad combination fails with a message naming the problem (before any work, but for a
 // result with no triangles), and writes nothing.
 TEST(CliSimplify, BadFlagsFailWithAMessage) {

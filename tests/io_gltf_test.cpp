@@ -4,6 +4,7 @@
 // each of which must come back as an Error naming the file, never a crash.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -325,6 +326,87 @@ TEST(GltfWriter, OverwritesAnEarlierOutputAtomically) {
   ASSERT_TRUE(reloaded) << reloaded.error().message;
   EXPECT_EQ(reloaded->materials[0].base_color_factor.y, 1.0f);
   EXPECT_EQ(temporaryFilesIn(dir), std::vector<std::string>{});
+}
+
+// quadAsset with a 2×2 base colour texture, so that a .gltf or .obj output has files beside it.
+core::Asset texturedQuadAsset() {
+  core::Asset asset = quadAsset();
+  asset.mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  core::Texture texture;
+  texture.name = "checker";
+  texture.image = {2, 2, {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255}};
+  texture.srgb = true;
+  asset.textures = {texture};
+  asset.materials[0].base_color_texture = 0;
+  return asset;
+}
+
+std::vector<std::string> namesIn(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir))
+    names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// The files of one output are written all or nothing: with a folder where the document goes,
+// the .bin, the texture and the .mtl made before it are not left behind.
+TEST(GltfWriter, AFailedWriteLeavesNoFileOfTheOutput) {
+  const core::Asset asset = texturedQuadAsset();
+  for (const char* blocked : {"out.gltf", "out.obj", "out.mtl"}) {
+    fs::path dir = test::scratchDir(std::string("all_or_nothing_") + blocked);
+    fs::create_directory(dir / blocked);
+    const std::string path = (dir / (std::string(blocked) == "out.gltf" ? "out.gltf" : "out.obj")).string();
+    auto written = test::contains(path, ".gltf") ? io::writeGltf(asset, path) : io::writeObj(asset, path);
+    ASSERT_FALSE(written) << blocked;
+    EXPECT_TRUE(test::contains(written.error().message, "is a folder")) << written.error().message;
+    EXPECT_EQ(namesIn(dir), std::vector<std::string>{blocked}) << blocked;
+  }
+  // Without the folder in the way, the same writes make every file.
+  fs::path dir = test::scratchDir("all_or_nothing_ok");
+  ASSERT_TRUE(io::writeGltf(asset, (dir / "out.gltf").string()));
+  ASSERT_TRUE(io::writeObj(asset, (dir / "out.obj").string()));
+  // Both writers name the texture out_texture0.png (the same bytes).
+  EXPECT_EQ(namesIn(dir), (std::vector<std::string>{"out.bin", "out.gltf", "out.mtl", "out.obj",
+                                                     "out_texture0.png"}));
+}
+
+// Not replacing: a file beside the output that exists (an earlier .bin, someone's .mtl) is kept,
+// and nothing of the output is written.
+TEST(GltfWriter, ExistingFilesBesideTheOutputAreKeptUnlessReplacing) {
+  const core::Asset asset = texturedQuadAsset();
+  fs::path dir = test::scratchDir("keep_beside");
+  for (const char* kept : {"out.bin", "out.mtl"}) {
+    std::ofstream(dir / kept) << "precious";
+    const std::string path = (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
+    auto written = test::contains(path, ".gltf")
+                       ? io::writeGltf(asset, path, {.replace_existing = false})
+                       : io::writeObj(asset, path, {.replace_existing = false});
+    ASSERT_FALSE(written) << kept;
+    EXPECT_TRUE(test::contains(written.error().message, kept)) << written.error().message;
+    EXPECT_TRUE(test::contains(written.error().message, "already exists")) << written.error().message;
+    EXPECT_EQ(test::readText(dir / kept), "precious");
+    EXPECT_FALSE(fs::exists(path));
+    EXPECT_TRUE(io::writeGltf(asset, (dir / "replaced.gltf").string(), {.replace_existing = true}));
+  }
+  EXPECT_EQ(temporaryFilesIn(dir), std::vector<std::string>{});
+}
+
+// File names become URI references: a space, a '%' and UTF-8 are percent-encoded, so that a
+// reader (ours, gltfpack, the validator) decodes them back to the files written.
+TEST(GltfWriter, FileReferencesArePercentEncoded) {
+  const core::Asset asset = texturedQuadAsset();
+  fs::path dir = test::scratchDir("uri");
+  const std::string path = (dir / "my model%20\xC3\xA9.gltf").string();
+  ASSERT_TRUE(io::writeGltf(asset, path));
+  const nlohmann::json document = nlohmann::json::parse(test::readText(path));
+  EXPECT_EQ(document["buffers"][0]["uri"], "my%20model%2520%C3%A9.bin");
+  EXPECT_TRUE(fs::exists(dir / "my model%20\xC3\xA9.bin"));
+  auto reloaded = io::loadAsset(path);
+  ASSERT_TRUE(reloaded) << reloaded.error().message;
+  ASSERT_EQ(reloaded->textures.size(), 1u);
+  EXPECT_EQ(reloaded->textures[0].image.width, 2);
+  EXPECT_EQ(reloaded->mesh.triangleCount(), 2u);
 }
 
 // ---------------------------------------------------------------------------------------------

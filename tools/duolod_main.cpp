@@ -171,6 +171,31 @@ core::Status checkOutputPath(const std::string& out, const std::vector<std::stri
   return core::okStatus();
 }
 
+// A folder output (generate, shader) removed again when writing it fails (a full disk): the
+// folder itself when this run made it, its entries when it was empty (all of them this run's). A
+// non-empty folder written into with --force keeps what the run wrote until the failure.
+class FolderOutput {
+ public:
+  explicit FolderOutput(const std::string& path) : path_(path) {
+    std::error_code ec;
+    created_ = !fs::exists(path_, ec);
+    was_empty_ = created_ || fs::is_empty(path_, ec);
+  }
+  void removeWritten() const {
+    std::error_code ec;
+    if (created_) {
+      fs::remove_all(path_, ec);
+    } else if (was_empty_) {
+      for (const fs::directory_entry& entry : fs::directory_iterator(path_, ec))
+        fs::remove_all(entry.path(), ec);
+    }
+  }
+
+ private:
+  std::string path_;
+  bool created_ = false, was_empty_ = false;
+};
+
 int runInfo(const std::string& path) {
   auto asset = loadWithWarnings(path);
   if (!asset) return fail(asset.error().message);
@@ -225,6 +250,7 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   std::vector<std::string> inputs = {path, flags.vert, flags.frag, flags.bindings};
   if (flags.vert.empty()) inputs.insert(inputs.end(), {flags.shader + ".vert", flags.shader + ".frag"});
   if (auto ok = checkOutputPath(out, inputs, force); !ok) return fail(ok.error().message);
+  if (auto ok = io::checkWritablePath(out); !ok) return fail(ok.error().message);
   if (lowerExtension(out) != ".png") return fail(out + ": the render is written as PNG: name it .png");
   auto asset = loadWithWarnings(path);
   if (!asset) return fail(asset.error().message);
@@ -491,6 +517,8 @@ int runSimplify(SimplifyFlags& flags) {
   if (auto ok = flags.check(); !ok) return fail(ok.error().message);
   if (auto ok = checkOutputPath(flags.out, {flags.in}, flags.force); !ok)
     return fail(ok.error().message);
+  // Before the work, not after it (an image-mode run takes minutes).
+  if (auto ok = io::checkWritablePath(flags.out); !ok) return fail(ok.error().message);
 
   auto start = std::chrono::steady_clock::now();
   // A file of positions only (OFF, a bare OBJ or PLY): the quadric and cluster modes simplify the
@@ -638,7 +666,8 @@ int runSimplify(SimplifyFlags& flags) {
   if (flags.mode != "image" && positions_only) derive(output.mesh);
   start = std::chrono::steady_clock::now();
   core::Status written =
-      flags.writesObj() ? io::writeObj(output, flags.out) : io::writeGltf(output, flags.out);
+      flags.writesObj() ? io::writeObj(output, flags.out, {.replace_existing = flags.force})
+                        : io::writeGltf(output, flags.out, {.replace_existing = flags.force});
   if (!written) return fail(written.error().message);
   std::printf("write     %s: %zu triangles, %zu vertices, %.3f s\n", flags.out.c_str(),
               output.mesh.triangleCount(), output.mesh.vertexCount(), secondsSince(start));
@@ -899,8 +928,12 @@ int runGenerate(GenerateFlags& flags) {
   line.finish();
   if (!result) return fail(result.error().message);
   auto export_start = std::chrono::steady_clock::now();
-  if (auto written = lod::writeLodOutput(*result, *asset, options, flags.out, flags.force); !written)
+  FolderOutput folder(flags.out);
+  if (auto written = lod::writeLodOutput(*result, *asset, options, flags.out, flags.force);
+      !written) {
+    folder.removeWritten();
     return fail(written.error().message);
+  }
   result->timings.export_seconds = secondsSince(export_start);
 
   std::printf("device    %s\n", result->device.c_str());
@@ -1062,8 +1095,11 @@ int runShader(ShaderFlags& flags) {
   options.compile_ahead = !flags.no_compile_ahead;
   auto report = shader::runShaderLod(*asset, *source, options);
   if (!report) return fail(report.error().message);
-  if (auto written = shader::writeShaderLod(*report, flags.out, flags.force); !written)
+  FolderOutput folder(flags.out);
+  if (auto written = shader::writeShaderLod(*report, flags.out, flags.force); !written) {
+    folder.removeWritten();
     return fail(written.error().message);
+  }
 
   std::printf("%s at distance %s (footprint %d px, %d samples), %s search on %s\n", flags.in.c_str(),
               formatNumber(options.distance).c_str(), report->footprint_px, report->domain_samples,

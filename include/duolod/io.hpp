@@ -47,8 +47,15 @@ core::Result<core::Asset> readOff(const std::string& path, const LoadOptions& op
 // (refuseSourceFile). writeGltf picks .gltf (+ .bin and textures beside it)
 // or .glb (everything embedded) by extension. Textures are written by textureFile: the PNG or
 // JPEG bytes they were read from while unchanged, else PNG.
-core::Status writeGltf(const core::Asset& asset, const std::string& path);
-core::Status writeObj(const core::Asset& asset, const std::string& path);
+// The files of one output are written all or nothing (FileSet). With `replace_existing` false, a
+// file that exists is not replaced: the document's, or one written beside it.
+struct WriteOptions {
+  bool replace_existing = true;
+};
+core::Status writeGltf(const core::Asset& asset, const std::string& path,
+                       const WriteOptions& options = {});
+core::Status writeObj(const core::Asset& asset, const std::string& path,
+                      const WriteOptions& options = {});
 
 // The LOD chain as one glTF (.gltf or .glb): one node and mesh per level, all sharing the asset's
 // materials and textures. Node 0 (level 0) lists the coarser nodes in its MSFT_lod extension and
@@ -146,5 +153,32 @@ core::Result<std::vector<uint8_t>> readFileBytes(const std::string& path);
 // Writes to PATH.tmp-XXXX then renames over PATH, so a reader never sees a partial file.
 core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> bytes);
 core::Status writeFileAtomic(const std::string& path, std::string_view text);
+
+// Files written together (a .gltf with its .bin and textures, an .obj with its .mtl): add() writes
+// each to a temporary file beside its target, commit() renames them all into place. A failure
+// before commit (a full disk, a target that is a folder) leaves no file of the set: the
+// temporaries of a set that is not committed are removed when it is destroyed. With
+// `replace_existing` false, add() refuses a target that exists.
+class FileSet {
+ public:
+  explicit FileSet(bool replace_existing = true) : replace_existing_(replace_existing) {}
+  FileSet(const FileSet&) = delete;
+  FileSet& operator=(const FileSet&) = delete;
+  ~FileSet();
+  core::Status add(const std::string& path, std::span<const uint8_t> bytes);
+  core::Status add(const std::string& path, std::string_view text);
+  core::Status commit();
+
+ private:
+  struct Staged {
+    std::string temporary, target;
+  };
+  bool replace_existing_;
+  std::vector<Staged> staged_;
+};
+
+// Checks, before any work, that files can be written at `path`: its folder exists and is a
+// folder, and `path` itself is not a folder.
+core::Status checkWritablePath(const std::string& path);
 
 }  // namespace duolod::io

@@ -49,14 +49,36 @@ core::Result<std::vector<uint8_t>> readFileBytes(const std::string& path) {
   return bytes;
 }
 
-core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> bytes) {
+core::Status checkWritablePath(const std::string& path) {
+  if (path.empty()) return Error{"empty output path"};
   fs::path target(path);
   std::error_code ec;
   fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(folder, ec)) return Error{path + ": folder " + folder.string() + " does not exist"};
+  if (!fs::exists(folder, ec)) return Error{path + ": folder " + folder.string() + " does not exist"};
+  if (!fs::is_directory(folder, ec)) return Error{path + ": " + folder.string() + " is not a folder"};
+  if (fs::is_directory(target, ec)) return Error{path + ": is a folder"};
+  return core::okStatus();
+}
+
+FileSet::~FileSet() {
+  std::error_code ec;
+  for (const Staged& file : staged_) fs::remove(file.temporary, ec);
+}
+
+core::Status FileSet::add(const std::string& path, std::string_view text) {
+  return add(path, std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
+}
+
+core::Status FileSet::add(const std::string& path, std::span<const uint8_t> bytes) {
+  if (auto writable = checkWritablePath(path); !writable) return writable;
+  std::error_code ec;
+  if (!replace_existing_ && fs::exists(path, ec))
+    return Error{path + ": already exists (use --force to replace it)"};
+  for (const Staged& file : staged_)
+    if (file.target == path) return Error{path + ": written twice in one set"};
   // A unique temporary name in the same folder, so rename() is atomic on the same file system.
   std::random_device entropy;
-  fs::path temp = target;
+  fs::path temp(path);
   temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() % 1000000);
   FILE* file = std::fopen(temp.c_str(), "wb");
   if (!file) return Error{path + ": cannot create (" + std::strerror(errno) + ")"};
@@ -67,12 +89,30 @@ core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> b
     fs::remove(temp, ec);
     return Error{path + ": write failed (disk full?)"};
   }
-  fs::rename(temp, target, ec);
-  if (ec) {
-    fs::remove(temp, ec);
-    return Error{path + ": cannot move the finished file into place (" + ec.message() + ")"};
-  }
+  staged_.push_back({temp.string(), path});
   return core::okStatus();
+}
+
+core::Status FileSet::commit() {
+  for (size_t i = 0; i < staged_.size(); ++i) {
+    std::error_code rename_error;
+    fs::rename(staged_[i].temporary, staged_[i].target, rename_error);
+    if (rename_error) {
+      // The files before it are in place already (each rename is atomic, the set is not); the
+      // rest are removed with the set.
+      staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(i));
+      return Error{staged_.front().target + ": cannot move the finished file into place (" +
+                   rename_error.message() + ")"};
+    }
+  }
+  staged_.clear();
+  return core::okStatus();
+}
+
+core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> bytes) {
+  FileSet file;
+  if (auto added = file.add(path, bytes); !added) return added;
+  return file.commit();
 }
 
 core::Status writeFileAtomic(const std::string& path, std::string_view text) {

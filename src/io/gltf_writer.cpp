@@ -2,6 +2,7 @@
 // with a primitive per submesh, metallic-roughness materials, PNG textures, written as .gltf with a
 // .bin and PNG files beside it, or as a single .glb. Every file goes through writeFileAtomic.
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -94,10 +95,30 @@ json materialJson(const core::Material& m) {
   return out;
 }
 
+// A file name as a glTF URI reference (RFC 3986): every byte but the unreserved characters
+// percent-encoded, UTF-8 bytes one by one. Readers decode %XX, so "a%20b.bin" written raw was
+// read back as "a b.bin".
+std::string uriOfFileName(const std::string& name) {
+  static const char kHex[] = "0123456789ABCDEF";
+  std::string uri;
+  for (char c : name) {
+    const unsigned char byte = static_cast<unsigned char>(c);
+    if (std::isalnum(byte) || c == '-' || c == '.' || c == '_' || c == '~') {
+      uri += c;
+    } else {
+      uri += '%';
+      uri += kHex[byte >> 4];
+      uri += kHex[byte & 15];
+    }
+  }
+  return uri;
+}
+
 // Writes `meshes` (one node each) with the asset's materials and textures. With `screen_coverage`
 // non-empty, node 0 chains the others through MSFT_lod and only node 0 is in the scene.
 core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::Mesh> meshes,
-                               std::span<const double> screen_coverage, const std::string& path) {
+                               std::span<const double> screen_coverage, const std::string& path,
+                               const WriteOptions& options) {
   if (auto refused = refuseSourceFile(asset, path); !refused) return refused;
   for (size_t i = 0; i < meshes.size(); ++i)
     if (auto valid = core::validateMesh(meshes[i]); !valid)
@@ -179,7 +200,7 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
       } else {
         std::string name =
             target.stem().string() + "_texture" + std::to_string(image) + file.extension;
-        images.push_back({{"uri", name}});
+        images.push_back({{"uri", uriOfFileName(name)}});
         side_files.emplace_back((target.parent_path() / name).string(), std::vector<uint8_t>{});
       }
       image_files.push_back(std::move(file));
@@ -228,24 +249,30 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
     put32(static_cast<uint32_t>(builder.bin_.size()));
     put32(0x004E4942);  // "BIN\0"
     glb.insert(glb.end(), builder.bin_.begin(), builder.bin_.end());
-    return writeFileAtomic(path, glb);
+    FileSet file(options.replace_existing);
+    if (auto added = file.add(path, glb); !added) return added;
+    return file.commit();
   }
   std::string bin_name = target.stem().string() + ".bin";
-  document["buffers"] = {{{"byteLength", builder.bin_.size()}, {"uri", bin_name}}};
+  document["buffers"] = {{{"byteLength", builder.bin_.size()}, {"uri", uriOfFileName(bin_name)}}};
   // Side files must not replace any file the asset was read from (its own .bin or textures,
   // which may carry these names); an earlier output's are replaced.
   side_files.emplace_back((target.parent_path() / bin_name).string(), std::move(builder.bin_));
   for (const auto& [file, bytes] : side_files)
     if (auto refused = refuseSourceFile(asset, file); !refused) return refused;
+  // All or nothing: a failure (a full disk, a folder in the way) leaves none of the files.
+  FileSet files(options.replace_existing);
   for (const auto& [file, bytes] : side_files)
-    if (auto written = writeFileAtomic(file, bytes); !written) return written;
-  return writeFileAtomic(path, document.dump(2));
+    if (auto added = files.add(file, bytes); !added) return added;
+  if (auto added = files.add(path, document.dump(2)); !added) return added;
+  return files.commit();
 }
 
 }  // namespace
 
-core::Status writeGltf(const core::Asset& asset, const std::string& path) {
-  return writeGltfDocument(asset, std::span<const core::Mesh>(&asset.mesh, 1), {}, path);
+core::Status writeGltf(const core::Asset& asset, const std::string& path,
+                       const WriteOptions& options) {
+  return writeGltfDocument(asset, std::span<const core::Mesh>(&asset.mesh, 1), {}, path, options);
 }
 
 core::Status writeGltfLodChain(const core::Asset& asset, std::span<const core::Mesh> level_meshes,
@@ -262,7 +289,7 @@ core::Status writeGltfLodChain(const core::Asset& asset, std::span<const core::M
       return Error{path + ": screen coverage must decrease from level to level (level " +
                    std::to_string(i) + ")"};
   }
-  return writeGltfDocument(asset, level_meshes, screen_coverage, path);
+  return writeGltfDocument(asset, level_meshes, screen_coverage, path, {});
 }
 
 }  // namespace duolod::io

@@ -55,7 +55,8 @@ std::vector<std::string> uniqueMaterialNames(const std::vector<core::Material>& 
 
 class ObjWriter {
  public:
-  ObjWriter(const core::Asset& asset, const std::string& path) : asset_(asset), path_(path) {}
+  ObjWriter(const core::Asset& asset, const std::string& path, const WriteOptions& options)
+      : asset_(asset), path_(path), files_(options.replace_existing) {}
 
   core::Status write() {
     const core::Mesh& mesh = asset_.mesh;
@@ -101,8 +102,7 @@ class ObjWriter {
       if (auto status = refuseSource(image_path); !status) return status;
       if (encoded.bytes.empty())
         return Error{image_path.string() + ": cannot encode texture as PNG"};
-      if (auto status =
-              writeFileAtomic(image_path.string(), std::span<const uint8_t>(encoded.bytes));
+      if (auto status = files_.add(image_path.string(), std::span<const uint8_t>(encoded.bytes));
           !status) {
         return status;
       }
@@ -155,11 +155,14 @@ class ObjWriter {
       for (size_t i = 0; i < asset_.materials.size(); ++i) {
         appendMaterial(mtl, asset_.materials[i], names[i], texture_files);
       }
-      if (auto status = writeFileAtomic(mtl_path.string(), std::string_view(mtl)); !status) {
+      if (auto status = files_.add(mtl_path.string(), std::string_view(mtl)); !status) {
         return status;
       }
     }
-    return writeFileAtomic(path_, std::string_view(obj));
+    if (auto status = files_.add(path_, std::string_view(obj)); !status) return status;
+    // All or nothing: a failure before here (a full disk, a folder in the way) left none of the
+    // textures, the .mtl or the .obj.
+    return files_.commit();
   }
 
  private:
@@ -204,12 +207,14 @@ class ObjWriter {
 
   const core::Asset& asset_;
   const std::string& path_;
+  FileSet files_;
 };
 
 }  // namespace
 
-core::Status writeObj(const core::Asset& asset, const std::string& path) {
-  return ObjWriter(asset, path).write();
+core::Status writeObj(const core::Asset& asset, const std::string& path,
+                      const WriteOptions& options) {
+  return ObjWriter(asset, path, options).write();
 }
 
 }  // namespace duolod::io
