@@ -227,6 +227,16 @@ TEST(Cli, OutOfRangeFlagsNameTheFlag) {
   test::CommandRun unknown = runCli({"bogus"});
   EXPECT_EQ(unknown.exit_code, 2);
   EXPECT_TRUE(test::contains(unknown.err, "unknown command 'bogus'")) << unknown.err;
+  // A folder where a file is expected, and two ways of naming the shader at once.
+  const std::string folder = test::scratchDir("a_folder").string();
+  test::CommandRun info = runCli({"info", folder});
+  EXPECT_EQ(info.exit_code, 1);
+  EXPECT_TRUE(test::contains(info.err, "is a folder")) << info.err;
+  test::CommandRun two_shaders =
+      runCli({"render", writeQuad(test::scratchDir("two_shaders")), "--pixels", "16", "--shader",
+              "constant", "--vert", folder, "--frag", folder, "--out", folder + "/x.png"});
+  EXPECT_EQ(two_shaders.exit_code, 1);
+  EXPECT_TRUE(test::contains(two_shaders.err, "--shader or --vert")) << two_shaders.err;
   test::CommandRun empty_out = runCli({"shader", "missing.obj", "--pixels", "32", "--out", ""});
   EXPECT_EQ(empty_out.exit_code, 1) << empty_out.err;
   EXPECT_TRUE(test::contains(empty_out.err, "--out: empty path")) << empty_out.err;

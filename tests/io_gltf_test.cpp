@@ -607,6 +607,27 @@ TEST(GltfMalformed, TruncatedJson) {
   expectLoadError(path);
 }
 
+// A required extension that is not read, and glTF 1.0, are refused by name; a required
+// KHR_mesh_quantization (any accessor component type is read) and an optional extension load.
+TEST(GltfMalformed, RequiredExtensionsAndVersionAreHonoured) {
+  fs::path dir = test::scratchDir("required");
+  for (const char* extension : {"KHR_draco_mesh_compression", "KHR_texture_transform"}) {
+    HandGltf g = oneTriangle();
+    g.doc["extensionsUsed"] = {extension};
+    g.doc["extensionsRequired"] = {extension};
+    expectLoadError(g.write(dir, extension), std::string("requires the glTF extension ") + extension);
+  }
+  HandGltf quantized = oneTriangle();
+  quantized.doc["extensionsUsed"] = {"KHR_mesh_quantization", "MSFT_lod"};
+  quantized.doc["extensionsRequired"] = {"KHR_mesh_quantization"};
+  auto loaded = io::loadAsset(quantized.write(dir, "quantized"));
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(loaded->mesh.triangleCount(), 1u);
+  HandGltf old_version = oneTriangle();
+  old_version.doc["asset"]["version"] = "1.0";
+  expectLoadError(old_version.write(dir, "version1"), "glTF 2.0 only");
+}
+
 TEST(GltfMalformed, IndexOutOfRange) {
   HandGltf g = oneTriangle();
   // Replace the index data: 5 does not exist among 3 vertices.

@@ -69,6 +69,7 @@ struct ShadingFlags {
   float distance = 0;
   int pixels = 0;
   std::string views = "sphere";
+  CLI::Option* shader_option = nullptr;
 
   void add(CLI::App* command) {
     command
@@ -78,7 +79,7 @@ struct ShadingFlags {
                      "the ground with +Y up, seen from around eye height)")
         ->check(CLI::IsMember({"sphere", "upright"}))
         ->capture_default_str();
-    command->add_option("--shader", shader,
+    shader_option = command->add_option("--shader", shader,
                         "duolod shader by name (pbr, noise_phong, blend, constant) or a path "
                         "prefix P with P.vert and P.frag")
         ->capture_default_str();
@@ -102,13 +103,13 @@ struct ShadingFlags {
 
   core::Result<render::GlslSource> source() const {
     if (vert.empty() != frag.empty()) return core::Error{"--vert and --frag go together"};
+    if (!vert.empty() && shader_option && shader_option->count() > 0)
+      return core::Error{"give --shader or --vert with --frag, not both"};
     if (!vert.empty()) {
       auto read = [](const std::string& path) -> core::Result<std::string> {
-        std::ifstream in(path);
-        if (!in) return core::Error{path + ": shader file not found"};
-        std::stringstream text;
-        text << in.rdbuf();
-        return text.str();
+        auto bytes = io::readFileBytes(path);  // names a missing file or a folder
+        if (!bytes) return bytes.error();
+        return std::string(bytes->begin(), bytes->end());
       };
       auto v = read(vert);
       if (!v) return v.error();

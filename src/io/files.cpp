@@ -411,6 +411,7 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
   std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
   std::error_code ec;
   if (!fs::exists(path, ec)) return Error{path + ": file not found"};
+  if (fs::is_directory(path, ec)) return Error{path + ": is a folder, not a file"};
   core::Result<core::Asset> loaded = Error{};
   if (extension == ".gltf" || extension == ".glb")
     loaded = readGltf(path, options);

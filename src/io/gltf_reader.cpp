@@ -581,6 +581,15 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
     std::replace(error.begin(), error.end(), '\n', ';');
     return Error{path + ": " + error};
   }
+  // glTF 2 only (1.0's materials and techniques are another format), and no extension the file
+  // declares required that is not read here: the spec's rule, for what it needs cannot be drawn
+  // right without it (Draco-compressed geometry, say, reads as broken accessors).
+  if (!model.asset.version.starts_with("2."))
+    return Error{path + ": glTF version '" + model.asset.version + "' is not supported (glTF 2.0 only)"};
+  for (const std::string& extension : model.extensionsRequired)
+    if (extension != "KHR_mesh_quantization")  // any accessor component type is read
+      return Error{path + ": requires the glTF extension " + extension +
+                   ", which duolod does not read (extensionsRequired)"};
   core::Asset asset;
   asset.source_path = path;
   // The files read (the document, its buffers, its images when textures are loaded) and the
