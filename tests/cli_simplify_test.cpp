@@ -189,6 +189,8 @@ TEST(CliSimplify, UnreachableTargetSaysWhy) {
   EXPECT_TRUE(test::contains(lineStarting(run.out, "simplify"),
                              "target 1 not reached (no edge may collapse"))
       << run.out;
+  EXPECT_TRUE(test::contains(run.err, "warning: " + square + ": the target of 1 triangles was not reached"))
+      << run.err;
   auto output = io::loadAsset(out);
   ASSERT_TRUE(output) << output.error().message;
   EXPECT_EQ(output->mesh.triangleCount(), 2u);

@@ -241,6 +241,7 @@ float resolveDistance(const ShadingFlags& flags, const core::Sphere& sphere) {
 }
 
 std::string lowerExtension(const std::string& path);
+std::string formatNumber(double value);
 
 int runRender(const std::string& path, ShadingFlags& flags, int view, int light, int supersample,
               const std::string& out, bool force) {
@@ -264,7 +265,16 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   if (!asset_id) return fail(asset_id.error().message);
   core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
   float distance = resolveDistance(flags, sphere);
+  if (!(distance > sphere.radius))
+    return fail(path + ": --distance " + formatNumber(distance) +
+                " puts the camera inside the asset's bounding sphere (radius " +
+                formatNumber(sphere.radius) + "); the domain's views look at it from outside");
   int resolution = render::footprintPixels(sphere, distance, flags.display());
+  if (resolution >= 16384)
+    std::fprintf(stderr,
+                 "duolod: warning: %s: at distance %g the object spans more than 16384 px; "
+                 "rendered at 16384 px\n",
+                 path.c_str(), distance);
   std::vector<render::Sample> all =
       render::domainSamples(sphere, distance, {.views = flags.viewSet()});
   std::vector<render::Sample> chosen;
@@ -430,7 +440,8 @@ struct SimplifyFlags {
                         "camera distance (asset units): image mode's distance, and reports the "
                         "image error there")->check(positive());
     command->add_option("--pixels", shading.pixels,
-                        "alternatively: the distance at which the object spans N pixels")->check(between(1, 16384));
+                        "alternatively: the distance at which the object spans N pixels")
+        ->check(between(1, 16384));
     command->add_flag("--force", force, "replace OUT if it exists");
   }
 
@@ -649,6 +660,11 @@ int runSimplify(SimplifyFlags& flags) {
               input_triangles, output_triangles,
               input_triangles ? 100.0 * double(output_triangles) / double(input_triangles) : 0.0,
               simplify_seconds, detail.c_str());
+  // Also on stderr, where a script's log shows warnings: the file is written, but not as asked.
+  if (target_triangles > 0 && output_triangles > target_triangles)
+    std::fprintf(stderr, "duolod: warning: %s: the target of %zu triangles was not reached (%zu "
+                 "left; see the simplify line)\n",
+                 flags.in.c_str(), target_triangles, output_triangles);
 
   // A result with no triangles is no mesh: no reader (ours included) takes such a file, so it is
   // not written. Only the cluster mode gets here (a grid so coarse that every triangle has two
@@ -1008,7 +1024,8 @@ struct ShaderFlags {
     command->add_option("--distance", shading.distance,
                         "camera distance from the bounding-sphere centre, in asset units")->check(positive());
     command->add_option("--pixels", shading.pixels,
-                        "alternatively: the distance at which the object spans N pixels")->check(between(1, 16384));
+                        "alternatively: the distance at which the object spans N pixels")
+        ->check(between(1, 16384));
     command->add_option("--search", search, "gp (genetic programming, NSGA-II) or greedy (He et al.)")
         ->check(CLI::IsMember({"gp", "greedy"}))
         ->capture_default_str();
@@ -1152,7 +1169,8 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--distance", render_flags.distance,
                          "camera distance from the bounding-sphere centre, in asset units")->check(positive());
   render_cmd->add_option("--pixels", render_flags.pixels,
-                         "alternatively: the distance at which the object spans N pixels")->check(between(1, 16384));
+                         "alternatively: the distance at which the object spans N pixels")
+        ->check(between(1, 16384));
   render_cmd->add_option("--view", render_view, "one view 0-19 (default: all, as a contact sheet)")->check(between(0, 19));
   render_cmd->add_option("--light", render_light, "light 0-4")->check(between(0, 4))->capture_default_str();
   render_cmd->add_option("--supersample", render_supersample,
@@ -1171,7 +1189,8 @@ int main(int argc, char** argv) {
   error_cmd->add_option("asset_b", error_b, "the approximation")->required();
   error_flags.add(error_cmd);
   error_cmd->add_option("--distance", error_flags.distance, "camera distance, asset units")->check(positive());
-  error_cmd->add_option("--pixels", error_flags.pixels, "alternatively: footprint in pixels")->check(between(1, 16384));
+  error_cmd->add_option("--pixels", error_flags.pixels, "alternatively: footprint in pixels")
+      ->check(between(1, 16384));
   error_cmd->add_option("--supersample", error_supersample, "reference supersampling k")->check(between(1, 16))
       ->capture_default_str();
   error_cmd->add_option("--e-max", bound.e_max, "maximum per-pixel error (eq. 4)")->check(atLeast(0))->capture_default_str();
