@@ -4,9 +4,9 @@
 // loads, every level's shaders in four forms, the autoLOD shader and the report. Every kept level
 // must pass its bound on the held-out views and lights, or be the original (flagged).
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "duolod/runtime.hpp"
 #include "test_support.hpp"

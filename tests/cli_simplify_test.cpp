@@ -189,7 +189,8 @@ TEST(CliSimplify, UnreachableTargetSaysWhy) {
   EXPECT_TRUE(test::contains(lineStarting(run.out, "simplify"),
                              "target 1 not reached (no edge may collapse"))
       << run.out;
-  EXPECT_TRUE(test::contains(run.err, "warning: " + square + ": the target of 1 triangles was not reached"))
+  EXPECT_TRUE(
+      test::contains(run.err, "warning: " + square + ": the target of 1 triangles was not reached"))
       << run.err;
   auto output = io::loadAsset(out);
   ASSERT_TRUE(output) << output.error().message;
@@ -224,7 +225,8 @@ TEST(CliSimplify, FilesBesideTheOutputAndItsFolderAreChecked) {
   std::string sphere = writeSphere(dir);
   for (const char* kept : {"out.bin", "out.mtl"}) {
     std::ofstream(dir / kept) << "precious";
-    const std::string out = (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
+    const std::string out =
+        (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
     test::CommandRun run = runCli({"simplify", sphere, out, "--ratio", "0.5"});
     EXPECT_EQ(run.exit_code, 1) << run.err;
     EXPECT_TRUE(test::contains(run.err, std::string(kept) + ": already exists")) << run.err;
@@ -237,9 +239,8 @@ TEST(CliSimplify, FilesBesideTheOutputAndItsFolderAreChecked) {
   for (const std::string& out : {(dir / "nowhere" / "out.glb").string(), sphere + "/out.glb"}) {
     test::CommandRun run = runCli({"simplify", sphere, out, "--ratio", "0.5"});
     EXPECT_EQ(run.exit_code, 1) << run.err;
-    EXPECT_TRUE(test::contains(run.err, out.find("nowhere") != std::string::npos
-                                            ? "does not exist"
-                                            : "is not a folder"))
+    EXPECT_TRUE(test::contains(
+        run.err, out.find("nowhere") != std::string::npos ? "does not exist" : "is not a folder"))
         << run.err;
     EXPECT_FALSE(test::contains(run.out, "load")) << "loaded before checking: " << run.out;
   }

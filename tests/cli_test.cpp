@@ -171,10 +171,12 @@ TEST(Cli, RenderRefusesToOverwriteAnyFileItReads) {
   const std::string bindings = (dir / "bindings.json").string();
   std::ofstream(bindings) << "{\"attributes\": {\"normal\": 2}}";
   const std::string vert = (dir / "flat.vert").string(), frag = (dir / "flat.frag").string();
-  fs::copy_file(test::sourcePath("shaders/constant.vert"), vert, fs::copy_options::overwrite_existing);
-  fs::copy_file(test::sourcePath("shaders/constant.frag"), frag, fs::copy_options::overwrite_existing);
-  const std::vector<std::string> base = {"render", obj, "--pixels", "16", "--view", "0",
-                                         "--force", "--bindings", bindings};
+  fs::copy_file(test::sourcePath("shaders/constant.vert"), vert,
+                fs::copy_options::overwrite_existing);
+  fs::copy_file(test::sourcePath("shaders/constant.frag"), frag,
+                fs::copy_options::overwrite_existing);
+  const std::vector<std::string> base = {"render", obj,       "--pixels",   "16",    "--view",
+                                         "0",      "--force", "--bindings", bindings};
   for (const std::string& victim : {texture, bindings, frag}) {
     const std::string before = test::readText(victim);
     std::vector<std::string> args = base;

@@ -356,8 +356,10 @@ TEST(GltfWriter, AFailedWriteLeavesNoFileOfTheOutput) {
   for (const char* blocked : {"out.gltf", "out.obj", "out.mtl"}) {
     fs::path dir = test::scratchDir(std::string("all_or_nothing_") + blocked);
     fs::create_directory(dir / blocked);
-    const std::string path = (dir / (std::string(blocked) == "out.gltf" ? "out.gltf" : "out.obj")).string();
-    auto written = test::contains(path, ".gltf") ? io::writeGltf(asset, path) : io::writeObj(asset, path);
+    const std::string path =
+        (dir / (std::string(blocked) == "out.gltf" ? "out.gltf" : "out.obj")).string();
+    auto written =
+        test::contains(path, ".gltf") ? io::writeGltf(asset, path) : io::writeObj(asset, path);
     ASSERT_FALSE(written) << blocked;
     EXPECT_TRUE(test::contains(written.error().message, "is a folder")) << written.error().message;
     EXPECT_EQ(namesIn(dir), std::vector<std::string>{blocked}) << blocked;
@@ -368,7 +370,7 @@ TEST(GltfWriter, AFailedWriteLeavesNoFileOfTheOutput) {
   ASSERT_TRUE(io::writeObj(asset, (dir / "out.obj").string()));
   // Both writers name the texture out_texture0.png (the same bytes).
   EXPECT_EQ(namesIn(dir), (std::vector<std::string>{"out.bin", "out.gltf", "out.mtl", "out.obj",
-                                                     "out_texture0.png"}));
+                                                    "out_texture0.png"}));
 }
 
 // Not replacing: a file beside the output that exists (an earlier .bin, someone's .mtl) is kept,
@@ -378,13 +380,15 @@ TEST(GltfWriter, ExistingFilesBesideTheOutputAreKeptUnlessReplacing) {
   fs::path dir = test::scratchDir("keep_beside");
   for (const char* kept : {"out.bin", "out.mtl"}) {
     std::ofstream(dir / kept) << "precious";
-    const std::string path = (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
+    const std::string path =
+        (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
     auto written = test::contains(path, ".gltf")
                        ? io::writeGltf(asset, path, {.replace_existing = false})
                        : io::writeObj(asset, path, {.replace_existing = false});
     ASSERT_FALSE(written) << kept;
     EXPECT_TRUE(test::contains(written.error().message, kept)) << written.error().message;
-    EXPECT_TRUE(test::contains(written.error().message, "already exists")) << written.error().message;
+    EXPECT_TRUE(test::contains(written.error().message, "already exists"))
+        << written.error().message;
     EXPECT_EQ(test::readText(dir / kept), "precious");
     EXPECT_FALSE(fs::exists(path));
     EXPECT_TRUE(io::writeGltf(asset, (dir / "replaced.gltf").string(), {.replace_existing = true}));
@@ -615,7 +619,8 @@ TEST(GltfMalformed, RequiredExtensionsAndVersionAreHonoured) {
     HandGltf g = oneTriangle();
     g.doc["extensionsUsed"] = {extension};
     g.doc["extensionsRequired"] = {extension};
-    expectLoadError(g.write(dir, extension), std::string("requires the glTF extension ") + extension);
+    expectLoadError(g.write(dir, extension),
+                    std::string("requires the glTF extension ") + extension);
   }
   HandGltf quantized = oneTriangle();
   quantized.doc["extensionsUsed"] = {"KHR_mesh_quantization", "MSFT_lod"};

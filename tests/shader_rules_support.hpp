@@ -115,7 +115,8 @@ inline size_t bodyInstructionCount(const ir::Module& module) {
   return count;
 }
 
-// The site whose description mentions `name` (e.g. "fragment: v → its average over the domain"), or nullptr.
+// The site whose description mentions `name` (e.g. "fragment: v → its average over the domain"), or
+// nullptr.
 inline const RuleSite* siteNamed(const std::vector<RuleSite>& sites, const std::string& name) {
   for (const RuleSite& site : sites)
     if (site.description.find(": " + name + " ") != std::string::npos) return &site;

@@ -33,9 +33,9 @@ CLI::Validator numberWhere(const std::string& need, std::function<bool(double)> 
       [need, acceptable](std::string& text) -> std::string {
         char* end = nullptr;
         const double value = std::strtod(text.c_str(), &end);
-        if (text.empty() || end != text.c_str() + text.size()) return "'" + text + "' is not a number";
-        if (!std::isfinite(value) || !acceptable(value))
-          return "must be " + need + ", got " + text;
+        if (text.empty() || end != text.c_str() + text.size())
+          return "'" + text + "' is not a number";
+        if (!std::isfinite(value) || !acceptable(value)) return "must be " + need + ", got " + text;
         return {};
       },
       need);
@@ -79,18 +79,21 @@ struct ShadingFlags {
                      "the ground with +Y up, seen from around eye height)")
         ->check(CLI::IsMember({"sphere", "upright"}))
         ->capture_default_str();
-    shader_option = command->add_option("--shader", shader,
-                        "duolod shader by name (pbr, noise_phong, blend, constant) or a path "
-                        "prefix P with P.vert and P.frag")
-        ->capture_default_str();
+    shader_option =
+        command
+            ->add_option("--shader", shader,
+                         "duolod shader by name (pbr, noise_phong, blend, constant) or a path "
+                         "prefix P with P.vert and P.frag")
+            ->capture_default_str();
     command->add_option("--vert", vert, "vertex shader (GLSL 450); needs --frag");
     command->add_option("--frag", frag, "fragment shader (GLSL 450); needs --vert");
     command->add_option("--bindings", bindings,
                         "JSON file moving the shader interface's attribute locations, block and "
                         "texture bindings, e.g. {\"attributes\": {\"normal\": 2}} (README, "
                         "Formats)");
-    command->add_option("--device", device,
-                        "EGL device index; -1 = Mesa surfaceless (llvmpipe without a GPU)")
+    command
+        ->add_option("--device", device,
+                     "EGL device index; -1 = Mesa surfaceless (llvmpipe without a GPU)")
         ->check(atLeast(-1))
         ->capture_default_str();
     command->add_option("--fov", fov_y_deg, "display vertical field of view, degrees")
@@ -250,10 +253,12 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   // Never over a file this run reads: the asset, the shader files and the bindings (below: the
   // asset's own .bin, .mtl and textures).
   std::vector<std::string> inputs = {path, flags.vert, flags.frag, flags.bindings};
-  if (flags.vert.empty()) inputs.insert(inputs.end(), {flags.shader + ".vert", flags.shader + ".frag"});
+  if (flags.vert.empty())
+    inputs.insert(inputs.end(), {flags.shader + ".vert", flags.shader + ".frag"});
   if (auto ok = checkOutputPath(out, inputs, force); !ok) return fail(ok.error().message);
   if (auto ok = io::checkWritablePath(out); !ok) return fail(ok.error().message);
-  if (lowerExtension(out) != ".png") return fail(out + ": the render is written as PNG: name it .png");
+  if (lowerExtension(out) != ".png")
+    return fail(out + ": the render is written as PNG: name it .png");
   auto asset = loadWithWarnings(path);
   if (!asset) return fail(asset.error().message);
   // The asset's own files: its .bin, .mtl and textures, those found beside it included.
@@ -436,11 +441,14 @@ struct SimplifyFlags {
                       "as attributes (closer shading, the general engine: several times slower) "
                       "instead of deriving them again on the result");
     shading.add(command);
-    command->add_option("--distance", shading.distance,
-                        "camera distance (asset units): image mode's distance, and reports the "
-                        "image error there")->check(positive());
-    command->add_option("--pixels", shading.pixels,
-                        "alternatively: the distance at which the object spans N pixels")
+    command
+        ->add_option("--distance", shading.distance,
+                     "camera distance (asset units): image mode's distance, and reports the "
+                     "image error there")
+        ->check(positive());
+    command
+        ->add_option("--pixels", shading.pixels,
+                     "alternatively: the distance at which the object spans N pixels")
         ->check(between(1, 16384));
     command->add_flag("--force", force, "replace OUT if it exists");
   }
@@ -662,7 +670,8 @@ int runSimplify(SimplifyFlags& flags) {
               simplify_seconds, detail.c_str());
   // Also on stderr, where a script's log shows warnings: the file is written, but not as asked.
   if (target_triangles > 0 && output_triangles > target_triangles)
-    std::fprintf(stderr, "duolod: warning: %s: the target of %zu triangles was not reached (%zu "
+    std::fprintf(stderr,
+                 "duolod: warning: %s: the target of %zu triangles was not reached (%zu "
                  "left; see the simplify line)\n",
                  flags.in.c_str(), target_triangles, output_triangles);
 
@@ -682,9 +691,9 @@ int runSimplify(SimplifyFlags& flags) {
   // attributes).
   if (flags.mode != "image" && positions_only) derive(output.mesh);
   start = std::chrono::steady_clock::now();
-  core::Status written =
-      flags.writesObj() ? io::writeObj(output, flags.out, {.replace_existing = flags.force})
-                        : io::writeGltf(output, flags.out, {.replace_existing = flags.force});
+  core::Status written = flags.writesObj()
+                             ? io::writeObj(output, flags.out, {.replace_existing = flags.force})
+                             : io::writeGltf(output, flags.out, {.replace_existing = flags.force});
   if (!written) return fail(written.error().message);
   std::printf("write     %s: %zu triangles, %zu vertices, %.3f s\n", flags.out.c_str(),
               output.mesh.triangleCount(), output.mesh.vertexCount(), secondsSince(start));
@@ -785,7 +794,8 @@ struct GenerateFlags {
                         "(one quadric record, fast)")
         ->check(CLI::IsMember({"image", "quadric"}))
         ->capture_default_str();
-    command->add_option("--levels", options.levels.level_count, "number of distance levels N")->check(atLeast(1))
+    command->add_option("--levels", options.levels.level_count, "number of distance levels N")
+        ->check(atLeast(1))
         ->capture_default_str();
     command
         ->add_option("--level-spacing", level_spacing,
@@ -793,34 +803,62 @@ struct GenerateFlags {
                      "ratios of projected size, so level 1 begins nearer")
         ->check(CLI::IsMember({"linear", "geometric"}))
         ->capture_default_str();
-    command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")->check(atLeast(0))
+    command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
+        ->check(atLeast(0))
         ->capture_default_str();
-    command->add_option("--q", options.levels.bound.q, "quality falloff Q (eq. 4)")->check(between(0, 1))
+    command->add_option("--q", options.levels.bound.q, "quality falloff Q (eq. 4)")
+        ->check(between(0, 1))
         ->capture_default_str();
-    command->add_option("--d-near", options.levels.bound.d_near,
-                        "nearest level's distance (0: where the object spans --near-pixels)")
-        ->capture_default_str()->check(atLeast(0));
-    command->add_option("--d-far", options.levels.bound.d_far,
-                        "farthest level's distance (0: where the object spans --far-pixels)")
-        ->capture_default_str()->check(atLeast(0));
-    near_pixels_option = command->add_option("--near-pixels", options.near_footprint_px,
-                        "with --d-near 0: d_near is where the object spans this many pixels")->check(atLeast(1))->capture_default_str();
-    far_pixels_option = command->add_option("--far-pixels", options.far_footprint_px,
-                        "with --d-far 0: d_far is where the object spans this many pixels")->check(atLeast(1))->capture_default_str();
-    command->add_option("--candidates", options.mesh_candidates, "mesh candidates K per level")->check(between(1, 1000000))
+    command
+        ->add_option("--d-near", options.levels.bound.d_near,
+                     "nearest level's distance (0: where the object spans --near-pixels)")
+        ->capture_default_str()
+        ->check(atLeast(0));
+    command
+        ->add_option("--d-far", options.levels.bound.d_far,
+                     "farthest level's distance (0: where the object spans --far-pixels)")
+        ->capture_default_str()
+        ->check(atLeast(0));
+    near_pixels_option =
+        command
+            ->add_option("--near-pixels", options.near_footprint_px,
+                         "with --d-near 0: d_near is where the object spans this many pixels")
+            ->check(atLeast(1))
+            ->capture_default_str();
+    far_pixels_option =
+        command
+            ->add_option("--far-pixels", options.far_footprint_px,
+                         "with --d-far 0: d_far is where the object spans this many pixels")
+            ->check(atLeast(1))
+            ->capture_default_str();
+    command->add_option("--candidates", options.mesh_candidates, "mesh candidates K per level")
+        ->check(between(1, 1000000))
         ->capture_default_str();
-    command->add_option("--shader-levels", options.shader_search_levels,
-                        "levels whose meshes get a GP shader search")->check(atLeast(0))
+    command
+        ->add_option("--shader-levels", options.shader_search_levels,
+                     "levels whose meshes get a GP shader search")
+        ->check(atLeast(0))
         ->capture_default_str();
-    command->add_option("--shader-meshes", options.shader_search_meshes,
-                        "meshes per such level searched")->check(atLeast(1))
+    command
+        ->add_option("--shader-meshes", options.shader_search_meshes,
+                     "meshes per such level searched")
+        ->check(atLeast(1))
         ->capture_default_str();
-    command->add_option("--population", options.population, "GP population size")->check(atLeast(2))->capture_default_str();
-    command->add_option("--generations", options.generations, "GP generations")->check(atLeast(0))->capture_default_str();
-    command->add_option("--seed", options.seed, "GP random seed")->check(atLeast(0))->capture_default_str();
-    command->add_option("--time-tolerance", options.time_tolerance, "T of Algorithm 2")->check(atLeast(0))
+    command->add_option("--population", options.population, "GP population size")
+        ->check(atLeast(2))
         ->capture_default_str();
-    command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")->check(atLeast(0))->capture_default_str();
+    command->add_option("--generations", options.generations, "GP generations")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    command->add_option("--seed", options.seed, "GP random seed")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    command->add_option("--time-tolerance", options.time_tolerance, "T of Algorithm 2")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")
+        ->check(atLeast(0))
+        ->capture_default_str();
     command->add_option("--bound-margin", options.bound_margin,
                         "searches aim at (1 - margin) x the error bound, so views and lights "
                         "outside the training domain stay within it")
@@ -1021,21 +1059,32 @@ struct ShaderFlags {
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
     shading.add(command);
-    command->add_option("--distance", shading.distance,
-                        "camera distance from the bounding-sphere centre, in asset units")->check(positive());
-    command->add_option("--pixels", shading.pixels,
-                        "alternatively: the distance at which the object spans N pixels")
+    command
+        ->add_option("--distance", shading.distance,
+                     "camera distance from the bounding-sphere centre, in asset units")
+        ->check(positive());
+    command
+        ->add_option("--pixels", shading.pixels,
+                     "alternatively: the distance at which the object spans N pixels")
         ->check(between(1, 16384));
     command->add_option("--search", search, "gp (genetic programming, NSGA-II) or greedy (He et al.)")
         ->check(CLI::IsMember({"gp", "greedy"}))
         ->capture_default_str();
     command->add_option("--seed", seed, "GP random seed")->check(atLeast(0))->capture_default_str();
-    command->add_option("--generations", generations, "GP generations")->check(atLeast(0))->capture_default_str();
-    command->add_option("--population", population, "GP population size")->check(atLeast(2))->capture_default_str();
-    command->add_option("--steps", greedy_steps, "greedy: most rules applied")->check(atLeast(1))->capture_default_str();
-    command->add_option("--candidates", greedy_candidates,
-                        "greedy: sites scored per step, spread evenly over all sites (0: every "
-                        "site; noise_phong offers ~650, each one a compile and two renders)")->check(atLeast(1))
+    command->add_option("--generations", generations, "GP generations")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    command->add_option("--population", population, "GP population size")
+        ->check(atLeast(2))
+        ->capture_default_str();
+    command->add_option("--steps", greedy_steps, "greedy: most rules applied")
+        ->check(atLeast(1))
+        ->capture_default_str();
+    command
+        ->add_option("--candidates", greedy_candidates,
+                     "greedy: sites scored per step, spread evenly over all sites (0: every "
+                     "site; noise_phong offers ~650, each one a compile and two renders)")
+        ->check(atLeast(1))
         ->capture_default_str();
     command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
     command->add_flag("--no-compile-ahead", no_compile_ahead,
@@ -1127,9 +1176,9 @@ int runShader(ShaderFlags& flags) {
   for (size_t k = 0; k < report->variants.size(); ++k) {
     const shader::ShaderLodVariant& variant = report->variants[k];
     std::string ratio = options.measure_time ? formatNumber(variant.time_ratio) : "-";
-    std::printf("%-6zu %s %14.4g %10s %10.4g\n", k,
-                rulesInWords(variant.search.sites, 52).c_str(), variant.search.predicted_cost * 1e3,
-                ratio.c_str(), variant.search.rendered_error.value_or(-1));
+    std::printf("%-6zu %s %14.4g %10s %10.4g\n", k, rulesInWords(variant.search.sites, 52).c_str(),
+                variant.search.predicted_cost * 1e3, ratio.c_str(),
+                variant.search.rendered_error.value_or(-1));
   }
   const shader::SearchCounters& counters = report->search;
   std::printf("variants: %d generated, %d predicted (%d compiled ahead), %d rendered, %d compiled; "
@@ -1166,15 +1215,23 @@ int main(int argc, char** argv) {
       "render", "Render an asset from the paper's domain (a contact sheet of all 20 views, or one)");
   render_cmd->add_option("asset", render_path, "glTF/GLB/OBJ/PLY/OFF file")->required();
   render_flags.add(render_cmd);
-  render_cmd->add_option("--distance", render_flags.distance,
-                         "camera distance from the bounding-sphere centre, in asset units")->check(positive());
-  render_cmd->add_option("--pixels", render_flags.pixels,
-                         "alternatively: the distance at which the object spans N pixels")
-        ->check(between(1, 16384));
-  render_cmd->add_option("--view", render_view, "one view 0-19 (default: all, as a contact sheet)")->check(between(0, 19));
-  render_cmd->add_option("--light", render_light, "light 0-4")->check(between(0, 4))->capture_default_str();
-  render_cmd->add_option("--supersample", render_supersample,
-                         "k: render k×k larger and box-filter (the reference of eq. 1)")->check(between(1, 16))
+  render_cmd
+      ->add_option("--distance", render_flags.distance,
+                   "camera distance from the bounding-sphere centre, in asset units")
+      ->check(positive());
+  render_cmd
+      ->add_option("--pixels", render_flags.pixels,
+                   "alternatively: the distance at which the object spans N pixels")
+      ->check(between(1, 16384));
+  render_cmd->add_option("--view", render_view, "one view 0-19 (default: all, as a contact sheet)")
+      ->check(between(0, 19));
+  render_cmd->add_option("--light", render_light, "light 0-4")
+      ->check(between(0, 4))
+      ->capture_default_str();
+  render_cmd
+      ->add_option("--supersample", render_supersample,
+                   "k: render k×k larger and box-filter (the reference of eq. 1)")
+      ->check(between(1, 16))
       ->capture_default_str();
   render_cmd->add_option("--out", render_out, "PNG to write")->required();
   render_cmd->add_flag("--force", render_force, "replace --out if it exists");
@@ -1188,15 +1245,25 @@ int main(int argc, char** argv) {
   error_cmd->add_option("asset_a", error_a, "the original (reference) asset")->required();
   error_cmd->add_option("asset_b", error_b, "the approximation")->required();
   error_flags.add(error_cmd);
-  error_cmd->add_option("--distance", error_flags.distance, "camera distance, asset units")->check(positive());
+  error_cmd->add_option("--distance", error_flags.distance, "camera distance, asset units")
+      ->check(positive());
   error_cmd->add_option("--pixels", error_flags.pixels, "alternatively: footprint in pixels")
       ->check(between(1, 16384));
-  error_cmd->add_option("--supersample", error_supersample, "reference supersampling k")->check(between(1, 16))
+  error_cmd->add_option("--supersample", error_supersample, "reference supersampling k")
+      ->check(between(1, 16))
       ->capture_default_str();
-  error_cmd->add_option("--e-max", bound.e_max, "maximum per-pixel error (eq. 4)")->check(atLeast(0))->capture_default_str();
-  error_cmd->add_option("--q", bound.q, "quality falloff Q (eq. 4)")->check(between(0, 1))->capture_default_str();
-  error_cmd->add_option("--d-near", bound.d_near, "nearest LOD distance (eq. 4)")->check(positive())->capture_default_str();
-  error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")->check(positive())->capture_default_str();
+  error_cmd->add_option("--e-max", bound.e_max, "maximum per-pixel error (eq. 4)")
+      ->check(atLeast(0))
+      ->capture_default_str();
+  error_cmd->add_option("--q", bound.q, "quality falloff Q (eq. 4)")
+      ->check(between(0, 1))
+      ->capture_default_str();
+  error_cmd->add_option("--d-near", bound.d_near, "nearest LOD distance (eq. 4)")
+      ->check(positive())
+      ->capture_default_str();
+  error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")
+      ->check(positive())
+      ->capture_default_str();
 
   SimplifyFlags simplify_flags;
   CLI::App* simplify_cmd = app.add_subcommand(
@@ -1227,8 +1294,7 @@ int main(int argc, char** argv) {
     std::string message = e.what();
     if (argc > 1 && argv[1][0] != '-' && app.get_subcommands().empty()) {
       message = std::string("unknown command '") + argv[1] + "'; the commands are";
-      for (const CLI::App* command : app.get_subcommands({}))
-        message += " " + command->get_name();
+      for (const CLI::App* command : app.get_subcommands({})) message += " " + command->get_name();
     }
     std::fprintf(stderr, "duolod: error: %s\n(run 'duolod%s%s --help' for the options)\n",
                  message.c_str(), app.get_subcommands().empty() ? "" : " ",

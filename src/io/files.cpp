@@ -54,8 +54,10 @@ core::Status checkWritablePath(const std::string& path) {
   fs::path target(path);
   std::error_code ec;
   fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::exists(folder, ec)) return Error{path + ": folder " + folder.string() + " does not exist"};
-  if (!fs::is_directory(folder, ec)) return Error{path + ": " + folder.string() + " is not a folder"};
+  if (!fs::exists(folder, ec))
+    return Error{path + ": folder " + folder.string() + " does not exist"};
+  if (!fs::is_directory(folder, ec))
+    return Error{path + ": " + folder.string() + " is not a folder"};
   if (fs::is_directory(target, ec)) return Error{path + ": is a folder"};
   return core::okStatus();
 }
@@ -66,7 +68,8 @@ FileSet::~FileSet() {
 }
 
 core::Status FileSet::add(const std::string& path, std::string_view text) {
-  return add(path, std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
+  return add(path,
+             std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
 core::Status FileSet::add(const std::string& path, std::span<const uint8_t> bytes) {

@@ -585,7 +585,8 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   // declares required that is not read here: the spec's rule, for what it needs cannot be drawn
   // right without it (Draco-compressed geometry, say, reads as broken accessors).
   if (!model.asset.version.starts_with("2."))
-    return Error{path + ": glTF version '" + model.asset.version + "' is not supported (glTF 2.0 only)"};
+    return Error{path + ": glTF version '" + model.asset.version +
+                 "' is not supported (glTF 2.0 only)"};
   for (const std::string& extension : model.extensionsRequired)
     if (extension != "KHR_mesh_quantization")  // any accessor component type is read
       return Error{path + ": requires the glTF extension " + extension +

@@ -1388,7 +1388,9 @@ namespace {
 // reading the first candidate's error from an empty list. (The bound's and the display's
 // parameters are checked where the levels are placed: distanceLevels.)
 core::Status checkGenerateOptions(const GenerateOptions& options) {
-  auto finiteAtLeast = [](double value, double low) { return std::isfinite(value) && value >= low; };
+  auto finiteAtLeast = [](double value, double low) {
+    return std::isfinite(value) && value >= low;
+  };
   struct Check {
     bool holds;
     const char* what;
@@ -1404,7 +1406,8 @@ core::Status checkGenerateOptions(const GenerateOptions& options) {
       {options.average_resolution >= 1, "average_resolution must be >= 1"},
       {options.near_footprint_px >= 1 && options.far_footprint_px >= 1,
        "near_footprint_px and far_footprint_px must be >= 1"},
-      {finiteAtLeast(options.levels.bound.d_near, 0) && finiteAtLeast(options.levels.bound.d_far, 0),
+      {finiteAtLeast(options.levels.bound.d_near, 0) &&
+           finiteAtLeast(options.levels.bound.d_far, 0),
        "d_near and d_far must be finite and >= 0 (0: placed by the footprints)"},
       {finiteAtLeast(options.time_tolerance, 0), "time_tolerance must be finite and >= 0"},
       {finiteAtLeast(options.merge_min_gain, 0), "merge_min_gain must be finite and >= 0"},

@@ -701,7 +701,8 @@ core::Result<AutoLodShader> buildAutoLodShader(std::span<const ShaderProgram> le
   // Each parameter under the name the merged stages give its uniform: imported globals took
   // their level's suffix ("uAverage_x_40_lod2"), and by-name lookups in the cross-compiled GLSL
   // ES and HLSL (which have no locations) must find what the summary and lod.json list.
-  for (const Module* stage : {&result.program.vertex, &result.program.fragment}) {  // fragment last: its name wins
+  for (const Module* stage :
+       {&result.program.vertex, &result.program.fragment}) {  // fragment last: its name wins
     ir::DefUse uses(*stage);
     for (const ir::LooseUniform& uniform : ir::looseUniforms(*stage, uses))
       for (ParameterValue& parameter : result.program.parameters)
