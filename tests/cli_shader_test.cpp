@@ -143,8 +143,16 @@ TEST(CliShaderTest, GreedySearchRecordsItsSteps) {
   const nlohmann::json& levels = summary["levels"];
   ASSERT_EQ(levels.size(), 3u);  // the original + 2 steps
   for (size_t k = 0; k < levels.size(); ++k) EXPECT_EQ(levels[k]["rules"].size(), k);
+  // Again into the same folder with one step: level02's files of the first run are removed, so
+  // the folder holds this result only.
+  EXPECT_TRUE(fs::exists(out / "level02.frag.glsl"));
+  args[std::find(args.begin(), args.end(), "--steps") - args.begin() + 1] = "1";
   args.push_back("--force");
   EXPECT_EQ(runCli(args).exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(test::readText(out / "summary.json"))["levels"].size(), 2u);
+  EXPECT_TRUE(fs::exists(out / "level01.frag.glsl"));
+  for (const char* extension : {".frag.spv", ".frag.glsl", ".frag.es.glsl", ".frag.hlsl", ".vert.spv"})
+    EXPECT_FALSE(fs::exists(out / ("level02" + std::string(extension)))) << extension;
 }
 
 TEST(CliShaderTest, BadFlagsAreClearErrors) {

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <span>
+#include <regex>
 #include <sstream>
 #include <unistd.h>
 
@@ -200,6 +201,20 @@ class FolderOutput {
   bool created_ = false, was_empty_ = false;
 };
 
+// After a run with --force into a folder an earlier run wrote: the level shader files of levels
+// this run does not have (levelK.* of generate, levelNN.* of shader), which would otherwise read
+// as part of this result. Only names of exactly that form are removed.
+void removeStaleLevelFiles(const std::string& folder, size_t level_count) {
+  static const std::regex kLevelFile(R"(level(\d{1,6})\.(vert|frag)\.(spv|glsl|es\.glsl|hlsl))");
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
+    std::smatch match;
+    const std::string name = entry.path().filename().string();
+    if (std::regex_match(name, match, kLevelFile) && std::stoul(match[1].str()) >= level_count)
+      fs::remove(entry.path(), ec);
+  }
+}
+
 int runInfo(const std::string& path) {
   auto asset = loadWithWarnings(path);
   if (!asset) return fail(asset.error().message);
@@ -351,6 +366,9 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
              int supersample, const metric::BoundConfig& bound) {
   if ((flags.distance > 0) == (flags.pixels > 0))
     return fail("give exactly one of --distance D or --pixels N");
+  if (!(bound.d_near < bound.d_far))
+    return fail("--d-near (" + formatNumber(bound.d_near) + ") must be less than --d-far (" +
+                formatNumber(bound.d_far) + ")");
   auto a = loadWithWarnings(path_a);
   if (!a) return fail(a.error().message);
   auto b = loadWithWarnings(path_b);
@@ -364,6 +382,14 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   if (!comparison) return fail(comparison.error().message);
   const metric::ImageError& error = comparison->errors[0];
   double e_a = metric::perPixelBound(bound, distance);
+  // d_near and d_far are in asset units and default to 1 and 10: a distance outside them gets the
+  // bound of the nearer end (0 below d_near), which is rarely what was meant.
+  if (distance < bound.d_near || distance > bound.d_far)
+    std::fprintf(stderr,
+                 "duolod: warning: distance %g is outside [--d-near, --d-far] = [%g, %g] (asset "
+                 "units): the bound is that of %s\n",
+                 distance, bound.d_near, bound.d_far,
+                 distance < bound.d_near ? "d_near, 0" : "d_far");
   bool ok = metric::withinBound(error, bound, distance);
   std::printf("distance %g  footprint %d px  samples %d (20 views x 5 lights)\n", distance,
               comparison->footprint_px, error.samples);
@@ -989,6 +1015,7 @@ int runGenerate(GenerateFlags& flags) {
     folder.removeWritten();
     return fail(written.error().message);
   }
+  removeStaleLevelFiles(flags.out, result->levels.size());
   result->timings.export_seconds = secondsSince(export_start);
 
   std::printf("device    %s\n", result->device.c_str());
@@ -1025,9 +1052,10 @@ int runGenerate(GenerateFlags& flags) {
     if (dropped.covering_error >= dropped.bound) ++violations;
   }
   const lod::GenerateTimings& t = result->timings;
-  std::printf("\ntime      mesh %.1f s, shader %.1f s, optimization %.1f s, export %.1f s, total %.1f s\n",
-              t.mesh_seconds, t.shader_seconds, t.optimization_seconds, t.export_seconds,
-              secondsSince(start));
+  std::printf("\ntime      references %.1f s, mesh %.1f s, shader %.1f s, optimization %.1f s, "
+              "export %.1f s, total %.1f s\n",
+              t.setup_seconds, t.mesh_seconds, t.shader_seconds, t.optimization_seconds,
+              t.export_seconds, secondsSince(start));
   if (t.shader_search_seconds > 0)
     std::printf("          (the shader searches took %.1f s, alongside the mesh stage until it "
                 "ended; the shader stage is what they added after it)\n",
@@ -1167,6 +1195,7 @@ int runShader(ShaderFlags& flags) {
     folder.removeWritten();
     return fail(written.error().message);
   }
+  removeStaleLevelFiles(flags.out, report->variants.size());
 
   std::printf("%s at distance %s (footprint %d px, %d samples), %s search on %s\n", flags.in.c_str(),
               formatNumber(options.distance).c_str(), report->footprint_px, report->domain_samples,

@@ -831,6 +831,7 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   for (const LevelState& level : levels_) result.all_levels.push_back(level.level);
 
   auto mesh_start = Clock::now();
+  result.timings.setup_seconds = std::chrono::duration<double>(mesh_start - start).count();
   startShaderSearch();
   if (auto made = makeMeshCandidates(source); !made) return made.error();
   addReadyConfigurations(static_cast<int>(levels_.size()) - 1);  // quadric mode, shader only

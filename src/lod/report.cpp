@@ -102,17 +102,21 @@ void appendLevels(std::string& html, const ReportData& data) {
   if (data.levels.empty()) return;
   html +=
       "<section id=\"levels\"><h2>Levels</h2>\n<table><tr><th>level</th><th>distance</th>"
-      "<th>screen coverage</th><th>triangles</th><th class=\"text\">shader</th>"
+      // Coverage at the level's own distance d (lod.json's screen_coverage is at the distance
+      // where the level takes over, 1 for level 0).
+      "<th>screen coverage at d</th><th>triangles</th><th class=\"text\">shader</th>"
       "<th>error &#949;<sub>a</sub></th><th>bound e<sub>a</sub>&#183;s<sub>d</sub></th>"
       "<th>transition &#949;<sub>t</sub></th><th>predicted cost</th><th>measured cost</th></tr>\n";
   for (const ReportLevel& level : data.levels) {
     bool over = level.error >= level.error_bound && level.index > 0;
+    const bool last = &level == &data.levels.back();  // no next level: no transition (null in lod.json)
     html += "<tr><td>" + std::to_string(level.index) + "</td><td>" + number(level.distance) +
             "</td><td>" + number(level.screen_coverage) + "</td><td>" +
             std::to_string(level.triangles) + "</td><td class=\"text\">" +
             escaped(level.shader_summary) + "</td><td" + (over ? " class=\"over\"" : "") + ">" +
             number(level.error) + "</td><td>" + number(level.error_bound) + "</td><td>" +
-            number(level.transition_error) + "</td><td>" + number(level.predicted_cost) +
+            (last ? std::string("&#8212;") : number(level.transition_error)) + "</td><td>" +
+            number(level.predicted_cost) +
             "</td><td>" + (level.measured_cost > 0 ? number(level.measured_cost) : std::string("not measured")) + "</td></tr>\n";
   }
   html += "</table>\n";
