@@ -151,7 +151,8 @@ TEST(CliShaderTest, GreedySearchRecordsItsSteps) {
   EXPECT_EQ(runCli(args).exit_code, 0);
   EXPECT_EQ(nlohmann::json::parse(test::readText(out / "summary.json"))["levels"].size(), 2u);
   EXPECT_TRUE(fs::exists(out / "level01.frag.glsl"));
-  for (const char* extension : {".frag.spv", ".frag.glsl", ".frag.es.glsl", ".frag.hlsl", ".vert.spv"})
+  for (const char* extension :
+       {".frag.spv", ".frag.glsl", ".frag.es.glsl", ".frag.hlsl", ".vert.spv"})
     EXPECT_FALSE(fs::exists(out / ("level02" + std::string(extension)))) << extension;
 }
 

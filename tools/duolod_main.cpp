@@ -1,5 +1,7 @@
 // The duolod command line: a thin layer over libduolod. Each subcommand parses flags, calls the
 // library, and prints what a user needs; errors go to stderr with a non-zero exit code.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
@@ -9,10 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <span>
 #include <regex>
+#include <span>
 #include <sstream>
-#include <unistd.h>
 
 #include "duolod/core.hpp"
 #include "duolod/io.hpp"
@@ -1052,10 +1053,11 @@ int runGenerate(GenerateFlags& flags) {
     if (dropped.covering_error >= dropped.bound) ++violations;
   }
   const lod::GenerateTimings& t = result->timings;
-  std::printf("\ntime      references %.1f s, mesh %.1f s, shader %.1f s, optimization %.1f s, "
-              "export %.1f s, total %.1f s\n",
-              t.setup_seconds, t.mesh_seconds, t.shader_seconds, t.optimization_seconds,
-              t.export_seconds, secondsSince(start));
+  std::printf(
+      "\ntime      references %.1f s, mesh %.1f s, shader %.1f s, optimization %.1f s, "
+      "export %.1f s, total %.1f s\n",
+      t.setup_seconds, t.mesh_seconds, t.shader_seconds, t.optimization_seconds, t.export_seconds,
+      secondsSince(start));
   if (t.shader_search_seconds > 0)
     std::printf("          (the shader searches took %.1f s, alongside the mesh stage until it "
                 "ended; the shader stage is what they added after it)\n",

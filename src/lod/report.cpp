@@ -109,15 +109,17 @@ void appendLevels(std::string& html, const ReportData& data) {
       "<th>transition &#949;<sub>t</sub></th><th>predicted cost</th><th>measured cost</th></tr>\n";
   for (const ReportLevel& level : data.levels) {
     bool over = level.error >= level.error_bound && level.index > 0;
-    const bool last = &level == &data.levels.back();  // no next level: no transition (null in lod.json)
+    const bool last =
+        &level == &data.levels.back();  // no next level: no transition (null in lod.json)
     html += "<tr><td>" + std::to_string(level.index) + "</td><td>" + number(level.distance) +
             "</td><td>" + number(level.screen_coverage) + "</td><td>" +
             std::to_string(level.triangles) + "</td><td class=\"text\">" +
             escaped(level.shader_summary) + "</td><td" + (over ? " class=\"over\"" : "") + ">" +
             number(level.error) + "</td><td>" + number(level.error_bound) + "</td><td>" +
             (last ? std::string("&#8212;") : number(level.transition_error)) + "</td><td>" +
-            number(level.predicted_cost) +
-            "</td><td>" + (level.measured_cost > 0 ? number(level.measured_cost) : std::string("not measured")) + "</td></tr>\n";
+            number(level.predicted_cost) + "</td><td>" +
+            (level.measured_cost > 0 ? number(level.measured_cost) : std::string("not measured")) +
+            "</td></tr>\n";
   }
   html += "</table>\n";
   for (const ReportLevel& level : data.levels) {
