@@ -309,6 +309,17 @@ TEST(MalformedFiles, MissingFileNamesThePath) {
   }
 }
 
+// A file whose every triangle has zero area loads as nothing; the message says why, not only
+// that no triangle is left.
+TEST(MalformedFiles, AllDegenerateTrianglesAreNamedAsSuch) {
+  const std::string path = (test::scratchDir("degenerate") / "line.off").string();
+  std::ofstream(path) << "OFF\n3 2 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n3 0 0 1\n";
+  auto asset = io::loadAsset(path);
+  ASSERT_FALSE(asset.ok());
+  EXPECT_NE(asset.error().message.find("line.off: all 2 triangles are degenerate"), std::string::npos)
+      << asset.error().message;
+}
+
 // Valid files of each kind, to be cut and corrupted below.
 std::vector<std::pair<std::string, std::string>> seedFiles() {
   std::string binary_ply = "ply\nformat binary_little_endian 1.0\nelement vertex 4\n" +

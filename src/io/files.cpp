@@ -442,7 +442,10 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
   size_t degenerate = core::removeDegenerateTriangles(mesh);
   if (degenerate > 0)
     asset.warnings.push_back(std::to_string(degenerate) + " degenerate triangles removed");
-  if (mesh.triangleCount() == 0) return Error{path + ": the file contains no triangles"};
+  if (mesh.triangleCount() == 0)
+    return Error{path + (degenerate > 0 ? ": all " + std::to_string(degenerate) +
+                                              " triangles are degenerate (zero area)"
+                                        : std::string(": the file contains no triangles"))};
   if (options.weld) core::weldVertices(mesh);
   if (options.generate_normals && mesh.normals.empty()) core::computeNormals(mesh);
   if (options.generate_tangents && mesh.tangents.empty() && !mesh.normals.empty() &&
