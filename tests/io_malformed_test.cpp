@@ -316,7 +316,8 @@ TEST(MalformedFiles, AllDegenerateTrianglesAreNamedAsSuch) {
   std::ofstream(path) << "OFF\n3 2 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n3 0 0 1\n";
   auto asset = io::loadAsset(path);
   ASSERT_FALSE(asset.ok());
-  EXPECT_NE(asset.error().message.find("line.off: all 2 triangles are degenerate"), std::string::npos)
+  EXPECT_NE(asset.error().message.find("line.off: all 2 triangles are degenerate"),
+            std::string::npos)
       << asset.error().message;
 }
 
