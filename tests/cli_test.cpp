@@ -169,7 +169,7 @@ TEST(Cli, RenderRefusesToOverwriteAnyFileItReads) {
   const std::string obj = (dir / "spot.obj").string();
   const std::string texture = (dir / "spot_texture.png").string();
   const std::string bindings = (dir / "bindings.json").string();
-  std::ofstream(bindings) << "{\"attributes\": {\"normal\": 2}}";
+  std::ofstream(bindings) << "{\"attributes\": {\"normal\": 2, \"tangent\": -1}}";
   const std::string vert = (dir / "flat.vert").string(), frag = (dir / "flat.frag").string();
   fs::copy_file(test::sourcePath("shaders/constant.vert"), vert,
                 fs::copy_options::overwrite_existing);

@@ -91,7 +91,7 @@ struct ShadingFlags {
     command->add_option("--frag", frag, "fragment shader (GLSL 450); needs --vert");
     command->add_option("--bindings", bindings,
                         "JSON file moving the shader interface's attribute locations, block and "
-                        "texture bindings, e.g. {\"attributes\": {\"normal\": 2}} (README, "
+                        "texture bindings, e.g. {\"attributes\": {\"color\": 7}} (README, "
                         "Formats)");
     command
         ->add_option("--device", device,

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "duolod/render.hpp"
 
@@ -49,6 +50,15 @@ core::Result<Bindings> parseBindings(const std::string& json_text, const std::st
       *field->target = entry.get<int>();
     }
   }
+  // Two inputs of one kind at one location or binding would read the same data (defaults
+  // included: the interface's locations for what the file leaves out).
+  for (const Field& a : fields)
+    for (const Field& b : fields)
+      if (&a < &b && std::string_view(a.section) == b.section && *a.target >= 0 &&
+          *a.target == *b.target)
+        return Error{file_name + ": '" + a.section + "." + a.key + "' and '" + b.section + "." +
+                     b.key + "' are both " + std::to_string(*a.target) +
+                     " (give one of them another, or -1 for unused)"};
   return bindings;
 }
 
