@@ -221,6 +221,12 @@ TEST(Cli, OutOfRangeFlagsNameTheFlag) {
     EXPECT_EQ(run.exit_code, 2) << args[1] << " " << flag << ": " << run.err;
     EXPECT_TRUE(test::contains(run.err, "duolod: error: " + flag + ":")) << run.err;
   }
+  // In range: shader's --candidates 0 means every site (the parser passes it; the missing asset
+  // is what fails).
+  test::CommandRun every_site = runCli(
+      {"shader", "missing.obj", "--pixels", "32", "--candidates", "0", "--out", "s"});
+  EXPECT_EQ(every_site.exit_code, 1) << every_site.err;
+  EXPECT_TRUE(test::contains(every_site.err, "missing.obj")) << every_site.err;
   // Contradictory generate flags, and an unknown command, are named too.
   test::CommandRun both =
       runCli({"generate", "missing.obj", "--d-near", "0.5", "--near-pixels", "100", "--out", "g"});

@@ -44,7 +44,7 @@ TEST(CoreResult, DereferencesTemporariesAndConstResults) {
   auto make = [](int n) { return core::Result<std::vector<int>>(std::vector<int>(size_t(n), 7)); };
   std::vector<int> moved = *make(3);
   EXPECT_EQ(moved, (std::vector<int>{7, 7, 7}));
-  static_assert(std::is_same_v<decltype(*make(1)), std::vector<int>&&>);
+  static_assert(std::is_same_v<decltype(*make(1)), std::vector<int>>);
   const core::Result<std::vector<int>> kept = make(2);
   EXPECT_EQ((*kept).size(), 2u);
   static_assert(std::is_same_v<decltype(*kept), const std::vector<int>&>);

@@ -411,6 +411,13 @@ TEST(GltfWriter, FileReferencesArePercentEncoded) {
   ASSERT_EQ(reloaded->textures.size(), 1u);
   EXPECT_EQ(reloaded->textures[0].image.width, 2);
   EXPECT_EQ(reloaded->mesh.triangleCount(), 2u);
+  // Read without its textures, the image it names is still known as a file it was read from, by
+  // its decoded name, so no writer replaces it.
+  auto undecoded = io::loadAsset(path, {.load_textures = false});
+  ASSERT_TRUE(undecoded) << undecoded.error().message;
+  const std::string texture = (dir / "my model%20\xC3\xA9_texture0.png").string();
+  ASSERT_TRUE(fs::exists(texture));
+  EXPECT_FALSE(io::refuseSourceFile(*undecoded, texture));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -177,6 +177,16 @@ core::Status checkOutputPath(const std::string& out, const std::vector<std::stri
   return core::okStatus();
 }
 
+// The entries of `folder`, listed before any is removed, without throwing (a folder that changes
+// or cannot be read lists what could be read).
+std::vector<fs::path> entriesOf(const fs::path& folder) {
+  std::vector<fs::path> entries;
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
+    entries.push_back(it->path());
+  return entries;
+}
+
 // A folder output (generate, shader) removed again when writing it fails (a full disk): the
 // folder itself when this run made it, its entries when it was empty (all of them this run's). A
 // non-empty folder written into with --force keeps what the run wrote until the failure.
@@ -192,8 +202,7 @@ class FolderOutput {
     if (created_) {
       fs::remove_all(path_, ec);
     } else if (was_empty_) {
-      for (const fs::directory_entry& entry : fs::directory_iterator(path_, ec))
-        fs::remove_all(entry.path(), ec);
+      for (const fs::path& entry : entriesOf(path_)) fs::remove_all(entry, ec);
     }
   }
 
@@ -208,11 +217,11 @@ class FolderOutput {
 void removeStaleLevelFiles(const std::string& folder, size_t level_count) {
   static const std::regex kLevelFile(R"(level(\d{1,6})\.(vert|frag)\.(spv|glsl|es\.glsl|hlsl))");
   std::error_code ec;
-  for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
+  for (const fs::path& entry : entriesOf(folder)) {
     std::smatch match;
-    const std::string name = entry.path().filename().string();
+    const std::string name = entry.filename().string();
     if (std::regex_match(name, match, kLevelFile) && std::stoul(match[1].str()) >= level_count)
-      fs::remove(entry.path(), ec);
+      fs::remove(entry, ec);
   }
 }
 
@@ -279,17 +288,17 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   if (!asset) return fail(asset.error().message);
   // The asset's own files: its .bin, .mtl and textures, those found beside it included.
   if (auto ok = io::refuseSourceFile(*asset, out); !ok) return fail(ok.error().message);
+  core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
+  float distance = resolveDistance(flags, sphere);
+  if (!(distance > sphere.radius))
+    return fail(path + ": distance " + formatNumber(distance) +
+                " puts the camera inside the asset's bounding sphere (radius " +
+                formatNumber(sphere.radius) + "); the domain's views look at it from outside");
   auto session = openSession(flags);
   if (!session) return fail(session.error().message);
   auto& renderer = *session->renderer;
   auto asset_id = renderer.uploadAsset(*asset);
   if (!asset_id) return fail(asset_id.error().message);
-  core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
-  float distance = resolveDistance(flags, sphere);
-  if (!(distance > sphere.radius))
-    return fail(path + ": --distance " + formatNumber(distance) +
-                " puts the camera inside the asset's bounding sphere (radius " +
-                formatNumber(sphere.radius) + "); the domain's views look at it from outside");
   int resolution = render::footprintPixels(sphere, distance, flags.display());
   if (resolution >= 16384)
     std::fprintf(stderr,
@@ -787,8 +796,8 @@ struct GenerateFlags {
     if (bound.d_far > 0 && far_pixels_option->count() > 0)
       return core::Error{"give --d-far or --far-pixels, not both (--far-pixels places d_far)"};
     if (bound.d_near > 0 && bound.d_far > 0 && !(bound.d_near < bound.d_far))
-      return core::Error{"--d-near (" + std::to_string(bound.d_near) +
-                         ") must be less than --d-far (" + std::to_string(bound.d_far) + ")"};
+      return core::Error{"--d-near (" + formatNumber(bound.d_near) +
+                         ") must be less than --d-far (" + formatNumber(bound.d_far) + ")"};
     if (bound.d_near == 0 && bound.d_far == 0 &&
         !(options.near_footprint_px > options.far_footprint_px))
       return core::Error{"--near-pixels (" + std::to_string(options.near_footprint_px) +
@@ -889,12 +898,12 @@ struct GenerateFlags {
     command->add_option("--bound-margin", options.bound_margin,
                         "searches aim at (1 - margin) x the error bound, so views and lights "
                         "outside the training domain stay within it")
-        ->check(CLI::Range(0.0, 0.9))
+        ->check(between(0, 0.9))
         ->capture_default_str();
     command->add_option("--bisection-stop", options.bisection_stop,
                         "Algorithm 2's bisection stops when its bracketing meshes differ by at "
                         "most this fraction of their triangles (0 = the exact boundary)")
-        ->check(CLI::Range(0.0, 0.5))
+        ->check(between(0, 0.5))
         ->capture_default_str();
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
@@ -972,6 +981,7 @@ class ProgressLine {
 int runGenerate(GenerateFlags& flags) {
   auto start = std::chrono::steady_clock::now();
   if (auto valid = flags.check(); !valid) return fail(valid.error().message);
+  if (flags.out.empty()) return fail("--out: empty path; give the folder to write into");
   auto asset = loadWithWarnings(flags.in);
   if (!asset) return fail(asset.error().message);
   auto source = flags.shading.source();
@@ -1114,7 +1124,7 @@ struct ShaderFlags {
         ->add_option("--candidates", greedy_candidates,
                      "greedy: sites scored per step, spread evenly over all sites (0: every "
                      "site; noise_phong offers ~650, each one a compile and two renders)")
-        ->check(atLeast(1))
+        ->check(atLeast(0))
         ->capture_default_str();
     command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
     command->add_flag("--no-compile-ahead", no_compile_ahead,

@@ -41,8 +41,9 @@ class [[nodiscard]] Result {
   const T* operator->() const { return &value(); }
   T& operator*() & { return value(); }
   const T& operator*() const& { return value(); }
-  // On a temporary (`*loadShaderPair("pbr")` passed straight on) the value is moved out.
-  T&& operator*() && { return std::move(*this).value(); }
+  // On a temporary (`*loadShaderPair("pbr")` passed straight on) the value is moved out, by
+  // value: a reference would dangle once the temporary is gone (`const auto& a = *load();`).
+  T operator*() && { return std::move(*this).value(); }
   const Error& error() const { return std::get<Error>(state_); }
 
  private:

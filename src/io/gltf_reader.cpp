@@ -552,6 +552,31 @@ core::Status checkGlbLayout(const std::vector<uint8_t>& bytes, const std::string
 
 }  // namespace
 
+namespace {
+
+// A URI reference's file name: %XX decoded (the writer encodes spaces and UTF-8, so an image
+// named "my texture.png" is "my%20texture.png" in the document).
+std::string fileNameOfUri(const std::string& uri) {
+  auto hex = [](char c) {
+    return c >= '0' && c <= '9' ? c - '0'
+           : c >= 'a' && c <= 'f' ? c - 'a' + 10
+           : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                  : -1;
+  };
+  std::string name;
+  for (size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() && hex(uri[i + 1]) >= 0 && hex(uri[i + 2]) >= 0) {
+      name += static_cast<char>(hex(uri[i + 1]) * 16 + hex(uri[i + 2]));
+      i += 2;
+    } else {
+      name += uri[i];
+    }
+  }
+  return name;
+}
+
+}  // namespace
+
 core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& options) {
   tinygltf::TinyGLTF loader;
   ImageLoaderContext context;
@@ -599,7 +624,9 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   for (const tinygltf::Image& image : model.images)
     if (!image.uri.empty() && !image.uri.starts_with("data:"))
       asset.source_files.push_back(
-          (std::filesystem::path(path).parent_path() / image.uri).lexically_normal().string());
+          (std::filesystem::path(path).parent_path() / fileNameOfUri(image.uri))
+              .lexically_normal()
+              .string());
   if (!warning.empty()) asset.warnings.push_back(warning);
   if (auto materials = readMaterials(model, path, context.encoded, asset); !materials)
     return materials.error();

@@ -1,10 +1,12 @@
 // Bindings files: where a user's shader expects each asset input (see shaders/INTERFACE.md).
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string_view>
+#include <vector>
 
 #include "duolod/render.hpp"
 
@@ -34,6 +36,7 @@ core::Result<Bindings> parseBindings(const std::string& json_text, const std::st
       {"textures", "normal", &bindings.normal_map},   {"textures", "occlusion", &bindings.occlusion},
       {"textures", "emissive", &bindings.emissive},
   };
+  std::vector<const Field*> explicit_fields;
   for (auto& [section, value] : document.items()) {
     if (section != "attributes" && section != "blocks" && section != "textures")
       return Error{file_name + ": unknown section '" + section +
@@ -48,17 +51,29 @@ core::Result<Bindings> parseBindings(const std::string& json_text, const std::st
         return Error{file_name + ": '" + section + "." + key +
                      "' must be an integer from -1 (unused) to 31"};
       *field->target = entry.get<int>();
+      explicit_fields.push_back(field);
     }
   }
-  // Two inputs of one kind at one location or binding would read the same data (defaults
-  // included: the interface's locations for what the file leaves out).
-  for (const Field& a : fields)
-    for (const Field& b : fields)
-      if (&a < &b && std::string_view(a.section) == b.section && *a.target >= 0 &&
-          *a.target == *b.target)
-        return Error{file_name + ": '" + a.section + "." + a.key + "' and '" + b.section + "." +
-                     b.key + "' are both " + std::to_string(*a.target) +
-                     " (give one of them another, or -1 for unused)"};
+  // One location or binding per input of a kind. Two given at one are an error; a given one
+  // takes it from an input left at its default, which becomes unused (-1): {"position": 2}
+  // moves the position onto tangent's default location, and the tangent would otherwise be bound
+  // there after it and be what the shader reads.
+  auto isExplicit = [&](const Field& f) {
+    return std::find(explicit_fields.begin(), explicit_fields.end(), &f) != explicit_fields.end();
+  };
+  for (const Field* given : explicit_fields) {
+    if (*given->target < 0) continue;
+    for (Field& other : fields) {
+      if (&other == given || std::string_view(other.section) != given->section ||
+          *other.target != *given->target)
+        continue;
+      if (isExplicit(other))
+        return Error{file_name + ": '" + given->section + "." + given->key + "' and '" +
+                     other.section + "." + other.key + "' are both " +
+                     std::to_string(*given->target) + " (give one of them another, or -1)"};
+      *other.target = -1;
+    }
+  }
   return bindings;
 }
 
