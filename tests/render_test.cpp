@@ -368,8 +368,8 @@ TEST(Bindings, ParsesAndRejectsWithTheKeyNamed) {
   auto clash = render::parseBindings(R"({"attributes": {"position": 0, "normal": 0}})", "b.json");
   ASSERT_FALSE(clash);
   EXPECT_NE(clash.error().message.find("are both 0"), std::string::npos) << clash.error().message;
-  auto taken = render::parseBindings(R"({"attributes": {"position": 2}, "textures": {"emissive": 0}})",
-                                     "b.json");
+  auto taken = render::parseBindings(
+      R"({"attributes": {"position": 2}, "textures": {"emissive": 0}})", "b.json");
   ASSERT_TRUE(taken) << taken.error().message;
   EXPECT_EQ(taken->position, 2);
   EXPECT_EQ(taken->tangent, -1);

@@ -895,14 +895,16 @@ struct GenerateFlags {
     command->add_option("--merge-gain", options.merge_min_gain, "W of §6.2")
         ->check(atLeast(0))
         ->capture_default_str();
-    command->add_option("--bound-margin", options.bound_margin,
-                        "searches aim at (1 - margin) x the error bound, so views and lights "
-                        "outside the training domain stay within it")
+    command
+        ->add_option("--bound-margin", options.bound_margin,
+                     "searches aim at (1 - margin) x the error bound, so views and lights "
+                     "outside the training domain stay within it")
         ->check(between(0, 0.9))
         ->capture_default_str();
-    command->add_option("--bisection-stop", options.bisection_stop,
-                        "Algorithm 2's bisection stops when its bracketing meshes differ by at "
-                        "most this fraction of their triangles (0 = the exact boundary)")
+    command
+        ->add_option("--bisection-stop", options.bisection_stop,
+                     "Algorithm 2's bisection stops when its bracketing meshes differ by at "
+                     "most this fraction of their triangles (0 = the exact boundary)")
         ->check(between(0, 0.5))
         ->capture_default_str();
     command->add_flag("--brute-force", options.brute_force,

@@ -558,7 +558,7 @@ namespace {
 // named "my texture.png" is "my%20texture.png" in the document).
 std::string fileNameOfUri(const std::string& uri) {
   auto hex = [](char c) {
-    return c >= '0' && c <= '9' ? c - '0'
+    return c >= '0' && c <= '9'   ? c - '0'
            : c >= 'a' && c <= 'f' ? c - 'a' + 10
            : c >= 'A' && c <= 'F' ? c - 'A' + 10
                                   : -1;

@@ -1,9 +1,8 @@
 // Bindings files: where a user's shader expects each asset input (see shaders/INTERFACE.md).
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string_view>
 #include <vector>
