@@ -216,9 +216,8 @@ class FolderOutput {
 void removeStaleLevelFiles(const std::string& folder, size_t level_count) {
   // "level" + 1-6 digits + one of the shader files' suffixes (no <regex>: GCC 12 warns inside it
   // under the sanitizers).
-  static const char* const kSuffixes[] = {
-      ".vert.spv", ".vert.glsl", ".vert.es.glsl", ".vert.hlsl",
-      ".frag.spv", ".frag.glsl", ".frag.es.glsl", ".frag.hlsl"};
+  static const char* const kSuffixes[] = {".vert.spv", ".vert.glsl", ".vert.es.glsl", ".vert.hlsl",
+                                          ".frag.spv", ".frag.glsl", ".frag.es.glsl", ".frag.hlsl"};
   std::error_code ec;
   for (const fs::path& entry : entriesOf(folder)) {
     const std::string name = entry.filename().string();
