@@ -527,8 +527,6 @@ struct SimplifyFlags {
                                "one vertex per cell)"};
     if (lock_border && mode == "cluster")
       return core::Error{"--lock-border does not apply to --mode cluster"};
-    if (shading.distance < 0 || shading.pixels < 0)
-      return core::Error{"--distance and --pixels must be positive"};
     if (shading.distance > 0 && shading.pixels > 0)
       return core::Error{"give at most one of --distance D or --pixels N"};
     if (mode == "image" && shading.distance <= 0 && shading.pixels <= 0)
@@ -1173,10 +1171,6 @@ std::string rulesInWords(const std::vector<shader::RuleSite>& sites, size_t widt
 int runShader(ShaderFlags& flags) {
   if (!(flags.shading.distance > 0) && !(flags.shading.pixels > 0))
     return fail("shader: give --distance D (> 0) or --pixels N");
-  if (flags.generations < 0 || flags.population < 2 || flags.greedy_steps < 1 ||
-      flags.greedy_candidates < 0)
-    return fail("shader: --generations must be >= 0, --population >= 2, --steps >= 1, "
-                "--candidates >= 0");
   if (flags.out.empty()) return fail("--out: empty path; give the folder to write into");
   auto source = flags.shading.source();
   if (!source) return fail(source.error().message);
