@@ -5,8 +5,11 @@
 // must pass its bound on the held-out views and lights, or be the original (flagged).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "duolod/runtime.hpp"
@@ -87,6 +90,45 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
   test::CommandRun again = test::runCommand(DUOLOD_CLI, args);
   EXPECT_NE(again.exit_code, 0);
   EXPECT_NE(again.err.find("--force"), std::string::npos) << again.err;
+
+  // With --force, an output that fails part-way in (a folder where report.html goes) leaves the
+  // folder as the first run wrote it: no file of the second run (2 levels, not 3), none half.
+  fs::remove(out / "report.html");
+  fs::create_directory(out / "report.html");
+  auto contentsOf = [](const fs::path& dir) {
+    std::map<std::string, std::string> contents;
+    for (const auto& entry : fs::recursive_directory_iterator(dir))
+      contents[entry.path().lexically_relative(dir).string()] =
+          entry.is_directory() ? "(folder)" : test::readText(entry.path());
+    return contents;
+  };
+  const auto before = contentsOf(out);
+  std::vector<std::string> forced = args;
+  forced[std::find(forced.begin(), forced.end(), "--levels") - forced.begin() + 1] = "2";
+  forced.push_back("--force");
+  test::CommandRun blocked = test::runCommand(DUOLOD_CLI, forced);
+  EXPECT_NE(blocked.exit_code, 0);
+  EXPECT_TRUE(test::contains(blocked.err, "report.html")) << blocked.err;
+  EXPECT_TRUE(contentsOf(out) == before) << "the folder changed:\n" << blocked.err;
+  EXPECT_EQ(contentsOf(out.parent_path()).size(), before.size() + 1)  // no staging folder left
+      << "beside the output: " << blocked.err;
+
+  // Unblocked, the forced run replaces the output, and the level shader files it did not write go:
+  // levels it does not have, and `duolod shader`'s names (levelNN) from another run.
+  fs::remove(out / "report.html");
+  std::ofstream(out / "level00.frag.glsl") << "from duolod shader";
+  std::ofstream(out / "level7.vert.spv") << "from a run with more levels";
+  std::ofstream(out / "level0.frag.glsl.orig") << "not a level file";
+  test::CommandRun replaced = test::runCommand(DUOLOD_CLI, forced);
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.out << replaced.err;
+  EXPECT_FALSE(fs::exists(out / "level00.frag.glsl"));
+  EXPECT_FALSE(fs::exists(out / "level7.vert.spv"));
+  EXPECT_TRUE(fs::exists(out / "level0.frag.glsl.orig"));
+  EXPECT_TRUE(fs::exists(out / "report.html"));
+  runtime::Policy replaced_policy;
+  ASSERT_TRUE(runtime::loadPolicy((out / "lod.json").string(), replaced_policy, &error)) << error;
+  for (size_t k = replaced_policy.levels.size(); k < 10; ++k)
+    EXPECT_FALSE(fs::exists(out / ("level" + std::to_string(k) + ".frag.spv"))) << k;
 }
 
 TEST(CliGenerate, BadInputIsAClearError) {

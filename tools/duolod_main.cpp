@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
+#include <set>
 #include <span>
 #include <sstream>
 
@@ -186,38 +188,18 @@ std::vector<fs::path> entriesOf(const fs::path& folder) {
   return entries;
 }
 
-// A folder output (generate, shader) removed again when writing it fails (a full disk): the
-// folder itself when this run made it, its entries when it was empty (all of them this run's). A
-// non-empty folder written into with --force keeps what the run wrote until the failure.
-class FolderOutput {
- public:
-  explicit FolderOutput(const std::string& path) : path_(path) {
-    std::error_code ec;
-    created_ = !fs::exists(path_, ec);
-    was_empty_ = created_ || fs::is_empty(path_, ec);
-  }
-  void removeWritten() const {
-    std::error_code ec;
-    if (created_) {
-      fs::remove_all(path_, ec);
-    } else if (was_empty_) {
-      for (const fs::path& entry : entriesOf(path_)) fs::remove_all(entry, ec);
-    }
-  }
-
- private:
-  std::string path_;
-  bool created_ = false, was_empty_ = false;
-};
-
-// After a run with --force into a folder an earlier run wrote: the level shader files of levels
-// this run does not have (levelK.* of generate, levelNN.* of shader), which would otherwise read
-// as part of this result. Only names of exactly that form are removed.
-void removeStaleLevelFiles(const std::string& folder, size_t level_count) {
+// After a run with --force into a folder an earlier run wrote: the level shader files this run
+// did not write (levels it does not have, or another command's names: generate writes levelK.*,
+// shader levelNN.*), which would otherwise read as part of this result. Only names of exactly
+// that form are removed. `level_stem(k)` is this run's name of level k.
+void removeStaleLevelFiles(const std::string& folder, size_t level_count,
+                           const std::function<std::string(size_t)>& level_stem) {
   // "level" + 1-6 digits + one of the shader files' suffixes (no <regex>: GCC 12 warns inside it
   // under the sanitizers).
   static const char* const kSuffixes[] = {".vert.spv", ".vert.glsl", ".vert.es.glsl", ".vert.hlsl",
                                           ".frag.spv", ".frag.glsl", ".frag.es.glsl", ".frag.hlsl"};
+  std::set<std::string> written;
+  for (size_t k = 0; k < level_count; ++k) written.insert(level_stem(k));
   std::error_code ec;
   for (const fs::path& entry : entriesOf(folder)) {
     const std::string name = entry.filename().string();
@@ -229,7 +211,7 @@ void removeStaleLevelFiles(const std::string& folder, size_t level_count) {
     const std::string suffix = name.substr(5 + digits);
     const bool ours = std::any_of(std::begin(kSuffixes), std::end(kSuffixes),
                                   [&](const char* known) { return suffix == known; });
-    if (ours && std::stoul(name.substr(5, digits)) >= level_count) fs::remove(entry, ec);
+    if (ours && !written.contains(name.substr(0, 5 + digits))) fs::remove(entry, ec);
   }
 }
 
@@ -1028,13 +1010,12 @@ int runGenerate(GenerateFlags& flags) {
   line.finish();
   if (!result) return fail(result.error().message);
   auto export_start = std::chrono::steady_clock::now();
-  FolderOutput folder(flags.out);
+  // All or nothing: a failure leaves the folder as it was (io::OutputFolder).
   if (auto written = lod::writeLodOutput(*result, *asset, options, flags.out, flags.force);
-      !written) {
-    folder.removeWritten();
+      !written)
     return fail(written.error().message);
-  }
-  removeStaleLevelFiles(flags.out, result->levels.size());
+  removeStaleLevelFiles(flags.out, result->levels.size(),
+                        [](size_t k) { return "level" + std::to_string(k); });
   result->timings.export_seconds = secondsSince(export_start);
 
   std::printf("device    %s\n", result->device.c_str());
@@ -1206,12 +1187,9 @@ int runShader(ShaderFlags& flags) {
   options.compile_ahead = !flags.no_compile_ahead;
   auto report = shader::runShaderLod(*asset, *source, options);
   if (!report) return fail(report.error().message);
-  FolderOutput folder(flags.out);
-  if (auto written = shader::writeShaderLod(*report, flags.out, flags.force); !written) {
-    folder.removeWritten();
+  if (auto written = shader::writeShaderLod(*report, flags.out, flags.force); !written)
     return fail(written.error().message);
-  }
-  removeStaleLevelFiles(flags.out, report->variants.size());
+  removeStaleLevelFiles(flags.out, report->variants.size(), shader::levelFileName);
 
   std::printf("%s at distance %s (footprint %d px, %d samples), %s search on %s\n", flags.in.c_str(),
               formatNumber(options.distance).c_str(), report->footprint_px, report->domain_samples,

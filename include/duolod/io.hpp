@@ -155,10 +155,12 @@ core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> b
 core::Status writeFileAtomic(const std::string& path, std::string_view text);
 
 // Files written together (a .gltf with its .bin and textures, an .obj with its .mtl): add() writes
-// each to a temporary file beside its target, commit() renames them all into place. A failure
-// before commit (a full disk, a target that is a folder) leaves no file of the set: the
-// temporaries of a set that is not committed are removed when it is destroyed. With
-// `replace_existing` false, add() refuses a target that exists.
+// each to a temporary file beside its target, commit() renames them all into place. All or
+// nothing: a failure before commit (a full disk, a target that is a folder) leaves no file of the
+// set (the temporaries of a set that is not committed are removed when it is destroyed), and a
+// rename that fails part-way through commit() puts back the files the earlier renames replaced
+// (each kept as a hard link, or a copy, until the set is in place) and removes the ones they
+// created. With `replace_existing` false, add() refuses a target that exists.
 class FileSet {
  public:
   explicit FileSet(bool replace_existing = true) : replace_existing_(replace_existing) {}
@@ -167,14 +169,40 @@ class FileSet {
   ~FileSet();
   core::Status add(const std::string& path, std::span<const uint8_t> bytes);
   core::Status add(const std::string& path, std::string_view text);
+  // A file already written elsewhere on the same file system, moved to `path` by commit() (and
+  // removed with the set if it is not committed).
+  core::Status adopt(const std::string& written, const std::string& path);
   core::Status commit();
 
  private:
+  core::Status checkTarget(const std::string& path) const;
   struct Staged {
     std::string temporary, target;
   };
   bool replace_existing_;
   std::vector<Staged> staged_;
+};
+
+// An output folder written all or nothing (`duolod generate`'s and `duolod shader`'s): its files
+// are written into a staging folder beside it (stagingPath()), and commit() moves them into the
+// folder as one FileSet, creating the folder if needed. A failed commit leaves the folder as it
+// was (the files it held before, or no folder); a staging folder that is not committed is removed
+// with everything in it. Files the folder holds and this output does not write are kept.
+class OutputFolder {
+ public:
+  OutputFolder() = default;
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder();
+  // Creates the staging folder beside `folder` (and `folder`'s parent folders if missing).
+  core::Status begin(const std::string& folder);
+  const std::string& stagingPath() const { return staging_; }
+  // Moves the staged files into the folder. No file may replace one `asset` was read from
+  // (refuseSourceFile), when given.
+  core::Status commit(const core::Asset* asset = nullptr);
+
+ private:
+  std::string folder_, staging_;
 };
 
 // Checks, before any work, that files can be written at `path`: its folder exists and is a

@@ -458,8 +458,8 @@ core::Result<GenerateResult> generateLod(const core::Asset& asset, const render:
 
 // Writes the output folder: lod.gltf (MSFT_lod chain), per level the shaders (SPIR-V, GLSL 450,
 // GLSL ES 300, HLSL), the single autoLOD shader, lod.json and report.html. `directory` must not
-// exist or be empty unless `force`; it must not be the asset's folder. Files are written
-// atomically.
+// exist or be empty unless `force`; it must not be the asset's folder. All or nothing
+// (io::OutputFolder): a failure leaves the folder as it was, with `force` too.
 core::Status writeLodOutput(const GenerateResult& result, const core::Asset& asset,
                             const GenerateOptions& options, const std::string& directory,
                             bool force);

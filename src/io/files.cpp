@@ -62,6 +62,21 @@ core::Status checkWritablePath(const std::string& path) {
   return core::okStatus();
 }
 
+namespace {
+// A name beside `path` that no other file has: PATH<tag>-<pid>-<random> (same folder, so a rename
+// between the two is atomic).
+fs::path uniqueSibling(const fs::path& path, const char* tag) {
+  std::random_device entropy;
+  for (;;) {
+    fs::path sibling = path;
+    sibling += std::string(tag) + "-" + std::to_string(::getpid()) + "-" +
+               std::to_string(entropy() % 1000000);
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(sibling, ec))) return sibling;
+  }
+}
+}  // namespace
+
 FileSet::~FileSet() {
   std::error_code ec;
   for (const Staged& file : staged_) fs::remove(file.temporary, ec);
@@ -72,23 +87,26 @@ core::Status FileSet::add(const std::string& path, std::string_view text) {
              std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
 }
 
-core::Status FileSet::add(const std::string& path, std::span<const uint8_t> bytes) {
+core::Status FileSet::checkTarget(const std::string& path) const {
   if (auto writable = checkWritablePath(path); !writable) return writable;
   std::error_code ec;
   if (!replace_existing_ && fs::exists(path, ec))
     return Error{path + ": already exists (use --force to replace it)"};
   for (const Staged& file : staged_)
     if (file.target == path) return Error{path + ": written twice in one set"};
-  // A unique temporary name in the same folder, so rename() is atomic on the same file system.
-  std::random_device entropy;
-  fs::path temp(path);
-  temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(entropy() % 1000000);
+  return core::okStatus();
+}
+
+core::Status FileSet::add(const std::string& path, std::span<const uint8_t> bytes) {
+  if (auto target = checkTarget(path); !target) return target;
+  const fs::path temp = uniqueSibling(path, ".tmp");
   FILE* file = std::fopen(temp.c_str(), "wb");
   if (!file) return Error{path + ": cannot create (" + std::strerror(errno) + ")"};
   size_t written = bytes.empty() ? 0 : std::fwrite(bytes.data(), 1, bytes.size(), file);
   bool flushed = std::fflush(file) == 0 && ::fsync(::fileno(file)) == 0;
   bool closed = std::fclose(file) == 0;
   if (written != bytes.size() || !flushed || !closed) {
+    std::error_code ec;
     fs::remove(temp, ec);
     return Error{path + ": write failed (disk full?)"};
   }
@@ -96,19 +114,151 @@ core::Status FileSet::add(const std::string& path, std::span<const uint8_t> byte
   return core::okStatus();
 }
 
+core::Status FileSet::adopt(const std::string& written, const std::string& path) {
+  if (auto target = checkTarget(path); !target) return target;
+  staged_.push_back({written, path});
+  return core::okStatus();
+}
+
 core::Status FileSet::commit() {
+  // Each rename is atomic, the set is not: the files that earlier renames replaced are kept (a
+  // hard link to each, else a copy) until the last rename is done, so that a failure part-way
+  // can put every target back as it was. The last rename needs no copy: nothing follows it.
+  struct Placed {
+    std::string target, kept;  // kept: the replaced file's copy ("" when there was none)
+  };
+  std::vector<Placed> placed;
+  // A failed commit ends the set: the targets back as they were, the temporaries not moved yet
+  // removed (the moved ones are gone).
+  auto putBack = [&] {
+    std::error_code ec;
+    for (auto it = placed.rbegin(); it != placed.rend(); ++it) {
+      if (it->kept.empty())
+        fs::remove(it->target, ec);
+      else
+        fs::rename(it->kept, it->target, ec);
+    }
+    for (size_t i = placed.size(); i < staged_.size(); ++i) fs::remove(staged_[i].temporary, ec);
+    staged_.clear();
+  };
   for (size_t i = 0; i < staged_.size(); ++i) {
+    const Staged file = staged_[i];  // a copy: putBack() clears the list
+    std::error_code ec;
+    std::string kept;
+    const fs::file_status existing = fs::symlink_status(file.target, ec);
+    if (i + 1 < staged_.size() && fs::exists(existing) && !fs::is_directory(existing)) {
+      kept = uniqueSibling(file.target, ".old").string();
+      fs::create_hard_link(file.target, kept, ec);
+      if (ec) {  // a file system without hard links
+        ec.clear();
+        fs::copy_file(file.target, kept, ec);
+      }
+      if (ec) {
+        const std::string reason = ec.message();
+        fs::remove(kept, ec);
+        putBack();
+        return Error{file.target + ": cannot keep the file it replaces until the output is in "
+                     "place (" + reason + "); nothing was replaced"};
+      }
+    }
     std::error_code rename_error;
-    fs::rename(staged_[i].temporary, staged_[i].target, rename_error);
+    fs::rename(file.temporary, file.target, rename_error);
     if (rename_error) {
-      // The files before it are in place already (each rename is atomic, the set is not); the
-      // rest are removed with the set.
-      staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(i));
-      return Error{staged_.front().target + ": cannot move the finished file into place (" +
-                   rename_error.message() + ")"};
+      if (!kept.empty()) fs::remove(kept, ec);
+      putBack();
+      return Error{file.target + ": cannot move the finished file into place (" +
+                   rename_error.message() + "); the files written with it were taken back"};
+    }
+    placed.push_back({file.target, std::move(kept)});
+  }
+  std::error_code ec;
+  for (const Placed& file : placed)
+    if (!file.kept.empty()) fs::remove(file.kept, ec);
+  staged_.clear();
+  return core::okStatus();
+}
+
+OutputFolder::~OutputFolder() {
+  std::error_code ec;
+  if (!staging_.empty()) fs::remove_all(staging_, ec);
+}
+
+core::Status OutputFolder::begin(const std::string& folder) {
+  if (folder.empty()) return Error{"empty output folder name"};
+  std::error_code ec;
+  fs::path target = fs::absolute(folder, ec).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();  // "out/" -> "out"
+  if (target == target.root_path())
+    return Error{folder + ": cannot write an output into the root folder"};
+  const fs::file_status status = fs::status(target, ec);
+  if (fs::exists(status) && !fs::is_directory(status))
+    return Error{folder + ": exists and is not a folder"};
+  const fs::path parent = target.parent_path();
+  fs::create_directories(parent, ec);
+  if (ec) return Error{folder + ": cannot create " + parent.string() + " (" + ec.message() + ")"};
+  // Hidden, beside the folder: on its file system, so that commit() only renames.
+  fs::path staging = uniqueSibling(parent / ("." + target.filename().string()), ".staging");
+  if (!fs::create_directory(staging, ec) || ec)
+    return Error{folder + ": cannot create the staging folder " + staging.string() + " (" +
+                 (ec ? ec.message() : std::string("it exists")) + ")"};
+  folder_ = target.string();
+  staging_ = staging.string();
+  return core::okStatus();
+}
+
+core::Status OutputFolder::commit(const core::Asset* asset) {
+  if (staging_.empty()) return Error{"output folder: commit() before begin()"};
+  std::error_code ec;
+  const fs::path target(folder_);
+  // The staged files in name order (a deterministic commit), sub-folders included.
+  std::vector<fs::path> files, folders;
+  for (auto it = fs::recursive_directory_iterator(staging_, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (it->is_directory(ec))
+      folders.push_back(it->path());
+    else
+      files.push_back(it->path());
+  }
+  if (ec) return Error{staging_ + ": cannot list the staged output (" + ec.message() + ")"};
+  std::sort(files.begin(), files.end());
+  std::sort(folders.begin(), folders.end());
+  auto targetOf = [&](const fs::path& staged) {
+    return (target / staged.lexically_relative(staging_)).string();
+  };
+  if (asset)
+    for (const fs::path& file : files)
+      if (auto refused = refuseSourceFile(*asset, targetOf(file)); !refused) return refused;
+
+  // The folders first (those this creates are removed again if the files cannot be moved).
+  std::vector<fs::path> created;
+  auto removeCreated = [&] {
+    std::error_code remove_ec;
+    for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, remove_ec);
+  };
+  std::vector<fs::path> needed{target};
+  for (const fs::path& staged_folder : folders) needed.push_back(targetOf(staged_folder));
+  for (const fs::path& folder : needed) {
+    if (fs::is_directory(folder, ec)) continue;
+    if (!fs::create_directory(folder, ec) || ec) {
+      removeCreated();
+      return Error{folder.string() + ": cannot create (" +
+                   (ec ? ec.message() : std::string("a file has that name")) + ")"};
+    }
+    created.push_back(folder);
+  }
+  FileSet set(/*replace_existing=*/true);
+  for (const fs::path& file : files) {
+    if (auto adopted = set.adopt(file.string(), targetOf(file)); !adopted) {
+      removeCreated();
+      return adopted;
     }
   }
-  staged_.clear();
+  if (auto committed = set.commit(); !committed) {
+    removeCreated();
+    return committed;
+  }
+  fs::remove_all(staging_, ec);
+  staging_.clear();
   return core::okStatus();
 }
 

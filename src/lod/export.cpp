@@ -16,7 +16,8 @@ namespace {
 namespace fs = std::filesystem;
 
 
-core::Status prepareDirectory(const std::string& directory, const core::Asset& asset, bool force) {
+// Whether the LOD may go into `directory` (written there by an io::OutputFolder).
+core::Status checkDirectory(const std::string& directory, const core::Asset& asset, bool force) {
   std::error_code error;
   fs::path out = fs::weakly_canonical(directory, error);
   if (!asset.source_path.empty()) {
@@ -29,8 +30,6 @@ core::Status prepareDirectory(const std::string& directory, const core::Asset& a
     if (!fs::is_empty(out) && !force)
       return core::Error{directory + ": not empty; choose another folder or pass --force"};
   }
-  fs::create_directories(out, error);
-  if (error) return core::Error{directory + ": cannot create: " + error.message()};
   return core::okStatus();
 }
 
@@ -40,8 +39,11 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
                             const GenerateOptions& options, const std::string& directory,
                             bool force) {
   if (result.levels.empty()) return core::Error{"write LOD: no levels"};
-  if (auto ready = prepareDirectory(directory, asset, force); !ready) return ready;
-  const fs::path out(directory);
+  if (auto ready = checkDirectory(directory, asset, force); !ready) return ready;
+  // All or nothing: written beside the folder, then moved in (a failure leaves it as it was).
+  io::OutputFolder folder;
+  if (auto begun = folder.begin(directory); !begun) return begun;
+  const fs::path out(folder.stagingPath());
 
   // The glTF chain: each level's coverage is where the next one takes over.
   std::vector<core::Mesh> meshes;
@@ -144,7 +146,8 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
                                      parameter.value.begin() + parameter.components)});
 
   if (auto ok = io::writeLodJson(document, (out / "lod.json").string()); !ok) return ok;
-  return writeReport(result.report, (out / "report.html").string());
+  if (auto ok = writeReport(result.report, (out / "report.html").string()); !ok) return ok;
+  return folder.commit(&asset);
 }
 
 }  // namespace duolod::lod

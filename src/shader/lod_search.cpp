@@ -164,23 +164,24 @@ nlohmann::json parametersJson(const std::vector<ParameterValue>& parameters) {
   return list;
 }
 
+}  // namespace
+
 std::string levelFileName(size_t level) {
   char name[32];
   std::snprintf(name, sizeof name, "level%02zu", level);
   return name;
 }
 
-}  // namespace
-
 core::Status writeShaderLod(const ShaderLodReport& report, const std::string& directory, bool force) {
   std::error_code ec;
-  fs::path out(directory);
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+  if (fs::exists(directory, ec) && !fs::is_directory(directory, ec))
     return core::Error{directory + ": exists and is not a directory"};
-  if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !force)
+  if (fs::exists(directory, ec) && !fs::is_empty(directory, ec) && !force)
     return core::Error{directory + ": already exists and is not empty (use --force to replace its files)"};
-  fs::create_directories(out, ec);
-  if (ec) return core::Error{directory + ": cannot create the directory: " + ec.message()};
+  // All or nothing: written beside the folder, then moved in (a failure leaves it as it was).
+  io::OutputFolder folder;
+  if (auto begun = folder.begin(directory); !begun) return begun;
+  const fs::path out(folder.stagingPath());
 
   nlohmann::json levels = nlohmann::json::array();
   for (size_t k = 0; k < report.variants.size(); ++k) {
@@ -235,7 +236,9 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
         {"rerender", report.rerender_seconds},
         {"timing", report.timing_seconds},
         {"total", report.total_seconds}}}};
-  return io::writeFileAtomic((out / "summary.json").string(), summary.dump(2) + "\n");
+  if (auto ok = io::writeFileAtomic((out / "summary.json").string(), summary.dump(2) + "\n"); !ok)
+    return ok;
+  return folder.commit();
 }
 
 }  // namespace duolod::shader

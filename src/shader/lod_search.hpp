@@ -71,9 +71,11 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
                                            const ShaderLodOptions& options);
 
 // Writes into `directory` (created; must not exist or be empty unless `force`): per variant
-// vNN.{vert,frag}.spv, .glsl (450), .es.glsl (ES 300), .hlsl; autolod.{vert,frag}.* likewise;
-// summary.json (variants with rules in words, costs, errors, time ratios, counters). Every file is
-// written atomically.
+// levelNN.{vert,frag}.spv, .glsl (450), .es.glsl (ES 300), .hlsl; autolod.{vert,frag}.* likewise;
+// summary.json (variants with rules in words, costs, errors, time ratios, counters). All or
+// nothing (io::OutputFolder): a failure leaves the folder as it was, with `force` too.
 core::Status writeShaderLod(const ShaderLodReport& report, const std::string& directory, bool force);
+// The stem of variant `level`'s files: "level00", "level01", ...
+std::string levelFileName(size_t level);
 
 }  // namespace duolod::shader

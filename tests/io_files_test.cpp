@@ -1,0 +1,155 @@
+// Outputs written all or nothing: io::FileSet (files written together) and io::OutputFolder (a
+// folder of them, as `duolod generate` and `duolod shader` write). Each case checks the whole
+// folder afterwards, temporaries and kept copies included.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "duolod/io.hpp"
+#include "test_support.hpp"
+
+namespace duolod {
+namespace {
+namespace fs = std::filesystem;
+
+void writeText(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// Every entry under `dir`, relative, sorted; folders end in '/'.
+std::vector<std::string> treeOf(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::recursive_directory_iterator(dir))
+    names.push_back(entry.path().lexically_relative(dir).string() +
+                    (entry.is_directory() ? "/" : ""));
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(FileSet, ARenameFailingPartWayPutsEveryFileBack) {
+  const fs::path dir = test::scratchDir("fileset_put_back");
+  writeText(dir / "a.txt", "old a");
+  io::FileSet set;
+  ASSERT_TRUE(set.add((dir / "a.txt").string(), std::string_view("new a")));  // replaces a file
+  ASSERT_TRUE(set.add((dir / "b.txt").string(), std::string_view("new b")));  // a new file
+  ASSERT_TRUE(set.add((dir / "c.txt").string(), std::string_view("new c")));
+  // After the files are written, a folder takes c.txt's place: its rename fails, the third.
+  fs::create_directory(dir / "c.txt");
+  writeText(dir / "c.txt" / "inside", "x");
+  auto committed = set.commit();
+  ASSERT_FALSE(committed);
+  EXPECT_TRUE(test::contains(committed.error().message, "c.txt")) << committed.error().message;
+  EXPECT_TRUE(test::contains(committed.error().message, "taken back")) << committed.error().message;
+  // a.txt holds its old text again, b.txt is gone, and no temporary or kept copy is left.
+  EXPECT_EQ(test::readText(dir / "a.txt"), "old a");
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"a.txt", "c.txt/", "c.txt/inside"}));
+}
+
+TEST(FileSet, ACommittedSetLeavesOnlyItsFiles) {
+  const fs::path dir = test::scratchDir("fileset_commit");
+  writeText(dir / "a.txt", "old a");
+  writeText(dir / "other.txt", "someone's");
+  io::FileSet set;
+  ASSERT_TRUE(set.add((dir / "a.txt").string(), std::string_view("new a")));
+  ASSERT_TRUE(set.add((dir / "b.txt").string(), std::string_view("new b")));
+  ASSERT_TRUE(set.commit());
+  EXPECT_EQ(test::readText(dir / "a.txt"), "new a");
+  EXPECT_EQ(test::readText(dir / "b.txt"), "new b");
+  EXPECT_EQ(test::readText(dir / "other.txt"), "someone's");
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"a.txt", "b.txt", "other.txt"}));
+}
+
+TEST(OutputFolder, CommitMovesEveryStagedFileIn) {
+  const fs::path parent = test::scratchDir("output_folder_commit");
+  const fs::path out = parent / "out";
+  fs::create_directory(out);
+  writeText(out / "x.txt", "old x");
+  writeText(out / "keep.txt", "not this output's");
+  io::OutputFolder folder;
+  ASSERT_TRUE(folder.begin(out.string() + "/"));  // a trailing '/' names the same folder
+  const fs::path staging(folder.stagingPath());
+  EXPECT_EQ(staging.parent_path(), parent);
+  writeText(staging / "x.txt", "new x");
+  fs::create_directory(staging / "sub");
+  writeText(staging / "sub" / "y.txt", "new y");
+  // Nothing is in the folder before the commit.
+  EXPECT_EQ(test::readText(out / "x.txt"), "old x");
+  EXPECT_FALSE(fs::exists(out / "sub"));
+  ASSERT_TRUE(folder.commit());
+  EXPECT_EQ(test::readText(out / "x.txt"), "new x");
+  EXPECT_EQ(test::readText(out / "sub" / "y.txt"), "new y");
+  EXPECT_EQ(test::readText(out / "keep.txt"), "not this output's");
+  EXPECT_EQ(treeOf(parent),
+            (std::vector<std::string>{"out/", "out/keep.txt", "out/sub/", "out/sub/y.txt",
+                                      "out/x.txt"}));
+}
+
+TEST(OutputFolder, AFailedCommitLeavesTheFolderAsItWas) {
+  const fs::path parent = test::scratchDir("output_folder_failed");
+  const fs::path out = parent / "out";
+  fs::create_directory(out);
+  writeText(out / "a.txt", "old a");
+  fs::create_directory(out / "z.txt");  // in the way of the last file
+  {
+    io::OutputFolder folder;
+    ASSERT_TRUE(folder.begin(out.string()));
+    const fs::path staging(folder.stagingPath());
+    writeText(staging / "a.txt", "new a");
+    writeText(staging / "b.txt", "new b");
+    fs::create_directory(staging / "sub");
+    writeText(staging / "sub" / "c.txt", "new c");
+    writeText(staging / "z.txt", "new z");
+    auto committed = folder.commit();
+    ASSERT_FALSE(committed);
+    EXPECT_TRUE(test::contains(committed.error().message, "z.txt")) << committed.error().message;
+    EXPECT_EQ(test::readText(out / "a.txt"), "old a");
+    EXPECT_EQ(treeOf(out), (std::vector<std::string>{"a.txt", "z.txt/"}));
+  }
+  // The staging folder goes with the OutputFolder.
+  EXPECT_EQ(treeOf(parent), (std::vector<std::string>{"out/", "out/a.txt", "out/z.txt/"}));
+}
+
+TEST(OutputFolder, WithoutACommitNothingIsWritten) {
+  const fs::path parent = test::scratchDir("output_folder_abandoned");
+  {
+    io::OutputFolder folder;
+    ASSERT_TRUE(folder.begin((parent / "new" / "out").string()));  // parents are made
+    writeText(fs::path(folder.stagingPath()) / "a.txt", "a");
+  }
+  EXPECT_EQ(treeOf(parent), (std::vector<std::string>{"new/"}));
+}
+
+TEST(OutputFolder, RefusesToReplaceTheAssetsFilesAndCreatesNothing) {
+  const fs::path parent = test::scratchDir("output_folder_source");
+  const fs::path out = parent / "out";
+  core::Asset asset;
+  asset.source_files = {(out / "texture.png").string()};
+  io::OutputFolder folder;
+  ASSERT_TRUE(folder.begin(out.string()));
+  writeText(fs::path(folder.stagingPath()) / "texture.png", "new");
+  auto committed = folder.commit(&asset);
+  ASSERT_FALSE(committed);
+  EXPECT_TRUE(test::contains(committed.error().message, "read from")) << committed.error().message;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(OutputFolder, BadFolderNamesAreRefused) {
+  const fs::path parent = test::scratchDir("output_folder_bad");
+  writeText(parent / "file", "x");
+  io::OutputFolder folder;
+  auto not_folder = folder.begin((parent / "file").string());
+  ASSERT_FALSE(not_folder);
+  EXPECT_TRUE(test::contains(not_folder.error().message, "not a folder"))
+      << not_folder.error().message;
+  EXPECT_FALSE(folder.begin(""));
+  EXPECT_FALSE(folder.begin("/"));
+  EXPECT_FALSE(folder.commit());  // not begun
+  EXPECT_EQ(treeOf(parent), std::vector<std::string>{"file"});
+}
+
+}  // namespace
+}  // namespace duolod
