@@ -83,9 +83,8 @@ TEST(OutputFolder, CommitMovesEveryStagedFileIn) {
   EXPECT_EQ(test::readText(out / "x.txt"), "new x");
   EXPECT_EQ(test::readText(out / "sub" / "y.txt"), "new y");
   EXPECT_EQ(test::readText(out / "keep.txt"), "not this output's");
-  EXPECT_EQ(treeOf(parent),
-            (std::vector<std::string>{"out/", "out/keep.txt", "out/sub/", "out/sub/y.txt",
-                                      "out/x.txt"}));
+  EXPECT_EQ(treeOf(parent), (std::vector<std::string>{"out/", "out/keep.txt", "out/sub/",
+                                                      "out/sub/y.txt", "out/x.txt"}));
 }
 
 TEST(OutputFolder, AFailedCommitLeavesTheFolderAsItWas) {

@@ -157,8 +157,10 @@ core::Status FileSet::commit() {
         const std::string reason = ec.message();
         fs::remove(kept, ec);
         putBack();
-        return Error{file.target + ": cannot keep the file it replaces until the output is in "
-                     "place (" + reason + "); nothing was replaced"};
+        return Error{file.target +
+                     ": cannot keep the file it replaces until the output is in "
+                     "place (" +
+                     reason + "); nothing was replaced"};
       }
     }
     std::error_code rename_error;

@@ -15,7 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-
 // Whether the LOD may go into `directory` (written there by an io::OutputFolder).
 core::Status checkDirectory(const std::string& directory, const core::Asset& asset, bool force) {
   std::error_code error;
