@@ -72,7 +72,7 @@ TEST(OutputFolder, CommitMovesEveryStagedFileIn) {
   io::OutputFolder folder;
   ASSERT_TRUE(folder.begin(out.string() + "/"));  // a trailing '/' names the same folder
   const fs::path staging(folder.stagingPath());
-  EXPECT_EQ(staging.parent_path(), parent);
+  EXPECT_EQ(staging.parent_path(), out);  // on the folder's file system
   writeText(staging / "x.txt", "new x");
   fs::create_directory(staging / "sub");
   writeText(staging / "sub" / "y.txt", "new y");
@@ -114,12 +114,19 @@ TEST(OutputFolder, AFailedCommitLeavesTheFolderAsItWas) {
 
 TEST(OutputFolder, WithoutACommitNothingIsWritten) {
   const fs::path parent = test::scratchDir("output_folder_abandoned");
+  fs::create_directory(parent / "kept");
+  writeText(parent / "kept" / "old.txt", "old");
   {
     io::OutputFolder folder;
     ASSERT_TRUE(folder.begin((parent / "new" / "out").string()));  // parents are made
     writeText(fs::path(folder.stagingPath()) / "a.txt", "a");
+    io::OutputFolder existing;
+    ASSERT_TRUE(existing.begin((parent / "kept").string()));
+    writeText(fs::path(existing.stagingPath()) / "old.txt", "new");
   }
-  EXPECT_EQ(treeOf(parent), (std::vector<std::string>{"new/"}));
+  // The folders begin() made are gone again, the one that was there keeps its files.
+  EXPECT_EQ(treeOf(parent), (std::vector<std::string>{"kept/", "kept/old.txt"}));
+  EXPECT_EQ(test::readText(parent / "kept" / "old.txt"), "old");
 }
 
 TEST(OutputFolder, RefusesToReplaceTheAssetsFilesAndCreatesNothing) {
@@ -127,13 +134,29 @@ TEST(OutputFolder, RefusesToReplaceTheAssetsFilesAndCreatesNothing) {
   const fs::path out = parent / "out";
   core::Asset asset;
   asset.source_files = {(out / "texture.png").string()};
-  io::OutputFolder folder;
-  ASSERT_TRUE(folder.begin(out.string()));
-  writeText(fs::path(folder.stagingPath()) / "texture.png", "new");
-  auto committed = folder.commit(&asset);
-  ASSERT_FALSE(committed);
-  EXPECT_TRUE(test::contains(committed.error().message, "read from")) << committed.error().message;
+  {
+    io::OutputFolder folder;
+    ASSERT_TRUE(folder.begin(out.string()));
+    writeText(fs::path(folder.stagingPath()) / "texture.png", "new");
+    auto committed = folder.commit(&asset);
+    ASSERT_FALSE(committed);
+    EXPECT_TRUE(test::contains(committed.error().message, "read from"))
+        << committed.error().message;
+  }
   EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(OutputFolder, ASymbolicLinkIsFollowed) {
+  const fs::path parent = test::scratchDir("output_folder_link");
+  fs::create_directory(parent / "real");
+  fs::create_directory_symlink(parent / "real", parent / "link");
+  io::OutputFolder folder;
+  ASSERT_TRUE(folder.begin((parent / "link").string()));
+  EXPECT_EQ(fs::path(folder.stagingPath()).parent_path(), parent / "real");
+  writeText(fs::path(folder.stagingPath()) / "a.txt", "a");
+  ASSERT_TRUE(folder.commit());
+  EXPECT_EQ(test::readText(parent / "real" / "a.txt"), "a");
+  EXPECT_TRUE(fs::is_symlink(parent / "link"));
 }
 
 TEST(OutputFolder, BadFolderNamesAreRefused) {

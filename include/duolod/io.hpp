@@ -184,17 +184,19 @@ class FileSet {
 };
 
 // An output folder written all or nothing (`duolod generate`'s and `duolod shader`'s): its files
-// are written into a staging folder beside it (stagingPath()), and commit() moves them into the
-// folder as one FileSet, creating the folder if needed. A failed commit leaves the folder as it
-// was (the files it held before, or no folder); a staging folder that is not committed is removed
-// with everything in it. Files the folder holds and this output does not write are kept.
+// are written into a hidden staging folder inside it (stagingPath(); inside, so that it is on the
+// folder's file system even when the folder is a mount point), and commit() moves them into the
+// folder as one FileSet. A failed commit leaves the folder as it was (with the files it held
+// before; a folder, and parents, that begin() made are removed again); a staging folder that is
+// not committed is removed with everything in it. Files the folder holds and this output does not
+// write are kept.
 class OutputFolder {
  public:
   OutputFolder() = default;
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
   ~OutputFolder();
-  // Creates the staging folder beside `folder` (and `folder`'s parent folders if missing).
+  // Creates the folder (and its missing parents) and the staging folder inside it.
   core::Status begin(const std::string& folder);
   const std::string& stagingPath() const { return staging_; }
   // Moves the staged files into the folder. No file may replace one `asset` was read from
@@ -202,7 +204,9 @@ class OutputFolder {
   core::Status commit(const core::Asset* asset = nullptr);
 
  private:
+  void abandon();
   std::string folder_, staging_;
+  std::vector<std::string> created_;  // by begin(), innermost first
 };
 
 // Checks, before any work, that files can be written at `path`: its folder exists and is a

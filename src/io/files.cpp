@@ -180,26 +180,40 @@ core::Status FileSet::commit() {
   return core::okStatus();
 }
 
-OutputFolder::~OutputFolder() {
+OutputFolder::~OutputFolder() { abandon(); }
+
+void OutputFolder::abandon() {
   std::error_code ec;
   if (!staging_.empty()) fs::remove_all(staging_, ec);
+  staging_.clear();
+  // Not committed: the folders begin() made go again (fs::remove takes only empty ones).
+  for (const std::string& folder : created_) fs::remove(folder, ec);
+  created_.clear();
 }
 
 core::Status OutputFolder::begin(const std::string& folder) {
   if (folder.empty()) return Error{"empty output folder name"};
+  if (!staging_.empty()) return Error{folder + ": output folder begun twice"};
   std::error_code ec;
-  fs::path target = fs::absolute(folder, ec).lexically_normal();
+  // Through symbolic links: the staging folder must be on the real folder's file system.
+  fs::path target = fs::weakly_canonical(fs::absolute(folder, ec), ec);
+  if (ec) return Error{folder + ": cannot resolve the path (" + ec.message() + ")"};
   if (target.filename().empty()) target = target.parent_path();  // "out/" -> "out"
   if (target == target.root_path())
     return Error{folder + ": cannot write an output into the root folder"};
   const fs::file_status status = fs::status(target, ec);
   if (fs::exists(status) && !fs::is_directory(status))
     return Error{folder + ": exists and is not a folder"};
-  const fs::path parent = target.parent_path();
-  fs::create_directories(parent, ec);
-  if (ec) return Error{folder + ": cannot create " + parent.string() + " (" + ec.message() + ")"};
-  // Hidden, beside the folder: on its file system, so that commit() only renames.
-  fs::path staging = uniqueSibling(parent / ("." + target.filename().string()), ".staging");
+  // The folder and the parents it lacks, innermost first (removed again, innermost first, unless
+  // committed).
+  for (fs::path missing = target; !fs::exists(missing, ec) && missing != missing.root_path();
+       missing = missing.parent_path())
+    created_.push_back(missing.string());
+  fs::create_directories(target, ec);
+  if (ec) return Error{folder + ": cannot create (" + ec.message() + ")"};
+  // Inside the folder, hidden: on its file system even when the folder is a mount point (a
+  // container's volume), so that commit() only renames.
+  const fs::path staging = uniqueSibling(target / ".duolod-staging", "");
   if (!fs::create_directory(staging, ec) || ec)
     return Error{folder + ": cannot create the staging folder " + staging.string() + " (" +
                  (ec ? ec.message() : std::string("it exists")) + ")"};
@@ -210,6 +224,11 @@ core::Status OutputFolder::begin(const std::string& folder) {
 
 core::Status OutputFolder::commit(const core::Asset* asset) {
   if (staging_.empty()) return Error{"output folder: commit() before begin()"};
+  // A failed commit ends the output: the folder is left as it was.
+  auto failed = [this](core::Status status) {
+    abandon();
+    return status;
+  };
   std::error_code ec;
   const fs::path target(folder_);
   // The staged files in name order (a deterministic commit), sub-folders included.
@@ -221,7 +240,7 @@ core::Status OutputFolder::commit(const core::Asset* asset) {
     else
       files.push_back(it->path());
   }
-  if (ec) return Error{staging_ + ": cannot list the staged output (" + ec.message() + ")"};
+  if (ec) return failed(Error{staging_ + ": cannot list the staged output (" + ec.message() + ")"});
   std::sort(files.begin(), files.end());
   std::sort(folders.begin(), folders.end());
   auto targetOf = [&](const fs::path& staged) {
@@ -229,38 +248,39 @@ core::Status OutputFolder::commit(const core::Asset* asset) {
   };
   if (asset)
     for (const fs::path& file : files)
-      if (auto refused = refuseSourceFile(*asset, targetOf(file)); !refused) return refused;
+      if (auto refused = refuseSourceFile(*asset, targetOf(file)); !refused)
+        return failed(refused);
 
-  // The folders first (those this creates are removed again if the files cannot be moved).
-  std::vector<fs::path> created;
-  auto removeCreated = [&] {
+  // Sub-folders first (those this makes are removed again if the files cannot be moved).
+  std::vector<fs::path> made;
+  auto removeMade = [&] {
     std::error_code remove_ec;
-    for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, remove_ec);
+    for (auto it = made.rbegin(); it != made.rend(); ++it) fs::remove(*it, remove_ec);
   };
-  std::vector<fs::path> needed{target};
-  for (const fs::path& staged_folder : folders) needed.push_back(targetOf(staged_folder));
-  for (const fs::path& folder : needed) {
+  for (const fs::path& staged_folder : folders) {
+    const fs::path folder = targetOf(staged_folder);
     if (fs::is_directory(folder, ec)) continue;
     if (!fs::create_directory(folder, ec) || ec) {
-      removeCreated();
-      return Error{folder.string() + ": cannot create (" +
-                   (ec ? ec.message() : std::string("a file has that name")) + ")"};
+      removeMade();
+      return failed(Error{folder.string() + ": cannot create (" +
+                          (ec ? ec.message() : std::string("a file has that name")) + ")"});
     }
-    created.push_back(folder);
+    made.push_back(folder);
   }
   FileSet set(/*replace_existing=*/true);
   for (const fs::path& file : files) {
     if (auto adopted = set.adopt(file.string(), targetOf(file)); !adopted) {
-      removeCreated();
-      return adopted;
+      removeMade();
+      return failed(adopted);
     }
   }
   if (auto committed = set.commit(); !committed) {
-    removeCreated();
-    return committed;
+    removeMade();
+    return failed(committed);
   }
   fs::remove_all(staging_, ec);
   staging_.clear();
+  created_.clear();  // in place: kept
   return core::okStatus();
 }
 
