@@ -180,7 +180,9 @@ core::Status FileSet::commit() {
   return core::okStatus();
 }
 
-OutputFolder::~OutputFolder() { abandon(); }
+OutputFolder::~OutputFolder() {
+  abandon();
+}
 
 void OutputFolder::abandon() {
   std::error_code ec;
@@ -248,8 +250,7 @@ core::Status OutputFolder::commit(const core::Asset* asset) {
   };
   if (asset)
     for (const fs::path& file : files)
-      if (auto refused = refuseSourceFile(*asset, targetOf(file)); !refused)
-        return failed(refused);
+      if (auto refused = refuseSourceFile(*asset, targetOf(file)); !refused) return failed(refused);
 
   // Sub-folders first (those this makes are removed again if the files cannot be moved).
   std::vector<fs::path> made;
