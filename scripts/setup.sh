@@ -12,6 +12,7 @@ packages=(
   libmeshoptimizer-dev gltfpack
   assimp-testmodels  # real (and deliberately broken) OBJ/PLY/glTF files for the robustness tests
   chromium    # headless screenshot test of report.html
+  locales     # a comma-decimal locale (localedef) for the runtime's locale-independence test
 )
 
 missing=()

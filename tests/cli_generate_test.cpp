@@ -12,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "duolod/io.hpp"
 #include "duolod/runtime.hpp"
 #include "test_support.hpp"
 
@@ -58,6 +59,30 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
   // lod.json lists the autoLOD shader's files and parameters, each parameter (a level's or the
   // autoLOD shader's) under the name its GLSL ES source declares: ES has no locations.
   const nlohmann::json root = nlohmann::json::parse(test::readText((out / "lod.json").string()));
+  // The asset's path is relative to lod.json's folder (as typed it was relative to the test's
+  // working folder), and the bound is the one the levels were made with: d_far is where the
+  // object spans --far-pixels (16 by default), not the last level's distance.
+  EXPECT_TRUE(fs::equivalent(out / root["asset"]["source"].get<std::string>(), spot))
+      << root["asset"]["source"];
+  EXPECT_GT(root["bound"]["d_far"].get<double>(),
+            root["levels"].back()["distance"].get<double>() * 0.999);
+  EXPECT_GT(root["bound"]["d_far"].get<double>(), 4 * root["bound"]["d_near"].get<double>());
+  // Every level lies within the culling radius around the bounding sphere's centre (quadric
+  // placement can move a vertex outside the original's sphere).
+  const nlohmann::json& sphere = root["asset"]["bounding_sphere"];
+  const double culling_radius = sphere["culling_radius"].get<double>();
+  EXPECT_GE(culling_radius, sphere["radius"].get<double>());
+  const core::Vec3 center{sphere["center"][0].get<float>(), sphere["center"][1].get<float>(),
+                          sphere["center"][2].get<float>()};
+  for (size_t k = 0; k < root["levels"].size(); ++k) {
+    io::LoadOptions load;
+    load.gltf_node = static_cast<int>(k);
+    load.load_textures = false;
+    auto level = io::loadAsset((out / "lod.gltf").string(), load);
+    ASSERT_TRUE(level) << level.error().message;
+    for (core::Vec3 p : level->mesh.positions)
+      ASSERT_LE(core::length(p - center), culling_radius * (1 + 1e-6)) << "level " << k;
+  }
   ASSERT_TRUE(root.contains("autolod")) << root.dump(2);
   EXPECT_EQ(root["autolod"]["uniform"], "autoLOD");
   EXPECT_EQ(root["autolod"]["location"], 39);

@@ -399,6 +399,31 @@ TEST(ValidateMesh, CatchesIndexOutOfRange) {
   expectInvalid(mesh, "index 4 = 4 is out of range (4 vertices)");
 }
 
+// The mesh operations index with the mesh's numbers: on an index out of range (or a submesh past
+// the index buffer) they crashed; now they leave the mesh as it is.
+TEST(MeshOperations, InconsistentMeshesAreLeftAsTheyAre) {
+  for (int broken = 0; broken < 2; ++broken) {
+    Mesh mesh = flatQuad();
+    mesh.normals.assign(4, Vec3{0, 0, 1});
+    mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    if (broken == 0) mesh.indices[4] = 4000000;
+    else mesh.submeshes = {{0, 600, 0}};
+    const Mesh before = mesh;
+    core::computeNormals(mesh);
+    EXPECT_EQ(core::computeTangents(mesh), 0u);
+    EXPECT_EQ(core::weldVertices(mesh), 0u);
+    EXPECT_EQ(core::removeDegenerateTriangles(mesh), 0u);
+    size_t before_runs = 7;
+    EXPECT_EQ(core::optimizeVertexReuse(mesh, 16, &before_runs), 0u);
+    EXPECT_EQ(before_runs, 0u);
+    EXPECT_EQ(mesh.indices, before.indices) << broken;
+    EXPECT_EQ(mesh.positions.size(), before.positions.size());
+    EXPECT_TRUE(mesh.tangents.empty());
+  }
+  const std::vector<uint32_t> out_of_range = {0, 1, 99};
+  EXPECT_EQ(core::countVertexRuns(out_of_range, 3, 16), 3u);
+}
+
 TEST(ValidateMesh, CatchesStreamSizeMismatch) {
   Mesh mesh = flatQuad();
   mesh.normals.assign(3, Vec3{0, 0, 1});

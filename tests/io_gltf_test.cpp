@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <nlohmann/json.hpp>
 
@@ -899,6 +900,79 @@ TEST(GltfMalformed, GlbImageBufferViewPastTheEnd) {
   });
   writeBytes(dir / "image_view.glb", out);
   expectLoadError((dir / "image_view.glb").string());
+}
+
+}  // namespace
+}  // namespace duolod
+
+namespace duolod {
+namespace {
+
+// Names that are not UTF-8 (a Latin-1 .mtl, a file named in Latin-1) are written with U+FFFD:
+// the JSON writer threw on them, which aborted the process from a function that returns Status.
+TEST(GltfWriter, NamesThatAreNotUtf8AreReplacedNotThrownOn) {
+  core::Asset asset = quadAsset();
+  asset.materials[0].name = "caf\xe9";
+  const fs::path dir = test::scratchDir("not_utf8");
+  for (const char* name : {"out.gltf", "out.glb"}) {
+    const std::string path = (dir / name).string();
+    ASSERT_TRUE(io::writeGltf(asset, path)) << name;
+    auto back = io::loadAsset(path);
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(back->materials[0].name, "caf\xef\xbf\xbd") << name;  // U+FFFD
+  }
+  io::LodJsonDocument document;
+  document.asset_name = "Avocad\xf6";
+  EXPECT_TRUE(test::contains(io::lodJsonText(document), "Avocad\xef\xbf\xbd"));
+}
+
+// What an asset's parts say of each other is checked before anything is written: a texture whose
+// pixels are fewer than its size says (encoding it read past them: a crash, or heap bytes in the
+// file), a material's texture or a submesh's material out of range, a mesh with no triangles.
+TEST(GltfWriter, InconsistentAssetsAreRefused) {
+  const fs::path dir = test::scratchDir("inconsistent_assets");
+  struct Case {
+    const char* what;
+    std::function<void(core::Asset&)> break_it;
+    const char* expected;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"short pixels",
+            [](core::Asset& a) {
+              a.textures[0].image.width = a.textures[0].image.height = 2048;
+            },
+            "holds 16 bytes"},
+           {"texture out of range", [](core::Asset& a) { a.materials[0].base_color_texture = 17; },
+            "uses texture 17 of 1"},
+           {"material out of range", [](core::Asset& a) { a.mesh.submeshes[0].material = 5; },
+            "uses material 5 of 1"},
+           {"zero width", [](core::Asset& a) { a.textures[0].image.width = 0; }, "is empty"},
+       }) {
+    core::Asset asset = texturedQuadAsset();
+    c.break_it(asset);
+    for (const char* name : {"out.gltf", "out.glb", "out.obj"}) {
+      const std::string path = (dir / name).string();
+      auto written = test::contains(name, ".obj") ? io::writeObj(asset, path)
+                                                  : io::writeGltf(asset, path);
+      ASSERT_FALSE(written) << c.what << " " << name;
+      EXPECT_TRUE(test::contains(written.error().message, c.expected))
+          << c.what << ": " << written.error().message;
+    }
+    EXPECT_EQ(namesIn(dir), std::vector<std::string>{}) << c.what;
+  }
+  core::ImageRGBA8 short_image{2048, 2048, std::vector<uint8_t>(16)};
+  EXPECT_TRUE(io::encodePng(short_image).empty());
+  auto png = io::writePng(short_image, (dir / "short.png").string());
+  ASSERT_FALSE(png);
+  EXPECT_TRUE(test::contains(png.error().message, "holds 16 bytes")) << png.error().message;
+
+  core::Asset empty = quadAsset();
+  empty.mesh.indices.clear();
+  empty.mesh.submeshes = {};
+  auto nothing = io::writeGltf(empty, (dir / "empty.gltf").string());
+  ASSERT_FALSE(nothing);
+  EXPECT_TRUE(test::contains(nothing.error().message, "no triangles")) << nothing.error().message;
+  EXPECT_EQ(namesIn(dir), std::vector<std::string>{});
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // corrupted chain must fail that validation.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
@@ -97,6 +99,20 @@ TEST(LodJson, InconsistentLevelsAreRejected) {
   EXPECT_FALSE(io::writeLodJson(document, (dir / "lod.json").string()).ok());
   document.levels.clear();
   EXPECT_FALSE(io::writeLodJson(document, (dir / "lod.json").string()).ok());
+  // Parameters the runtime would refuse on reading are refused on writing.
+  for (const io::LodJsonLevel::Parameter& bad :
+       {io::LodJsonLevel::Parameter{"none", 40, {}},
+        io::LodJsonLevel::Parameter{"five", 40, {1, 2, 3, 4, 5}},
+        io::LodJsonLevel::Parameter{"nan", 40, {std::nanf("")}},
+        io::LodJsonLevel::Parameter{"far", 70000, {1}}}) {
+    document = threeLevelDocument();
+    document.levels[1].shader_parameters = {bad};
+    auto refused = io::writeLodJson(document, (dir / "lod.json").string());
+    ASSERT_FALSE(refused.ok()) << bad.name;
+    EXPECT_TRUE(test::contains(refused.error().message, "levels[1].shader: parameter '" + bad.name))
+        << refused.error().message;
+  }
+  EXPECT_FALSE(fs::exists(dir / "lod.json"));
 }
 
 // ---- glTF LOD chain ----

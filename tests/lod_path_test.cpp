@@ -2,7 +2,9 @@
 // against the per-level cheapest choice, and merging inefficient levels (§6.2, W = 4%).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include "duolod/lod.hpp"
@@ -102,6 +104,25 @@ TEST(LodSmoothestPath, SingleLevelAndErrors) {
   lod::TransitionEvaluator negative =
       [](int, const EvaluatedPair&, const EvaluatedPair&) -> core::Result<double> { return -1.0; };
   EXPECT_FALSE(lod::smoothestPath(two, negative).ok());
+  // An infinite or NaN transition error is refused too (infinity crashed the path's read-back).
+  for (double bad : {std::numeric_limits<double>::infinity(), std::nan("")}) {
+    lod::TransitionEvaluator odd = [bad](int, const EvaluatedPair&,
+                                         const EvaluatedPair&) -> core::Result<double> { return bad; };
+    auto refused = lod::smoothestPath(two, odd);
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_NE(refused.error().message.find("finite"), std::string::npos) << refused.error().message;
+  }
+}
+
+TEST(LodDijkstra, OutOfRangeEndsAndInfiniteWeights) {
+  lod::WeightedGraph graph;
+  for (int i = 0; i < 3; ++i) graph.addNode();
+  graph.addEdge(0, 1, std::numeric_limits<double>::infinity());
+  graph.addEdge(1, 2, 1);
+  EXPECT_TRUE(lod::dijkstra(graph, 0, 2).nodes.empty());  // the infinite edge is no edge
+  EXPECT_TRUE(lod::dijkstra(graph, 0, 7).nodes.empty());
+  EXPECT_TRUE(lod::dijkstra(graph, -1, 2).nodes.empty());
+  EXPECT_EQ(lod::dijkstra(graph, 1, 2).nodes, (std::vector<int>{1, 2}));
 }
 
 // The property: the smoothest path never has a larger total transition error than taking

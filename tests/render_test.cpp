@@ -114,6 +114,58 @@ int scaledSquareCoverage(render::Renderer& renderer, render::Renderer::ProgramId
 // 32-bit shading squares distances: far beyond 1e18 units the image came out empty without a
 // word (an asset 1e20 across, even with the constant shader). Such requests are refused with a
 // message; large but representable scenes still render the same picture as at unit scale.
+// Two Renderers in one thread (a caller's own and generateLod's, say): each makes its context
+// current when it is used. Before, the second one's creation left its context current, so the
+// first drew into it (the second's objects, under the same names) and reported success.
+TEST(RendererContexts, EachRendererDrawsWithItsOwnContext) {
+  auto first = render::Renderer::create();
+  if (!first) GTEST_SKIP() << "SKIPPED: no OpenGL 4.5 context: " << first.error().message;
+  auto source = render::loadShaderPair(test::sourcePath("shaders/constant"));
+  ASSERT_TRUE(source) << source.error().message;
+  auto drawn = [&](render::Renderer& renderer, render::Renderer::AssetId asset,
+                   render::Renderer::ProgramId program) {
+    render::Sample sample = frontSample(4.0f);
+    auto batch = renderer.render(asset, program, std::span(&sample, 1), {.resolution = 32});
+    EXPECT_TRUE(batch) << batch.error().message;
+    return batch ? tileImage(*batch, 0).pixels : std::vector<uint8_t>{};
+  };
+  auto red = (*first)->uploadAsset(squareAsset({1, 0, 0, 1}));
+  auto red_program = (*first)->compileProgram(*source);
+  ASSERT_TRUE(red && red_program);
+  const std::vector<uint8_t> before = drawn(**first, *red, *red_program);
+  {
+    auto second = render::Renderer::create();
+    ASSERT_TRUE(second) << second.error().message;
+    core::Asset small = squareAsset({0, 1, 0, 1});
+    for (Vec3& p : small.mesh.positions) p = p * 0.5f;
+    auto green = (*second)->uploadAsset(small);
+    auto green_program = (*second)->compileProgram(*source);
+    ASSERT_TRUE(green && green_program);
+    const std::vector<uint8_t> other = drawn(**second, *green, *green_program);
+    EXPECT_NE(other, before);
+    EXPECT_EQ(drawn(**first, *red, *red_program), before) << "with a second renderer alive";
+    EXPECT_EQ(drawn(**second, *green, *green_program), other);
+  }
+  EXPECT_EQ(drawn(**first, *red, *red_program), before) << "after the second one is gone";
+}
+
+// An asset whose parts disagree is refused before anything reaches the GPU (a texture with fewer
+// pixels than its size was read past its end).
+TEST_F(RendererTest, InconsistentAssetsAreRefused) {
+  core::Asset asset = squareAsset({1, 1, 1, 1});
+  asset.textures.push_back({.name = "short", .image = {512, 512, std::vector<uint8_t>(16)}});
+  asset.materials[0].base_color_texture = 0;
+  auto short_pixels = renderer_->uploadAsset(asset);
+  ASSERT_FALSE(short_pixels);
+  EXPECT_TRUE(test::contains(short_pixels.error().message, "holds 16 bytes"))
+      << short_pixels.error().message;
+  asset = squareAsset({1, 1, 1, 1});
+  asset.mesh.submeshes[0].material = 5;
+  auto material = renderer_->uploadAsset(asset);
+  ASSERT_FALSE(material);
+  EXPECT_TRUE(test::contains(material.error().message, "material 5")) << material.error().message;
+}
+
 TEST_F(RendererTest, HugeCoordinatesAreRefusedWithAReason) {
   std::string message;
   const int unit = scaledSquareCoverage(*renderer_, constant_program_, 1.0f, message);
@@ -296,6 +348,32 @@ TEST(Metric, BoundFollowsEquationFour) {
   EXPECT_TRUE(metric::withinBound(error, config, 5.0));  // 9.9 < 0.2 * 100
   error.epsilon = 20.5;
   EXPECT_FALSE(metric::withinBound(error, config, 5.0));
+  // Q = 0: e_max from just beyond d_near on, but 0 at d_near itself (pow(0, 0) gave e_max).
+  config.q = 0;
+  EXPECT_DOUBLE_EQ(metric::perPixelBound(config, 1.0), 0.0);
+  EXPECT_NEAR(metric::perPixelBound(config, 1.5), 0.2, 1e-7);
+}
+
+// Batches that do not match are never within a bound, and nothing is read past a buffer.
+TEST(Metric, MismatchedBatchesGiveAnInfiniteError) {
+  render::ImageBatch8 image{.width = 4, .height = 4, .count = 2,
+                            .pixels = std::vector<uint8_t>(4 * 4 * 4 * 2, 255)};
+  render::ImageBatchF reference{.width = 4, .height = 4, .count = 2,
+                                .pixels = std::vector<float>(4 * 4 * 4 * 2, 1.0f)};
+  EXPECT_EQ(metric::imageError(image, reference).epsilon, 0.0);
+  render::ImageBatchF fewer = reference;
+  fewer.count = 1;
+  fewer.pixels.resize(4 * 4 * 4);
+  render::ImageBatchF wider = reference;
+  wider.width = 8;  // pixels no longer fill the shape
+  render::ImageBatch8 short_pixels = image;
+  short_pixels.pixels.resize(10);
+  for (const metric::ImageError& error :
+       {metric::imageError(image, fewer), metric::imageError(image, wider),
+        metric::imageError(short_pixels, reference)}) {
+    EXPECT_TRUE(std::isinf(error.epsilon));
+    EXPECT_FALSE(metric::withinBound(error, {}, 5.0));
+  }
 }
 
 }  // namespace

@@ -4,6 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <clocale>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+
 #include "test_support.hpp"
 
 namespace duolod {
@@ -107,6 +113,22 @@ TEST(RuntimePolicy, BadPoliciesNameTheField) {
            {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
                "screen_coverage": 1, "shader": {"parameters": [{"location": 3, "value": []}]}}]})",
             "levels[0].shader.parameters"},
+           {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
+               "screen_coverage": 1, "shader": {"parameters": [{"location": 1e12, "value": [1]}]}}]})",
+            "location must be a whole number"},
+           {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
+               "screen_coverage": 1, "shader": {"parameters": [{"location": 3, "value": [null]}]}}]})",
+            "finite numbers"},
+           {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
+               "screen_coverage": 1, "shader": {"parameters": [{"location": 3, "value": [1e39]}]}}]})",
+            "finite numbers"},
+           {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
+               "screen_coverage": 1, "triangles": 1e30}]})",
+            "levels[0].triangles"},
+           {R"({"format": "duolod-lod", "version": 1, "levels": [{"switch_distance": 0,
+               "screen_coverage": 1, "mesh": 3}]})",
+            "levels[0].mesh"},
+           {R"({"format": "duolod-lod", "version": 1e999, "levels": []})", "out of range"},
            {R"({"format": )", "offset"},
        }) {
     runtime::Policy policy;
@@ -118,6 +140,50 @@ TEST(RuntimePolicy, BadPoliciesNameTheField) {
   std::string error;
   EXPECT_FALSE(runtime::loadPolicy("/nonexistent/lod.json", policy, &error));
   EXPECT_NE(error.find("/nonexistent/lod.json"), std::string::npos);
+}
+
+TEST(RuntimePolicy, MeshNamesAFileAndANode) {
+  runtime::Level level;
+  level.mesh = "lod.gltf#node2";  // what `duolod generate` writes
+  EXPECT_EQ(level.meshFile(), "lod.gltf");
+  EXPECT_EQ(level.meshNode(), 2);
+  level.mesh = "lod1.gltf";
+  EXPECT_EQ(level.meshFile(), "lod1.gltf");
+  EXPECT_EQ(level.meshNode(), -1);
+  level.mesh = "odd#nodex";
+  EXPECT_EQ(level.meshNode(), -1);
+}
+
+// Numbers are read the same in any C locale: an engine that calls setlocale(LC_ALL, "") in a
+// comma-decimal locale must not read "2.5" as 2 (strtod would). The locale is made with
+// localedef (Debian's `locales`, which scripts/setup.sh installs) into a scratch folder.
+TEST(RuntimePolicy, NumbersDoNotDependOnTheLocale) {
+  const std::filesystem::path locales = test::scratchDir("runtime_locale");
+  const std::string make = "localedef -i de_DE -f UTF-8 " + (locales / "de_DE.UTF-8").string() +
+                           " >/dev/null 2>&1";
+  if (std::system(make.c_str()) != 0)
+    GTEST_SKIP() << "SKIPPED: cannot make the de_DE.UTF-8 locale with localedef (Debian package "
+                    "`locales`, installed by scripts/setup.sh)";
+  const char* old_path = std::getenv("LOCPATH");
+  const std::string kept_path = old_path ? old_path : "";
+  setenv("LOCPATH", locales.c_str(), 1);
+  const bool switched = std::setlocale(LC_NUMERIC, "de_DE.UTF-8") != nullptr;
+  if (old_path) setenv("LOCPATH", kept_path.c_str(), 1); else unsetenv("LOCPATH");
+  if (!switched) GTEST_SKIP() << "SKIPPED: setlocale(LC_NUMERIC, \"de_DE.UTF-8\") failed";
+  // The locale is in force: the C library reads a comma there.
+  const double c_library = std::strtod("2.5", nullptr);
+  runtime::Policy policy;
+  std::string error;
+  const bool parsed = runtime::parsePolicy(kThreeLevels, policy, &error);
+  JsonValue value;
+  const bool number = JsonValue::parse("[0.0625, 2.5e-1]", value, &error);
+  std::setlocale(LC_NUMERIC, "C");
+  EXPECT_EQ(c_library, 2.0);
+  ASSERT_TRUE(parsed) << error;
+  EXPECT_EQ(policy.levels[1].shader_parameters[0].value[1], 0.25f);
+  ASSERT_TRUE(number) << error;
+  EXPECT_EQ(value.items()[0].number(), 0.0625);
+  EXPECT_EQ(value.items()[1].number(), 0.25);
 }
 
 TEST(RuntimePolicy, LoadsFromAFile) {
@@ -186,6 +252,52 @@ TEST(RuntimeSelect, CrossFadeWeightRisesAcrossTheBand) {
                      after = selector.selectByDistance(10.001);
   EXPECT_NEAR(before.fade, 1.0f - after.fade, 3e-3);
   EXPECT_EQ(selector.selectByDistance(15).fade_level, -1);
+}
+
+// What is seen (each level's share) changes continuously with the distance, also with a
+// hysteresis wider than the fade band (the header's own example), moving away and back.
+TEST(RuntimeSelect, CrossFadeIsContinuousWithAWiderHysteresis) {
+  for (runtime::SelectorOptions options :
+       {runtime::SelectorOptions{.hysteresis = 0.1, .fade_band = 0.05},
+        runtime::SelectorOptions{.hysteresis = 0.02, .fade_band = 0.1},
+        runtime::SelectorOptions{.hysteresis = 0.3, .fade_band = 0.02}}) {
+    runtime::LevelSelector selector(threeLevels(), options);
+    std::vector<double> path;
+    for (int i = 0; i <= 30000; ++i) path.push_back(5 + i * 0.001);  // 5 → 35
+    for (int i = 30000; i >= 0; --i) path.push_back(5 + i * 0.001);  // and back
+    std::array<float, 3> previous{1, 0, 0};
+    float largest_step = 0;
+    for (double d : path) {
+      const runtime::Selection pick = selector.selectByDistance(d);
+      std::array<float, 3> seen{0, 0, 0};
+      seen[size_t(pick.level)] += 1 - pick.fade;
+      if (pick.fade_level >= 0) seen[size_t(pick.fade_level)] += pick.fade;
+      for (size_t k = 0; k < 3; ++k)
+        largest_step = std::max(largest_step, std::abs(seen[k] - previous[k]));
+      previous = seen;
+    }
+    // A step of 0.001 moves a weight by at most 0.001 / (2 · fade_band · 10) (0.01 at 0.05).
+    EXPECT_LT(largest_step, 0.03f) << "hysteresis " << options.hysteresis << ", fade band "
+                                   << options.fade_band;
+  }
+}
+
+TEST(RuntimeSelect, NanKeepsTheLevelAndOptionsAreClamped) {
+  runtime::LevelSelector selector(threeLevels(), {.hysteresis = 0, .fade_band = 0});
+  EXPECT_EQ(selector.selectByDistance(25).level, 2);
+  EXPECT_EQ(selector.selectByDistance(NAN).level, 2);
+  EXPECT_EQ(selector.selectByScreenCoverage(NAN).level, 2);
+  EXPECT_EQ(selector.selectByDistance(1).level, 0);
+  EXPECT_EQ(selector.selectByScreenCoverage(NAN).level, 0);
+  EXPECT_EQ(selector.selectByDistance(NAN).fade_level, -1);
+  // Out-of-range options (a negative band made std::clamp's bounds cross: undefined).
+  runtime::LevelSelector odd(threeLevels(), {.hysteresis = -0.5, .fade_band = NAN});
+  EXPECT_EQ(odd.options().hysteresis, 0.0);
+  EXPECT_EQ(odd.options().fade_band, 0.0);
+  EXPECT_EQ(odd.selectByDistance(15).level, 1);
+  runtime::LevelSelector wide(threeLevels(), {.hysteresis = 7, .fade_band = 2});
+  EXPECT_EQ(wide.options().hysteresis, 0.99);
+  EXPECT_EQ(wide.options().fade_band, 0.99);
 }
 
 }  // namespace

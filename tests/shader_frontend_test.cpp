@@ -238,6 +238,22 @@ TEST(ShaderFrontend, MalformedShadersGiveFileAndLine) {
   EXPECT_TRUE(test::contains(message, "broken.hlsl")) << message;
 }
 
+// A file that includes itself (directly or around a cycle) is an error naming it; glslang alone
+// expanded it until memory ran out.
+TEST(ShaderFrontend, RecursiveIncludesAreAnError) {
+  std::filesystem::path dir = test::scratchDir("shader_frontend_include_cycle");
+  writeFile(dir / "self.glsl", "#include \"self.glsl\"\nfloat f() { return 1.0; }\n");
+  writeFile(dir / "a.glsl", "#include \"b.glsl\"\n");
+  writeFile(dir / "b.glsl", "#include \"a.glsl\"\n");
+  for (const char* first : {"self.glsl", "a.glsl"}) {
+    const std::string source = std::string("#version 450 core\n#include \"") + first +
+                               "\"\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n";
+    const std::string message =
+        expectError(source.c_str(), Stage::kFragment, (dir / "main.frag").string(), {});
+    EXPECT_TRUE(test::contains(message, "nested more than")) << message;
+  }
+}
+
 TEST(ShaderFrontend, ValidatorRejectsBrokenModules) {
   std::vector<uint32_t> words =
       expectCompiles("#version 450 core\nlayout(location=0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n",
@@ -249,6 +265,16 @@ TEST(ShaderFrontend, ValidatorRejectsBrokenModules) {
   if (!status.ok()) {
     EXPECT_TRUE(test::contains(status.error().message, "truncated.spv")) << status.error().message;
   }
+  // SPIRV-Cross gets only valid modules: corrupt ones (every single word flipped in turn, a file
+  // damaged on disk) are errors, never a crash inside its parser.
+  int refused = 0;
+  for (size_t i = 5; i < words.size(); ++i) {
+    std::vector<uint32_t> damaged = words;
+    damaged[i] ^= 0x00ff00ffu;
+    for (Target target : {Target::kGlsl450, Target::kGlslEs300, Target::kHlsl50})
+      if (!crossCompile(damaged, target, "damaged.spv").ok()) ++refused;
+  }
+  EXPECT_GT(refused, 0);
 }
 
 }  // namespace

@@ -819,7 +819,7 @@ struct GenerateFlags {
         ->check(CLI::IsMember({"image", "quadric"}))
         ->capture_default_str();
     command->add_option("--levels", options.levels.level_count, "number of distance levels N")
-        ->check(atLeast(1))
+        ->check(between(1, lod::kMaxLevelCount))
         ->capture_default_str();
     command
         ->add_option("--level-spacing", level_spacing,
@@ -1203,6 +1203,10 @@ int runShader(ShaderFlags& flags) {
                 variant.search.predicted_cost * 1e3, ratio.c_str(),
                 variant.search.rendered_error.value_or(-1));
   }
+  if (report->dropped_costlier > 0)
+    std::printf("(%d variant%s of the front predicted to cost as much as the original or more: not "
+                "levels, left out)\n",
+                report->dropped_costlier, report->dropped_costlier == 1 ? "" : "s");
   const shader::SearchCounters& counters = report->search;
   std::printf("variants: %d generated, %d predicted (%d compiled ahead), %d rendered, %d compiled; "
               "search %.1f s, total %.1f s\n",

@@ -156,6 +156,9 @@ Bounds computeBounds(const Mesh& mesh);
 // Smallest-ish enclosing sphere (Ritter's bounding sphere, refined by one pass).
 Sphere computeBoundingSphere(const Mesh& mesh);
 
+// The operations below (normals to vertex reuse) leave a mesh whose streams, indices or
+// submeshes are inconsistent (validateMesh's structural checks) as it is, and return 0.
+//
 // Vertex normals as the angle-weighted average of face normals (Thürmer & Wüthrich 1998), which
 // does not depend on how a polygon was triangulated. Vertices at the same position (split by a
 // UV or colour seam) get the same normal.
@@ -185,7 +188,8 @@ size_t removeDegenerateTriangles(Mesh& mesh);
 // only the order changes. Returns the number of vertex shader runs the order costs in a FIFO
 // cache of `cache_size` (before: `before_runs` when given), so callers can see the gain.
 size_t optimizeVertexReuse(Mesh& mesh, int cache_size = 16, size_t* before_runs = nullptr);
-// Vertex shader runs of the index order in a FIFO post-transform cache of `cache_size` vertices.
+// Vertex shader runs of the index order in a FIFO post-transform cache of `cache_size` vertices
+// (an index out of range counts as a run).
 size_t countVertexRuns(std::span<const uint32_t> indices, size_t vertex_count, int cache_size);
 
 // ---------------------------------------------------------------------------------------------
@@ -259,6 +263,15 @@ struct Asset {
   std::vector<Texture> textures;
   std::vector<std::string> warnings;  // non-fatal problems found while loading
 };
+
+// Checks an image's size against its pixels: width and height >= 1 and pixels holding exactly
+// width × height × 4 bytes. Returns an Error saying which.
+Status validateImage(const ImageRGBA8& image);
+// Checks what an asset's parts say of each other (not the mesh: validateMesh): every submesh's
+// material and every material's textures are in range (material 0 when there are none: the
+// default material), and every texture is a valid image or
+// was loaded undecoded (its `encoded` bytes alone). Returns an Error naming the first problem.
+Status validateAssetReferences(const Asset& asset);
 
 // Per submesh (by index), whether its material has a normal texture: its tangents then shade,
 // and its mirror lines must be split (computeTangents).

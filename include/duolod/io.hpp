@@ -90,7 +90,10 @@ struct LodJsonLevel {
 };
 struct LodJsonDocument {
   std::string asset_name, asset_source;
-  core::Sphere bounds;
+  core::Sphere bounds;  // the original's: distances are measured from its centre
+  // Around bounds.center, the radius that holds every level's vertices (an optimal placement may
+  // move a vertex a little outside the original's sphere): for culling. 0: bounds.radius.
+  double culling_radius = 0;
   float fov_y_deg = 45, screen_aspect = 16.0f / 9.0f;
   int screen_height_px = 1080;
   double d_near = 0, d_far = 0, q = 0, e_max = 0;  // eq. (4)
@@ -111,7 +114,8 @@ struct LodJsonDocument {
 };
 std::string lodJsonText(const LodJsonDocument& document);
 // Checks what the runtime relies on (levels present, switch distances increasing, coverages in
-// [0, 1] decreasing) and writes atomically.
+// [0, 1] decreasing, parameters with a location in [0, 65535] and 1-4 finite values) and writes
+// atomically.
 core::Status writeLodJson(const LodJsonDocument& document, const std::string& path);
 
 // An error when `output` is one of the files `asset` was read from (Asset::source_files or its
@@ -122,6 +126,7 @@ core::Status refuseSourceFile(const core::Asset& asset, const std::string& outpu
 core::Result<core::ImageRGBA8> readImage(const std::string& path);  // PNG, JPEG, ... via stb
 core::Result<core::ImageRGBA8> decodeImage(std::span<const uint8_t> bytes, const std::string& name);
 core::Status writePng(const core::ImageRGBA8& image, const std::string& path);
+// Empty when the image is not valid (core::validateImage) or stb fails.
 std::vector<uint8_t> encodePng(const core::ImageRGBA8& image);
 // The bytes of a PNG or JPEG file, kept beside the image decoded from them (core::EncodedImage);
 // null for other formats (glTF takes only PNG and JPEG: the writers encode those as PNG).

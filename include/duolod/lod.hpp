@@ -63,7 +63,8 @@ struct DistanceLevel {
 };
 
 // The N levels between d_near and d_far (level 0 at d_near, where e_a = 0: the original). Requires
-// level_count >= 1 and d_far > d_near (checked: bad options are an Error).
+// 1 <= level_count <= kMaxLevelCount and d_far > d_near (checked: bad options are an Error).
+constexpr int kMaxLevelCount = 1000;
 core::Result<std::vector<DistanceLevel>> distanceLevels(const core::Sphere& bounds,
                                                         const LevelOptions& options);
 // eq. (3): the largest ε_a a pair may have at this level, e_a(d_i)·s_d.
@@ -204,7 +205,8 @@ struct ShortestPath {
   std::vector<int> nodes;  // source .. target; empty when the target is unreachable
   double length = 0;
 };
-// Dijkstra (1959) with a binary heap. Weights must be >= 0 (asserted: they are image errors).
+// Dijkstra (1959) with a binary heap. Edges whose weight is not finite and >= 0 (they are image
+// errors) are skipped; a source or target out of range gives an empty path.
 ShortestPath dijkstra(const WeightedGraph& graph, int source, int target);
 
 // Transition error ε_t of eq. (5): the pair `from` of level `level` and the pair `to` of level
@@ -440,6 +442,9 @@ struct GenerateTimings {
 struct GenerateResult {
   std::vector<GeneratedLevel> levels;  // the kept levels, finest first
   std::vector<DistanceLevel> all_levels;
+  // The bound the levels were made with: options.levels.bound with d_near and d_far placed (by
+  // the footprints when they were 0).
+  metric::BoundConfig bound;
   std::vector<HeldOutCheck> held_out;  // every kept level on held-out views and lights
   // Levels the optimizer kept but that broke their bound on the held-out views and lights: they
   // are left out of the chain (the finer level before each covers its distances).

@@ -197,7 +197,8 @@ struct SurfaceDistance {
 // For the maximum only, every vertex is measured too, and so is a dense grid (325 points) on each
 // of the 64 triangles with the largest distances measured, where the maximum most likely is.
 // Distances are to the other surface (closest point on any triangle, via a BVH). Two empty meshes
-// are at distance 0; one empty mesh is at infinity.
+// are at distance 0; one empty mesh is at infinity. The mean and rms are over the area samples:
+// NaN (not measured) when samples_per_mesh is 0.
 SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
                                 size_t samples_per_mesh = 100000, uint64_t seed = 1);
 

@@ -17,8 +17,8 @@ struct ImageError {
   int samples = 0;
 };
 
-// Error of `image` against the reference `reference`. The batches must have the same shape; a
-// mismatch is a programmer error (asserted).
+// Error of `image` against the reference `reference`. Batches of different shapes (or whose
+// pixels do not fill their shape) give an infinite epsilon and per_pixel, which no bound accepts.
 ImageError imageError(const render::ImageBatch8& image, const render::ImageBatchF& reference);
 ImageError imageError(const render::ImageBatch8& image, const render::ImageBatch8& reference);
 ImageError imageError(const render::ImageBatchF& image, const render::ImageBatchF& reference);
@@ -30,7 +30,7 @@ double tileSquaredError(const uint8_t* a, const float* b, size_t pixel_count);
 double tileCoverage(const float* rgba, size_t pixel_count);
 
 // The absolute per-pixel error bound of eq. (4): e_a(d) = ((d − d_near)/(d_far − d_near))^Q·e_max,
-// with d clamped into [d_near, d_far].
+// with d clamped into [d_near, d_far]; 0 at d_near for every Q.
 struct BoundConfig {
   float d_near = 1.0f;
   float d_far = 10.0f;

@@ -85,6 +85,10 @@ std::vector<core::Vec3> viewDirections(ViewSet views);
 // the square footprint images are rendered at. At least 1. Distances inside the sphere are clamped
 // to just outside it.
 int footprintPixels(const core::Sphere& bounds, float distance, const Display& display);
+// The same before rounding up: the bounding sphere's projected diameter in (fractional) pixels.
+// What screen coverage is computed from (lod::screenCoverage), so that coverage and distance
+// give the same switch.
+double projectedDiameterPixels(const core::Sphere& bounds, float distance, const Display& display);
 
 // Cameras at `distance` from the sphere centre, each framing exactly the bounding sphere (the
 // image is the footprint's crop of the display), with its lights. View-major order:

@@ -10,7 +10,7 @@
 // lod.json (format "duolod-lod", version 1) — fields the runtime reads:
 //   { "format": "duolod-lod", "version": 1,
 //     "levels": [ { "level": 0, "switch_distance": 0, "screen_coverage": 1,
-//                   "triangles": 4510, "mesh": "lod0.gltf",
+//                   "triangles": 4510, "mesh": "lod.gltf#node0",
 //                   "shader": { "summary": "...", "files": { "glsl450_frag": "..." },
 //                               "parameters": [ { "name": "n", "location": 40,
 //                                                 "value": [0.5, 0.2, 0.1] } ] } }, ... ] }
@@ -27,6 +27,7 @@
 #pragma once
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -137,9 +138,13 @@ class JsonValue {
         if (at < text.size() && (text[at] == '+' || text[at] == '-')) ++at;
         if (!digits()) return fail("invalid number");
       }
-      std::string token(text.substr(start, at - start));
+      // from_chars, not strtod: strtod reads the C locale's decimal point, so in a comma-decimal
+      // locale (an engine that called setlocale(LC_ALL, "")) "2.5" read as 2.
+      const char* first = text.data() + start;
+      const auto [end, status] = std::from_chars(first, text.data() + at, out.number_);
+      if (status == std::errc::result_out_of_range) return fail("number out of range");
+      if (status != std::errc() || end != text.data() + at) return fail("invalid number");
       out.kind_ = Kind::kNumber;
-      out.number_ = std::strtod(token.c_str(), nullptr);
       return true;
     }
     static void appendUtf8(std::string& out, uint32_t code) {
@@ -287,7 +292,10 @@ struct Level {
   double switch_distance = 0;  // camera distance from which this level is used
   double screen_coverage = 1;  // screen-area fraction below which this level is used
   uint64_t triangles = 0;
-  std::string mesh;            // file name, relative to lod.json
+  // The level's mesh: "FILE#nodeK" (what `duolod generate` writes: "lod.gltf#node2"), the glTF
+  // file relative to lod.json and the node that holds this level's mesh; or a file alone.
+  // meshFile() and meshNode() split it.
+  std::string mesh;
   std::string shader_summary;  // in words
   std::map<std::string, std::string>
       shader_files;  // kind ("spirv_frag", "glsl450_frag", ...) → file
@@ -299,6 +307,17 @@ struct Level {
     std::vector<float> value;  // 1..4 components
   };
   std::vector<Parameter> shader_parameters;
+
+  std::string meshFile() const { return mesh.substr(0, mesh.rfind("#node")); }
+  // The node after "#node", or -1 when `mesh` names a file alone.
+  int meshNode() const {
+    const size_t at = mesh.rfind("#node");
+    if (at == std::string::npos) return -1;
+    int node = -1;
+    const char* first = mesh.data() + at + 5;
+    const auto [end, status] = std::from_chars(first, mesh.data() + mesh.size(), node);
+    return status == std::errc() && end == mesh.data() + mesh.size() && node >= 0 ? node : -1;
+  }
 };
 
 struct Policy {
@@ -338,9 +357,17 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
     Level level;
     level.switch_distance = distance->number();
     level.screen_coverage = coverage->number();
-    if (const JsonValue* triangles = entry.find("triangles"))
-      level.triangles = static_cast<uint64_t>(std::max(0.0, triangles->number()));
-    if (const JsonValue* mesh = entry.find("mesh")) level.mesh = mesh->string();
+    // Numbers are range-checked before they are converted (a float beyond an integer's range
+    // is undefined behaviour to convert).
+    if (const JsonValue* triangles = entry.find("triangles")) {
+      if (!triangles->isNumber() || !(triangles->number() >= 0 && triangles->number() <= 1e15))
+        return fail(where + ".triangles must be a count");
+      level.triangles = static_cast<uint64_t>(triangles->number());
+    }
+    if (const JsonValue* mesh = entry.find("mesh")) {
+      if (!mesh->isString()) return fail(where + ".mesh must be a string");
+      level.mesh = mesh->string();
+    }
     if (const JsonValue* shader = entry.find("shader")) {
       if (const JsonValue* summary = shader->find("summary"))
         level.shader_summary = summary->string();
@@ -355,9 +382,17 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
           if (!location || !location->isNumber() || !value || !value->isArray() ||
               value->items().empty() || value->items().size() > 4)
             return fail(where + ".shader.parameters: each needs a location and 1-4 values");
-          parameter.location = static_cast<int>(location->number());
-          for (const JsonValue& component : value->items())
-            parameter.value.push_back(static_cast<float>(component.number()));
+          const double at = location->number();
+          if (!(at >= 0 && at < 65536 && at == std::floor(at)))
+            return fail(where + ".shader.parameters: a location must be a whole number in [0, 65535]");
+          parameter.location = static_cast<int>(at);
+          for (const JsonValue& component : value->items()) {
+            // A value written as null (a NaN) or out of float's range is not silently 0 or inf.
+            const double number = component.number(NAN);
+            if (!component.isNumber() || !std::isfinite(static_cast<float>(number)))
+              return fail(where + ".shader.parameters: values must be finite numbers");
+            parameter.value.push_back(static_cast<float>(number));
+          }
           level.shader_parameters.push_back(std::move(parameter));
         }
       }
@@ -411,6 +446,7 @@ struct SelectorOptions {
   // Relative half-width of the cross-fade band around each switch distance: within
   // [s_k·(1 − fade_band), s_k·(1 + fade_band)] levels k−1 and k are blended. 0 = no cross-fade.
   double fade_band = 0;
+  // Both are taken in [0, 0.99]: a value outside is clamped into it, NaN is 0.
 };
 
 struct Selection {
@@ -422,29 +458,36 @@ struct Selection {
 class LevelSelector {
  public:
   explicit LevelSelector(Policy policy, SelectorOptions options = {})
-      : policy_(std::move(policy)), options_(options) {}
+      : policy_(std::move(policy)), options_(sanitized(options)) {}
 
   const Policy& policy() const { return policy_; }
+  const SelectorOptions& options() const { return options_; }
   int currentLevel() const { return current_; }
 
-  // Selection for a camera at `distance` from the object (the units of lod.json).
+  // Selection for a camera at `distance` from the object (the units of lod.json). A NaN distance
+  // keeps the current level.
   Selection selectByDistance(double distance) {
     return select(distance, [this](size_t k) { return policy_.levels[k].switch_distance; });
   }
   // Selection for an object covering `coverage` of the screen area. Projected area falls with the
   // square of the distance, so 1/sqrt(coverage) plays the role of distance and the bands mean the
-  // same in both modes.
+  // same in both modes. A NaN coverage keeps the current level.
   Selection selectByScreenCoverage(double coverage) {
-    auto farness = [](double c) { return c > 0 ? 1.0 / std::sqrt(c) : INFINITY; };
+    auto farness = [](double c) { return std::isnan(c) ? NAN : c > 0 ? 1.0 / std::sqrt(c) : INFINITY; };
     return select(farness(coverage),
                   [&](size_t k) { return farness(policy_.levels[k].screen_coverage); });
   }
 
  private:
+  static SelectorOptions sanitized(SelectorOptions options) {
+    auto band = [](double value) { return std::isnan(value) ? 0.0 : std::clamp(value, 0.0, 0.99); };
+    return {.hysteresis = band(options.hysteresis), .fade_band = band(options.fade_band)};
+  }
+
   template <class Threshold>
   Selection select(double farness, const Threshold& threshold) {
     const size_t count = policy_.levels.size();
-    if (count == 0) return {};
+    if (count == 0 || std::isnan(farness)) return {.level = current_};
     // Thresholds increase with k. `entered` counts levels whose far side has been passed with the
     // band; `allowed` counts those not yet left with the band. entered <= allowed.
     int entered = 0, allowed = 0;
@@ -455,18 +498,35 @@ class LevelSelector {
     current_ = std::clamp(current_, entered, allowed);
     Selection selection{.level = current_};
     if (options_.fade_band <= 0) return selection;
+    // What is seen is a function of the distance alone, so that it never jumps, however the
+    // hysteresis holds the drawn level: levels k−1 and k blend across the band around s_k, and
+    // elsewhere the level whose range holds the distance is seen. The held level is drawn and
+    // the fade makes up the difference (a weight of 1: the fade level alone is seen).
+    int seen_near = 0, seen_far = -1;
+    float weight_far = 0;  // of seen_far
     for (size_t k = 1; k < count; ++k) {
-      double low = threshold(k) * (1 - options_.fade_band),
-             high = threshold(k) * (1 + options_.fade_band);
-      if (farness <= low || farness >= high) continue;
-      // Weight of level k rises from 0 at `low` to 1 at `high`.
-      float weight_far = static_cast<float>((farness - low) / (high - low));
-      const int near_level = static_cast<int>(k) - 1, far_level = static_cast<int>(k);
-      if (current_ == near_level)
-        selection = {current_, far_level, weight_far};
-      else if (current_ == far_level)
-        selection = {current_, near_level, 1.0f - weight_far};
+      const double low = threshold(k) * (1 - options_.fade_band),
+                   high = threshold(k) * (1 + options_.fade_band);
+      if (farness >= high) {
+        seen_near = static_cast<int>(k);
+        continue;
+      }
+      if (farness > low) {
+        seen_near = static_cast<int>(k) - 1;
+        seen_far = static_cast<int>(k);
+        // Weight of level k rises from 0 at `low` to 1 at `high`.
+        weight_far = static_cast<float>((farness - low) / (high - low));
+      }
       break;
+    }
+    if (seen_far < 0) {
+      if (seen_near != current_) selection = {current_, seen_near, 1.0f};
+    } else if (current_ == seen_near) {
+      selection = {current_, seen_far, weight_far};
+    } else if (current_ == seen_far) {
+      selection = {current_, seen_near, 1.0f - weight_far};
+    } else {  // held beyond both (a hysteresis wider than the gap between switches)
+      selection = {current_, weight_far >= 0.5f ? seen_far : seen_near, 1.0f};
     }
     return selection;
   }

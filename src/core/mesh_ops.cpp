@@ -53,6 +53,25 @@ bool finite4(Vec4 v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
 }
 
+// What the mesh operations below index by: stream sizes, indices in range, submeshes tiling the
+// index buffer (validateMesh without the finiteness checks). A mesh that fails it is left as it is:
+// the operations index with these numbers, and out of range that was a crash.
+bool indexable(const Mesh& mesh) {
+  const size_t n = mesh.vertexCount();
+  if (!streamSizeOk(mesh.normals, n) || !streamSizeOk(mesh.tangents, n) ||
+      !streamSizeOk(mesh.uv0, n) || !streamSizeOk(mesh.uv1, n) || !streamSizeOk(mesh.colors, n) ||
+      mesh.indices.size() % 3 != 0)
+    return false;
+  for (uint32_t index : mesh.indices)
+    if (index >= n) return false;
+  size_t covered = 0;
+  for (const Submesh& sub : mesh.submeshes) {
+    if (sub.first_index != covered || sub.index_count % 3 != 0) return false;
+    covered += sub.index_count;
+  }
+  return mesh.submeshes.empty() || covered == mesh.indices.size();
+}
+
 }  // namespace
 
 Status validateMesh(const Mesh& mesh) {
@@ -93,6 +112,46 @@ Status validateMesh(const Mesh& mesh) {
   if (covered != mesh.indices.size())
     return Error{"submeshes cover " + std::to_string(covered) + " of " +
                  std::to_string(mesh.indices.size()) + " indices"};
+  return okStatus();
+}
+
+Status validateImage(const ImageRGBA8& image) {
+  if (image.width <= 0 || image.height <= 0)
+    return Error{"image size " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                 " is empty"};
+  const uint64_t expected = uint64_t(image.width) * uint64_t(image.height) * 4;
+  if (image.pixels.size() != expected)
+    return Error{"image of " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                 " pixels holds " + std::to_string(image.pixels.size()) + " bytes, not " +
+                 std::to_string(expected)};
+  return okStatus();
+}
+
+Status validateAssetReferences(const Asset& asset) {
+  const size_t materials = asset.materials.size(), textures = asset.textures.size();
+  // With no materials at all, material 0 is the default one (glTF's; the renderer's zero block).
+  for (size_t s = 0; s < asset.mesh.submeshes.size(); ++s)
+    if (asset.mesh.submeshes[s].material >= std::max<size_t>(materials, 1))
+      return Error{"submesh " + std::to_string(s) + " uses material " +
+                   std::to_string(asset.mesh.submeshes[s].material) + " of " +
+                   std::to_string(materials)};
+  for (size_t m = 0; m < materials; ++m) {
+    const Material& material = asset.materials[m];
+    for (int texture : {material.base_color_texture, material.metallic_roughness_texture,
+                        material.normal_texture, material.occlusion_texture,
+                        material.emissive_texture})
+      if (texture < -1 || (texture >= 0 && size_t(texture) >= textures))
+        return Error{"material " + std::to_string(m) + " (" + material.name + ") uses texture " +
+                     std::to_string(texture) + " of " + std::to_string(textures)};
+  }
+  for (size_t t = 0; t < textures; ++t) {
+    const Texture& texture = asset.textures[t];
+    if (texture.image.pixels.empty())
+      continue;  // no pixels: undecoded (its `encoded` bytes) or a missing file's placeholder
+    if (auto valid = validateImage(texture.image); !valid)
+      return Error{"texture " + std::to_string(t) + " (" + texture.name + "): " +
+                   valid.error().message};
+  }
   return okStatus();
 }
 
@@ -163,6 +222,7 @@ Sphere computeBoundingSphere(const Mesh& mesh) {
 }
 
 void computeNormals(Mesh& mesh) {
+  if (!indexable(mesh)) return;
   mesh.normals.assign(mesh.vertexCount(), Vec3{});
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     uint32_t i[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
@@ -261,6 +321,7 @@ size_t splitMirroredVertices(Mesh& mesh, const std::vector<uint8_t>& in_scope) {
 
 // The tangent frames themselves, once the mirror lines in `split_scope` (per triangle) are split.
 size_t computeTangentsSplitting(Mesh& mesh, const std::vector<uint8_t>& split_scope) {
+  if (!indexable(mesh)) return 0;
   if (mesh.normals.size() != mesh.vertexCount() || mesh.uv0.size() != mesh.vertexCount()) return 0;
   const size_t split = splitMirroredVertices(mesh, split_scope);
   const size_t n = mesh.vertexCount();
@@ -332,6 +393,7 @@ size_t computeTangentsPerSubmesh(Mesh& mesh, const std::vector<bool>& split_subm
 }
 
 size_t weldVertices(Mesh& mesh) {
+  if (!indexable(mesh)) return 0;
   const size_t n = mesh.vertexCount();
   if (n == 0) return 0;
   // Pack each vertex's attributes into one byte string; equal strings are equal vertices.
@@ -396,6 +458,7 @@ size_t weldVertices(Mesh& mesh) {
 }
 
 size_t removeDegenerateTriangles(Mesh& mesh) {
+  if (!indexable(mesh)) return 0;
   std::vector<uint32_t> kept;
   kept.reserve(mesh.indices.size());
   size_t removed = 0;
@@ -498,12 +561,21 @@ size_t countVertexRuns(std::span<const uint32_t> indices, size_t vertex_count, i
   // FIFO: v is cached while fewer than cache_size misses happened since it entered.
   std::vector<int64_t> entered(vertex_count, std::numeric_limits<int64_t>::min() / 2);
   int64_t misses = 0;
-  for (uint32_t v : indices)
+  for (uint32_t v : indices) {
+    if (v >= vertex_count) {  // out of range: a run, not a read past the table
+      ++misses;
+      continue;
+    }
     if (misses - entered[v] > cache_size) entered[v] = misses++;
+  }
   return static_cast<size_t>(misses);
 }
 
 size_t optimizeVertexReuse(Mesh& mesh, int cache_size, size_t* before_runs) {
+  if (!indexable(mesh)) {
+    if (before_runs) *before_runs = 0;
+    return 0;
+  }
   const size_t vertex_count = mesh.vertexCount();
   if (before_runs) *before_runs = countVertexRuns(mesh.indices, vertex_count, cache_size);
   std::vector<Submesh> ranges = mesh.submeshes;

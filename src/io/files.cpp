@@ -334,6 +334,7 @@ core::Result<core::ImageRGBA8> readImage(const std::string& path) {
 
 std::vector<uint8_t> encodePng(const core::ImageRGBA8& image) {
   std::vector<uint8_t> out;
+  if (!core::validateImage(image)) return out;  // empty: the callers' "encoding failed"
   stbi_write_png_to_func(
       [](void* context, void* data, int size) {
         auto* sink = static_cast<std::vector<uint8_t>*>(context);
@@ -543,7 +544,8 @@ TextureFile textureFile(const core::Texture& texture) {
 }
 
 core::Status writePng(const core::ImageRGBA8& image, const std::string& path) {
-  if (image.width <= 0 || image.height <= 0) return Error{path + ": empty image"};
+  if (auto valid = core::validateImage(image); !valid)
+    return Error{path + ": " + valid.error().message};
   std::vector<uint8_t> png = encodePng(image);
   if (png.empty()) return Error{path + ": PNG encoding failed"};
   return writeFileAtomic(path, png);

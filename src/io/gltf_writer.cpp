@@ -120,6 +120,12 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
                                std::span<const double> screen_coverage, const std::string& path,
                                const WriteOptions& options) {
   if (auto refused = refuseSourceFile(asset, path); !refused) return refused;
+  if (auto consistent = core::validateAssetReferences(asset); !consistent)
+    return Error{path + ": cannot write the asset: " + consistent.error().message};
+  for (size_t i = 0; i < meshes.size(); ++i)
+    if (meshes[i].indices.empty())  // a mesh with no primitive is not valid glTF
+      return Error{path + ": cannot write a mesh with no triangles" +
+                   (meshes.size() > 1 ? " (level " + std::to_string(i) + ")" : std::string())};
   for (size_t i = 0; i < meshes.size(); ++i)
     if (auto valid = core::validateMesh(meshes[i]); !valid)
       return Error{path + ": cannot write an invalid mesh" +
@@ -232,7 +238,7 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
 
   if (binary) {
     document["buffers"] = {{{"byteLength", builder.bin_.size()}}};
-    std::string text = document.dump();
+    std::string text = document.dump(-1, ' ', false, json::error_handler_t::replace);
     while (text.size() % 4) text.push_back(' ');
     std::vector<uint8_t> glb;
     auto put32 = [&](uint32_t v) {
@@ -264,7 +270,7 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   FileSet files(options.replace_existing);
   for (const auto& [file, bytes] : side_files)
     if (auto added = files.add(file, bytes); !added) return added;
-  if (auto added = files.add(path, document.dump(2)); !added) return added;
+  if (auto added = files.add(path, document.dump(2, ' ', false, json::error_handler_t::replace)); !added) return added;
   return files.commit();
 }
 

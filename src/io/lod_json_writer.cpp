@@ -1,6 +1,7 @@
 // lod.json: the LOD policy of Liang et al., "Automatic Mesh and Shader Level of Detail" (per level
 // the switch distance d_i of §3.1, the bound of eq. 3/4, absolute and transition errors of eq. 1/5,
 // predicted and measured cost), in the schema include/duolod/runtime.hpp reads.
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -14,11 +15,35 @@ ordered_json optionalNumber(const std::optional<double>& value) {
   return value ? ordered_json(*value) : ordered_json(nullptr);
 }
 
+// A parameter the runtime reads back: a location in [0, 65535] and 1-4 finite values (a NaN is
+// written as null, which the runtime refuses).
+core::Status checkParameters(const std::vector<LodJsonLevel::Parameter>& parameters,
+                             const std::string& where) {
+  for (const LodJsonLevel::Parameter& parameter : parameters) {
+    if (parameter.location < 0 || parameter.location > 65535)
+      return core::Error{where + ": parameter '" + parameter.name + "' at location " +
+                         std::to_string(parameter.location) + ": must be in [0, 65535]"};
+    if (parameter.value.empty() || parameter.value.size() > 4)
+      return core::Error{where + ": parameter '" + parameter.name + "' has " +
+                         std::to_string(parameter.value.size()) + " values, not 1-4"};
+    for (float value : parameter.value)
+      if (!std::isfinite(value))
+        return core::Error{where + ": parameter '" + parameter.name + "' has a value that is not "
+                           "a finite number"};
+  }
+  return core::okStatus();
+}
+
 core::Status checkDocument(const LodJsonDocument& document, const std::string& path) {
   if (document.levels.empty()) return core::Error{path + ": lod.json needs at least one level"};
+  if (document.autolod)
+    if (auto valid = checkParameters(document.autolod->parameters, path + ": autolod"); !valid)
+      return valid;
   for (size_t i = 0; i < document.levels.size(); ++i) {
     const LodJsonLevel& level = document.levels[i];
     std::string where = path + ": levels[" + std::to_string(i) + "]";
+    if (auto valid = checkParameters(level.shader_parameters, where + ".shader"); !valid)
+      return valid;
     if (!std::isfinite(level.switch_distance) || level.switch_distance < 0)
       return core::Error{where + ".switch_distance must be a non-negative number"};
     if (!(level.screen_coverage >= 0 && level.screen_coverage <= 1))
@@ -81,7 +106,8 @@ std::string lodJsonText(const LodJsonDocument& document) {
         {"source", document.asset_source},
         {"bounding_sphere",
          {{"center", {sphere.center.x, sphere.center.y, sphere.center.z}},
-          {"radius", sphere.radius}}}}},
+          {"radius", sphere.radius},
+          {"culling_radius", std::max<double>(document.culling_radius, sphere.radius)}}}}},
       {"display",
        {{"fov_y_deg", document.fov_y_deg},
         {"height_px", document.screen_height_px},
@@ -103,7 +129,8 @@ std::string lodJsonText(const LodJsonDocument& document) {
                        {"uniform", autolod->uniform},
                        {"location", autolod->location},
                        {"parameters", parametersJson(autolod->parameters)}};
-  return root.dump(2) + "\n";
+  // Names that are not UTF-8 (a Latin-1 file name) are written with U+FFFD, not thrown on.
+  return root.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 core::Status writeLodJson(const LodJsonDocument& document, const std::string& path) {

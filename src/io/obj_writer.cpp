@@ -63,6 +63,8 @@ class ObjWriter {
     if (auto status = core::validateMesh(mesh); !status) {
       return Error{path_ + ": cannot write an invalid mesh: " + status.error().message};
     }
+    if (auto status = core::validateAssetReferences(asset_); !status)
+      return Error{path_ + ": cannot write the asset: " + status.error().message};
     fs::path obj_path(path_);
     fs::path mtl_path = fs::path(obj_path).replace_extension(".mtl");
     if (auto status = refuseSource(obj_path); !status) return status;

@@ -1,6 +1,7 @@
 // The output folder of `duolod generate` (issue 5, item 7): the LOD chain as one glTF with
 // MSFT_lod + MSFT_screencoverage, each level's shader in SPIR-V, GLSL 450, GLSL ES 300 and HLSL,
 // Olano's single autoLOD shader over the levels' shaders, lod.json and report.html.
+#include <algorithm>
 #include <filesystem>
 
 #include "duolod/io.hpp"
@@ -59,19 +60,29 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
 
   io::LodJsonDocument document;
   document.asset_name = fs::path(asset.source_path).stem().string();
-  document.asset_source = asset.source_path;
+  // Relative to lod.json's folder, as every other path in it (the path as typed was relative to
+  // wherever duolod ran).
+  if (!asset.source_path.empty()) {
+    std::error_code ec;
+    const fs::path source = fs::weakly_canonical(fs::absolute(asset.source_path, ec), ec);
+    const fs::path relative =
+        source.lexically_relative(fs::weakly_canonical(fs::absolute(directory, ec), ec));
+    document.asset_source = relative.empty() ? source.generic_string() : relative.generic_string();
+  }
   document.bounds = core::computeBoundingSphere(asset.mesh);
+  for (const core::Mesh& level_mesh : meshes)
+    for (core::Vec3 p : level_mesh.positions)
+      document.culling_radius =
+          std::max(document.culling_radius, double(core::length(p - document.bounds.center)));
   document.fov_y_deg = options.levels.display.fov_y_deg;
   document.screen_aspect = options.levels.screen_aspect;
   document.screen_height_px = options.levels.display.height_px;
-  document.d_near = options.levels.bound.d_near;
-  document.d_far = options.levels.bound.d_far;
-  if (!result.all_levels.empty()) {
-    document.d_near = result.all_levels.front().distance;
-    document.d_far = result.all_levels.back().distance;
-  }
-  document.q = options.levels.bound.q;
-  document.e_max = options.levels.bound.e_max;
+  // The bound as the levels were made with it (with one level, the last level's distance is
+  // d_near, not d_far).
+  document.d_near = result.bound.d_near;
+  document.d_far = result.bound.d_far;
+  document.q = result.bound.q;
+  document.e_max = result.bound.e_max;
   document.time_tolerance = options.time_tolerance;
   document.merge_min_gain = options.merge_min_gain;
   document.views = options.views == render::ViewSet::kUpright ? "upright" : "sphere";

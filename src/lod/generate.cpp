@@ -829,6 +829,7 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
                            : "predicted (cost model)";
   if (auto made = makeLevels(); !made) return made.error();
   for (const LevelState& level : levels_) result.all_levels.push_back(level.level);
+  result.bound = options_.levels.bound;  // as makeLevels placed it
 
   auto mesh_start = Clock::now();
   result.timings.setup_seconds = std::chrono::duration<double>(mesh_start - start).count();

@@ -2,7 +2,7 @@
 // (Algorithm 3, eq. 5); shortest paths by Dijkstra, "A note
 // on two problems in connexion with graphs", Numerische Mathematik 1 (1959).
 #include <algorithm>
-#include <cassert>
+#include <cmath>
 #include <limits>
 #include <queue>
 
@@ -12,7 +12,7 @@ namespace duolod::lod {
 
 ShortestPath dijkstra(const WeightedGraph& graph, int source, int target) {
   const int node_count = static_cast<int>(graph.out_edges.size());
-  assert(source >= 0 && source < node_count && target >= 0 && target < node_count);
+  if (source < 0 || source >= node_count || target < 0 || target >= node_count) return {};
   constexpr double kUnreached = std::numeric_limits<double>::infinity();
   std::vector<double> distance(node_count, kUnreached);
   std::vector<int> previous(node_count, -1);
@@ -26,7 +26,9 @@ ShortestPath dijkstra(const WeightedGraph& graph, int source, int target) {
     if (reached > distance[node]) continue;  // a stale entry: the node was settled shorter
     if (node == target) break;
     for (const WeightedGraph::Edge& edge : graph.out_edges[node]) {
-      assert(edge.weight >= 0 && "Dijkstra needs non-negative weights");
+      // Dijkstra needs non-negative weights; an edge that is not a finite one is no edge.
+      if (!(edge.weight >= 0 && edge.weight < kUnreached) || edge.to < 0 || edge.to >= node_count)
+        continue;
       double through = reached + edge.weight;
       if (through < distance[edge.to]) {
         distance[edge.to] = through;
@@ -81,9 +83,9 @@ core::Result<SmoothPath> smoothestPath(std::span<const std::vector<EvaluatedPair
           return core::Error{"SmoothestPath: transition " + std::to_string(level) + "." +
                              std::to_string(a) + " -> " + std::to_string(level + 1) + "." +
                              std::to_string(b) + ": " + weight.error().message};
-        if (!(*weight >= 0))
-          return core::Error{"SmoothestPath: transition error must be a non-negative number, got " +
-                             std::to_string(*weight)};
+        if (!(*weight >= 0 && std::isfinite(*weight)))
+          return core::Error{"SmoothestPath: transition error must be a finite non-negative "
+                             "number, got " + std::to_string(*weight)};
         graph.addEdge(node_of[level][a], node_of[level + 1][b], *weight);
         result.edges.push_back({.level = static_cast<int>(level),
                                 .from = static_cast<int>(a),
@@ -93,7 +95,8 @@ core::Result<SmoothPath> smoothestPath(std::span<const std::vector<EvaluatedPair
 
   // Line 15.
   ShortestPath path = dijkstra(graph, source, sink);
-  assert(path.nodes.size() == level_pairs.size() + 2);  // every level is reachable
+  if (path.nodes.size() != level_pairs.size() + 2)  // every edge is finite: cannot happen
+    return core::Error{"SmoothestPath: no path through the levels"};
   for (size_t k = 1; k + 1 < path.nodes.size(); ++k)
     result.choice.push_back(pair_of_node[path.nodes[k]]);
   for (const TransitionEdge& edge : result.edges)

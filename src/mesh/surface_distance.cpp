@@ -307,6 +307,8 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
   if (counted > 0) {
     result.mean /= double(counted);
     result.mean_sq /= double(counted);
+  } else {  // no area samples (samples_per_mesh 0): not measured, not 0
+    result.mean = result.mean_sq = std::numeric_limits<double>::quiet_NaN();
   }
   return result;
 }

@@ -1,8 +1,8 @@
 // Image error of Liang et al., eq. (6): squared L2 of pixelwise RGB differences summed over the
 // image, averaged over views × lights; and the per-pixel bound of eq. (4) it is tested against.
 #include <algorithm>
-#include <cassert>
 #include <cmath>
+#include <limits>
 
 #include "duolod/metric.hpp"
 
@@ -33,12 +33,20 @@ double coverage(const T* rgba, size_t pixel_count, float scale) {
 template <class A, class B>
 ImageError batchError(const render::TiledImages<A>& image, const render::TiledImages<B>& reference,
                       float scale_a, float scale_b) {
-  assert(image.width == reference.width && image.height == reference.height &&
-         image.count == reference.count);
   ImageError result;
+  size_t pixels = size_t(std::max(image.width, 0)) * size_t(std::max(image.height, 0));
+  auto holds = [&](const auto& batch) {
+    return batch.count >= 0 && batch.pixels.size() == size_t(batch.count) * pixels * 4;
+  };
+  // Batches of different shapes (or pixels that do not fill their shape) cannot be compared: an
+  // infinite error, which no bound accepts, instead of reading past a buffer.
+  if (image.width != reference.width || image.height != reference.height ||
+      image.count != reference.count || !holds(image) || !holds(reference)) {
+    result.epsilon = result.per_pixel = std::numeric_limits<double>::infinity();
+    return result;
+  }
   result.samples = image.count;
   if (image.count == 0) return result;
-  size_t pixels = size_t(image.width) * image.height;
   double error_sum = 0, coverage_sum = 0;
   for (int i = 0; i < image.count; ++i) {
     error_sum += squaredError(image.tile(i), reference.tile(i), pixels, scale_a, scale_b);
@@ -71,6 +79,8 @@ double tileCoverage(const float* rgba, size_t pixel_count) { return coverage(rgb
 double perPixelBound(const BoundConfig& config, double distance) {
   double span = std::max(1e-9, double(config.d_far) - config.d_near);
   double t = std::clamp((distance - config.d_near) / span, 0.0, 1.0);
+  // At d_near the bound is 0 for every Q, Q = 0 too (pow(0, 0) is 1): the original's distance.
+  if (!(t > 0)) return 0;
   return std::pow(t, double(config.q)) * config.e_max;  // eq. (4)
 }
 

@@ -105,14 +105,20 @@ ViewSet heldOutViews(ViewSet training) {
   }
 }
 
-int footprintPixels(const core::Sphere& bounds, float distance, const Display& display) {
+double projectedDiameterPixels(const core::Sphere& bounds, float distance, const Display& display) {
   float d = clampedDistance(bounds, distance);
   // The sphere's silhouette subtends asin(r/d); its projected half-size on the image plane is
   // tan(asin(r/d)) against the display's tan(fov/2) for half the screen height.
   float half_angle = std::asin(std::min(bounds.radius / d, 0.9999f));
   float screen_half = std::tan(display.fov_y_deg * kPi / 360.0f);
-  double pixels = display.height_px * std::tan(half_angle) / screen_half;
-  return std::clamp(static_cast<int>(std::ceil(pixels)), 1, 16384);
+  return display.height_px * std::tan(half_angle) / screen_half;
+}
+
+int footprintPixels(const core::Sphere& bounds, float distance, const Display& display) {
+  const double pixels = projectedDiameterPixels(bounds, distance, display);
+  // (NaN, a distance or display that is not a number, is 1, not an undefined conversion.)
+  if (!(pixels >= 1)) return 1;
+  return pixels >= 16384 ? 16384 : static_cast<int>(std::ceil(pixels));
 }
 
 std::vector<Sample> domainSamples(const core::Sphere& bounds, float distance,

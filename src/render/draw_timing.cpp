@@ -16,6 +16,7 @@ core::Result<std::vector<DrawTime>> Renderer::measureDrawTimes(AssetId asset_id,
                                                                std::span<const ProgramId> programs,
                                                                std::span<const Sample> samples,
                                                                const TimingOptions& options) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (programs.empty()) return core::Error{"measureDrawTimes: no programs to time"};
   if (options.repeats < 1 || options.max_passes_per_repeat < 1 || options.min_repeat_seconds < 0)

@@ -68,9 +68,20 @@ GlContext& GlContext::operator=(GlContext&& other) noexcept {
   return *this;
 }
 
+core::Status GlContext::makeCurrent() const {
+  if (context_ == EGL_NO_CONTEXT) return Error{"render: no GL context"};
+  if (eglGetCurrentContext() == context_) return core::okStatus();
+  if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
+    return Error{"render: cannot make the renderer's GL context current on this thread (" +
+                 eglErrorName() + "; a Renderer is used by one thread at a time)"};
+  return core::okStatus();
+}
+
 GlContext::~GlContext() {
   if (display_ != EGL_NO_DISPLAY) {
-    eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    // Released only where it is current: another Renderer's context stays as it is.
+    if (eglGetCurrentContext() == context_)
+      eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     if (context_ != EGL_NO_CONTEXT) eglDestroyContext(display_, context_);
     // No eglTerminate: Mesa would unload its driver, and leak checkers could no longer name the
     // driver's process-lifetime allocations. The display is reused by the next context.

@@ -20,6 +20,10 @@ class GlContext {
   ~GlContext();
 
   std::string description() const;
+  // Makes this context current on the calling thread unless it is already (one thread-local
+  // query: cheap). Another Renderer, or the caller's own GL context, may have been made current
+  // since. Fails when the context is current on another thread.
+  core::Status makeCurrent() const;
 
  private:
   EGLDisplay display_ = EGL_NO_DISPLAY;

@@ -92,6 +92,7 @@ Renderer::RegionSoup soupOfTiles(const Renderer::RegionSoup& soup, int first, in
 }  // namespace
 
 core::Result<Renderer::ProgramId> Renderer::compileRegionProgram(const GlslSource& source) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   if (!epoxy_has_gl_extension("GL_ARB_shader_viewport_layer_array"))
     return Error{"region rendering needs GL_ARB_shader_viewport_layer_array (gl_Layer written by "
                  "the vertex stage), which this OpenGL context lacks"};
@@ -119,6 +120,7 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
                                                   std::span<const Sample> samples,
                                                   int lights_per_view, int view_resolution,
                                                   int tile_size, RenderStats* stats) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   auto start = std::chrono::steady_clock::now();
   if (asset_id < 0 || asset_id >= static_cast<int>(s.assets.size()) || !s.assets[asset_id])

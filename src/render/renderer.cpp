@@ -237,10 +237,14 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
   return renderer;
 }
 
-std::string Renderer::deviceDescription() const { return state_->context.description(); }
+std::string Renderer::deviceDescription() const {
+  if (auto bound = state_->context.makeCurrent(); !bound) return "? (" + bound.error().message + ")";
+  return state_->context.description();
+}
 bool Renderer::canCountWork() const { return state_->work_queries.available; }
 
 core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const UniformValue> values) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound;
   State& s = *state_;
   if (program < 0 || program >= static_cast<int>(s.programs.size()) || !s.programs[program])
     return Error{"setProgramUniforms: unknown program id " + std::to_string(program)};
@@ -268,6 +272,7 @@ core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const Uni
 }
 
 core::Status Renderer::setParameterBlock(int binding, std::span<const uint8_t> bytes) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound;
   State& s = *state_;
   if (bytes.empty()) {
     s.parameter_binding = -1;
@@ -298,6 +303,11 @@ core::Status uploadGeometry(const core::Mesh& source, const std::vector<core::Ma
                             GLint ubo_alignment, GpuAsset& gpu) {
   if (auto valid = core::validateMesh(source); !valid) return valid;
   if (source.triangleCount() == 0) return Error{"no triangles to render"};
+  for (size_t s = 0; s < source.submeshes.size(); ++s)  // (uploadMesh's; uploadAsset checked)
+    if (source.submeshes[s].material >= std::max<size_t>(materials.size(), 1))
+      return Error{"submesh " + std::to_string(s) + " uses material " +
+                   std::to_string(source.submeshes[s].material) + " of " +
+                   std::to_string(materials.size())};
   gpu.bounds = core::computeBoundingSphere(source);
   core::Mesh mesh = source;
   // llvmpipe shades a vertex again whenever its index is not among the recently shaded ones: the
@@ -344,6 +354,9 @@ core::Status uploadGeometry(const core::Mesh& source, const std::vector<core::Ma
 }  // namespace
 
 core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
+  if (auto consistent = core::validateAssetReferences(asset); !consistent)
+    return Error{asset.source_path + ": " + consistent.error().message};
   GpuAsset gpu;
   if (auto uploaded = uploadGeometry(asset.mesh, asset.materials, state_->ubo_alignment, gpu);
       !uploaded) {
@@ -387,6 +400,7 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
 
 core::Result<Renderer::AssetId> Renderer::uploadMesh(AssetId materials_from,
                                                      const core::Mesh& mesh) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   if (materials_from < 0 || materials_from >= static_cast<int>(state_->assets.size()) ||
       !state_->assets[materials_from])
     return Error{"uploadMesh: unknown asset id " + std::to_string(materials_from)};
@@ -407,6 +421,7 @@ core::Result<Renderer::AssetId> Renderer::uploadMesh(AssetId materials_from,
 }
 
 void Renderer::releaseAsset(AssetId asset) {
+  if (!state_->context.makeCurrent()) return;
   if (asset >= 0 && asset < static_cast<int>(state_->assets.size()) && state_->assets[asset]) {
     State::release(*state_->assets[asset]);
     state_->assets[asset].reset();
@@ -414,6 +429,7 @@ void Renderer::releaseAsset(AssetId asset) {
 }
 
 core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& source) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   auto compile = [](GLenum stage, const std::string& text,
                     const std::string& name) -> core::Result<GLuint> {
     GLuint shader = glCreateShader(stage);
@@ -443,6 +459,7 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& sou
 }
 
 core::Result<Renderer::ProgramId> Renderer::compileProgram(const SpirvBinary& binary) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   auto specialize = [](GLenum stage, const std::vector<uint32_t>& words,
                        const char* name) -> core::Result<GLuint> {
     if (words.size() < 5 || words[0] != 0x07230203u)
@@ -474,6 +491,7 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const SpirvBinary& bi
 }
 
 void Renderer::releaseProgram(ProgramId program) {
+  if (!state_->context.makeCurrent()) return;
   if (program >= 0 && program < static_cast<int>(state_->programs.size()) &&
       state_->programs[program]) {
     glDeleteProgram(state_->programs[program]);
@@ -574,6 +592,7 @@ int drawCounted(Renderer::State& s, ChunkDrawer& drawer, bool count_work, int fi
 core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_id,
                                            std::span<const Sample> samples,
                                            const RenderOptions& options, RenderStats* stats) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
   if (options.supersample != 1)
@@ -631,6 +650,7 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
                                                     std::span<const Sample> samples,
                                                     const RenderOptions& options,
                                                     RenderStats* stats) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
   auto start = std::chrono::steady_clock::now();

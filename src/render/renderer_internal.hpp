@@ -149,7 +149,9 @@ struct Renderer::State {
   int parameter_binding = -1;
 
   ~State() {
-    if (context_alive) {
+    // The objects are this context's: with another one current (a second Renderer), these
+    // names would delete its objects. Not current here (another thread): they go with it.
+    if (context_alive && context.makeCurrent()) {
       for (auto& asset : assets)
         if (asset) release(*asset);
       for (GLuint p : programs)

@@ -15,6 +15,7 @@ using namespace internal;
 core::Result<SceneFrame> Renderer::renderScene(std::span<const InstanceBatch> batches,
                                                const SceneCamera& camera,
                                                const SceneOptions& options) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (camera.width < 1 || camera.height < 1 || camera.width > s.max_size ||
       camera.height > s.max_size)

@@ -58,6 +58,8 @@ const char* targetName(Target target) {
 
 core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Target target,
                                        const std::string& what) {
+  // SPIRV-Cross trusts its input (a corrupt module crashed its parser): validated first.
+  if (auto valid = validateSpirv(words, what); !valid) return valid.error();
   // SPIRV-Cross reports unsupported constructs by throwing CompilerError.
   try {
     if (target == Target::kHlsl50) {

@@ -39,11 +39,13 @@ class FileIncluder : public glslang::TShader::Includer {
   explicit FileIncluder(std::vector<std::string> dirs) : dirs_(std::move(dirs)) {}
 
   IncludeResult* includeLocal(const char* header, const char* includer, size_t depth) override {
+    if (depth > kMaxIncludeDepth) return tooDeep(header);
     std::filesystem::path base = std::filesystem::path(includer ? includer : "").parent_path();
     if (auto* found = tryOpen(base / header)) return found;
     return includeSystem(header, includer, depth);
   }
-  IncludeResult* includeSystem(const char* header, const char*, size_t) override {
+  IncludeResult* includeSystem(const char* header, const char*, size_t depth) override {
+    if (depth > kMaxIncludeDepth) return tooDeep(header);
     for (const std::string& dir : dirs_)
       if (auto* found = tryOpen(std::filesystem::path(dir) / header)) return found;
     return nullptr;
@@ -55,6 +57,16 @@ class FileIncluder : public glslang::TShader::Includer {
   }
 
  private:
+  // A file that includes itself, directly or around a cycle, would be expanded until memory ran
+  // out (glslang does not stop it): nesting deeper than this is an error.
+  static constexpr size_t kMaxIncludeDepth = 64;
+  // glslang's convention: an empty header name, and the message as the contents.
+  IncludeResult* tooDeep(const char* header) {
+    auto* message = new std::string(std::string("#include \"") + header + "\" nested more than " +
+                                     std::to_string(kMaxIncludeDepth) +
+                                     " deep: does it include itself?");
+    return new IncludeResult("", message->data(), message->size(), message);
+  }
   IncludeResult* tryOpen(const std::filesystem::path& path) {
     std::ifstream in(path);
     if (!in) return nullptr;

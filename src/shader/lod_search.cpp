@@ -85,6 +85,14 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
     if (a.sites.empty() != b.sites.empty()) return a.sites.empty();
     return a.predicted_cost > b.predicted_cost;
   });
+  // A level must be cheaper than the original: on Spot at 64 px a variant at 1.5x the original's
+  // cost was on the front for its error below the aliased original's.
+  const double original_cost = variants.front().predicted_cost;
+  const auto costlier = std::remove_if(variants.begin() + 1, variants.end(), [&](const auto& v) {
+    return !(v.predicted_cost < original_cost);
+  });
+  report.dropped_costlier = static_cast<int>(variants.end() - costlier);
+  variants.erase(costlier, variants.end());
   auto rerender_start = std::chrono::steady_clock::now();
   if (auto rendered = renderFront(search_cache, variants); !rendered) return rendered.error();
   report.rerender_seconds = secondsSince(rerender_start);
@@ -230,13 +238,15 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
         {"compile_failures", report.compile.compile_failures},
         {"cost_profiles", report.cost_profiles},
         {"average_renders", report.average_renders},
-        {"compiled_ahead", report.compiled_ahead}}},
+        {"compiled_ahead", report.compiled_ahead},
+        {"dropped_costlier_than_original", report.dropped_costlier}}},
       {"seconds",
        {{"search", report.search_seconds},
         {"rerender", report.rerender_seconds},
         {"timing", report.timing_seconds},
         {"total", report.total_seconds}}}};
-  if (auto ok = io::writeFileAtomic((out / "summary.json").string(), summary.dump(2) + "\n"); !ok)
+  if (auto ok = io::writeFileAtomic((out / "summary.json").string(), summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+      !ok)
     return ok;
   return folder.commit();
 }

@@ -50,8 +50,10 @@ struct ShaderLodVariant {
 
 struct ShaderLodReport {
   // The levels: the original (no site) first, then the search's variants by decreasing
-  // predicted cost.
+  // predicted cost, each predicted cheaper than the original (a front variant that costs as much
+  // or more, kept by the search for its lower error, is no level of detail: dropped, counted).
   std::vector<ShaderLodVariant> variants;
+  int dropped_costlier = 0;
   // The LOD shader over `variants` in that order, thresholds 0, 1, 2, ...: autoLOD = k selects
   // variants[k].
   AutoLodShader autolod;

@@ -14,8 +14,9 @@
 //     functions are copied whole;
 //   - types and constants are re-created (de-duplicated) in the vertex module.
 // Anything else (phis, locals written more than once, builtins, textures) makes the site
-// unavailable. The copy runs at the end of the vertex entry point and stores a new Output at
-// RuleContext::first_varying_location (or the next free location); the fragment stage reads the
+// unavailable. The copy runs at the end of the vertex entry point and stores a new Output at the
+// lowest varying location both stages leave free (from RuleContext::first_varying_location, 0:
+// GL 4.5 guarantees locations 0-14 only); the fragment stage reads the
 // matching Input instead of computing the value, and what becomes dead is removed.
 #include <map>
 #include <set>
@@ -547,7 +548,7 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
 
   ShaderProgram result = program;
   uint32_t location =
-      freeInterfaceLocation({&program.vertex, &program.fragment}, context.first_varying_location);
+      freeVaryingLocation(program.vertex, program.fragment, context.first_varying_location);
   std::string varying_name = "vPerVertex_" + name + "_" + std::to_string(location);
 
   // Vertex stage: the copied computation, stored into a new output at the end of main.

@@ -267,12 +267,13 @@ uint32_t locationsSpanned(const ir::DefUse& uses, Id type) {
 
 }  // namespace
 
-uint32_t freeInterfaceLocation(const std::vector<const Module*>& modules, uint32_t first) {
+uint32_t freeVaryingLocation(const Module& vertex, const Module& fragment, uint32_t first) {
   std::set<uint32_t> taken;
-  for (const Module* module : modules) {
+  for (const auto& [module, storage] : {std::pair{&vertex, spv::StorageClassOutput},
+                                        std::pair{&fragment, spv::StorageClassInput}}) {
     ir::DefUse uses(*module);
     for (const ir::InterfaceVariable& variable : ir::interfaceVariables(*module, uses)) {
-      if (!variable.location) continue;
+      if (variable.storage != storage || !variable.location) continue;
       uint32_t span = locationsSpanned(uses, variable.value_type);
       for (uint32_t i = 0; i < span; ++i) taken.insert(*variable.location + i);
     }

@@ -38,9 +38,10 @@ core::Result<ir::Id> replaceValueByLoad(ir::Module& module, ir::Id value, ir::Id
 // arguments are unused, and functions nobody calls. Returns the number of instructions removed.
 size_t removeDeadCode(ir::Module& module);
 
-// The lowest location >= `first` that no Input/Output variable of `modules` occupies (a location
-// taken by an array or matrix counts all the locations it spans).
-uint32_t freeInterfaceLocation(const std::vector<const ir::Module*>& modules, uint32_t first);
+// The lowest varying location at or above `first` that neither the vertex stage's outputs nor the
+// fragment stage's inputs use (vertex attributes and fragment outputs are other namespaces; a
+// location taken by an array or matrix counts all the locations it spans).
+uint32_t freeVaryingLocation(const ir::Module& vertex, const ir::Module& fragment, uint32_t first);
 // The lowest location >= `first` that no loose uniform of `modules` uses and that is not in
 // `taken`.
 uint32_t freeUniformLocation(const std::vector<const ir::Module*>& modules, uint32_t first,
