@@ -406,8 +406,10 @@ TEST(MeshOperations, InconsistentMeshesAreLeftAsTheyAre) {
     Mesh mesh = flatQuad();
     mesh.normals.assign(4, Vec3{0, 0, 1});
     mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    if (broken == 0) mesh.indices[4] = 4000000;
-    else mesh.submeshes = {{0, 600, 0}};
+    if (broken == 0)
+      mesh.indices[4] = 4000000;
+    else
+      mesh.submeshes = {{0, 600, 0}};
     const Mesh before = mesh;
     core::computeNormals(mesh);
     EXPECT_EQ(core::computeTangents(mesh), 0u);

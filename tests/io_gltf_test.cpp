@@ -938,9 +938,7 @@ TEST(GltfWriter, InconsistentAssetsAreRefused) {
   };
   for (const Case& c : std::vector<Case>{
            {"short pixels",
-            [](core::Asset& a) {
-              a.textures[0].image.width = a.textures[0].image.height = 2048;
-            },
+            [](core::Asset& a) { a.textures[0].image.width = a.textures[0].image.height = 2048; },
             "holds 16 bytes"},
            {"texture out of range", [](core::Asset& a) { a.materials[0].base_color_texture = 17; },
             "uses texture 17 of 1"},
@@ -952,8 +950,8 @@ TEST(GltfWriter, InconsistentAssetsAreRefused) {
     c.break_it(asset);
     for (const char* name : {"out.gltf", "out.glb", "out.obj"}) {
       const std::string path = (dir / name).string();
-      auto written = test::contains(name, ".obj") ? io::writeObj(asset, path)
-                                                  : io::writeGltf(asset, path);
+      auto written =
+          test::contains(name, ".obj") ? io::writeObj(asset, path) : io::writeGltf(asset, path);
       ASSERT_FALSE(written) << c.what << " " << name;
       EXPECT_TRUE(test::contains(written.error().message, c.expected))
           << c.what << ": " << written.error().message;

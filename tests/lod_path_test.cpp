@@ -107,7 +107,9 @@ TEST(LodSmoothestPath, SingleLevelAndErrors) {
   // An infinite or NaN transition error is refused too (infinity crashed the path's read-back).
   for (double bad : {std::numeric_limits<double>::infinity(), std::nan("")}) {
     lod::TransitionEvaluator odd = [bad](int, const EvaluatedPair&,
-                                         const EvaluatedPair&) -> core::Result<double> { return bad; };
+                                         const EvaluatedPair&) -> core::Result<double> {
+      return bad;
+    };
     auto refused = lod::smoothestPath(two, odd);
     ASSERT_FALSE(refused.ok()) << bad;
     EXPECT_NE(refused.error().message.find("finite"), std::string::npos) << refused.error().message;

@@ -356,10 +356,10 @@ TEST(Metric, BoundFollowsEquationFour) {
 
 // Batches that do not match are never within a bound, and nothing is read past a buffer.
 TEST(Metric, MismatchedBatchesGiveAnInfiniteError) {
-  render::ImageBatch8 image{.width = 4, .height = 4, .count = 2,
-                            .pixels = std::vector<uint8_t>(4 * 4 * 4 * 2, 255)};
-  render::ImageBatchF reference{.width = 4, .height = 4, .count = 2,
-                                .pixels = std::vector<float>(4 * 4 * 4 * 2, 1.0f)};
+  render::ImageBatch8 image{
+      .width = 4, .height = 4, .count = 2, .pixels = std::vector<uint8_t>(4 * 4 * 4 * 2, 255)};
+  render::ImageBatchF reference{
+      .width = 4, .height = 4, .count = 2, .pixels = std::vector<float>(4 * 4 * 4 * 2, 1.0f)};
   EXPECT_EQ(metric::imageError(image, reference).epsilon, 0.0);
   render::ImageBatchF fewer = reference;
   fewer.count = 1;

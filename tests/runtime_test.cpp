@@ -159,8 +159,8 @@ TEST(RuntimePolicy, MeshNamesAFileAndANode) {
 // localedef (Debian's `locales`, which scripts/setup.sh installs) into a scratch folder.
 TEST(RuntimePolicy, NumbersDoNotDependOnTheLocale) {
   const std::filesystem::path locales = test::scratchDir("runtime_locale");
-  const std::string make = "localedef -i de_DE -f UTF-8 " + (locales / "de_DE.UTF-8").string() +
-                           " >/dev/null 2>&1";
+  const std::string make =
+      "localedef -i de_DE -f UTF-8 " + (locales / "de_DE.UTF-8").string() + " >/dev/null 2>&1";
   if (std::system(make.c_str()) != 0)
     GTEST_SKIP() << "SKIPPED: cannot make the de_DE.UTF-8 locale with localedef (Debian package "
                     "`locales`, installed by scripts/setup.sh)";
@@ -168,7 +168,10 @@ TEST(RuntimePolicy, NumbersDoNotDependOnTheLocale) {
   const std::string kept_path = old_path ? old_path : "";
   setenv("LOCPATH", locales.c_str(), 1);
   const bool switched = std::setlocale(LC_NUMERIC, "de_DE.UTF-8") != nullptr;
-  if (old_path) setenv("LOCPATH", kept_path.c_str(), 1); else unsetenv("LOCPATH");
+  if (old_path)
+    setenv("LOCPATH", kept_path.c_str(), 1);
+  else
+    unsetenv("LOCPATH");
   if (!switched) GTEST_SKIP() << "SKIPPED: setlocale(LC_NUMERIC, \"de_DE.UTF-8\") failed";
   // The locale is in force: the C library reads a comma there.
   const double c_library = std::strtod("2.5", nullptr);
@@ -277,8 +280,8 @@ TEST(RuntimeSelect, CrossFadeIsContinuousWithAWiderHysteresis) {
       previous = seen;
     }
     // A step of 0.001 moves a weight by at most 0.001 / (2 · fade_band · 10) (0.01 at 0.05).
-    EXPECT_LT(largest_step, 0.03f) << "hysteresis " << options.hysteresis << ", fade band "
-                                   << options.fade_band;
+    EXPECT_LT(largest_step, 0.03f)
+        << "hysteresis " << options.hysteresis << ", fade band " << options.fade_band;
   }
 }
 

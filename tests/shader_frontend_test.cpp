@@ -246,8 +246,9 @@ TEST(ShaderFrontend, RecursiveIncludesAreAnError) {
   writeFile(dir / "a.glsl", "#include \"b.glsl\"\n");
   writeFile(dir / "b.glsl", "#include \"a.glsl\"\n");
   for (const char* first : {"self.glsl", "a.glsl"}) {
-    const std::string source = std::string("#version 450 core\n#include \"") + first +
-                               "\"\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n";
+    const std::string source =
+        std::string("#version 450 core\n#include \"") + first +
+        "\"\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n";
     const std::string message =
         expectError(source.c_str(), Stage::kFragment, (dir / "main.frag").string(), {});
     EXPECT_TRUE(test::contains(message, "nested more than")) << message;

@@ -1204,9 +1204,10 @@ int runShader(ShaderFlags& flags) {
                 variant.search.rendered_error.value_or(-1));
   }
   if (report->dropped_costlier > 0)
-    std::printf("(%d variant%s of the front predicted to cost as much as the original or more: not "
-                "levels, left out)\n",
-                report->dropped_costlier, report->dropped_costlier == 1 ? "" : "s");
+    std::printf(
+        "(%d variant%s of the front predicted to cost as much as the original or more: not "
+        "levels, left out)\n",
+        report->dropped_costlier, report->dropped_costlier == 1 ? "" : "s");
   const shader::SearchCounters& counters = report->search;
   std::printf("variants: %d generated, %d predicted (%d compiled ahead), %d rendered, %d compiled; "
               "search %.1f s, total %.1f s\n",

@@ -384,7 +384,8 @@ inline bool policyFromJson(const JsonValue& root, Policy& policy, std::string* e
             return fail(where + ".shader.parameters: each needs a location and 1-4 values");
           const double at = location->number();
           if (!(at >= 0 && at < 65536 && at == std::floor(at)))
-            return fail(where + ".shader.parameters: a location must be a whole number in [0, 65535]");
+            return fail(where +
+                        ".shader.parameters: a location must be a whole number in [0, 65535]");
           parameter.location = static_cast<int>(at);
           for (const JsonValue& component : value->items()) {
             // A value written as null (a NaN) or out of float's range is not silently 0 or inf.
@@ -473,7 +474,9 @@ class LevelSelector {
   // square of the distance, so 1/sqrt(coverage) plays the role of distance and the bands mean the
   // same in both modes. A NaN coverage keeps the current level.
   Selection selectByScreenCoverage(double coverage) {
-    auto farness = [](double c) { return std::isnan(c) ? NAN : c > 0 ? 1.0 / std::sqrt(c) : INFINITY; };
+    auto farness = [](double c) {
+      return std::isnan(c) ? NAN : c > 0 ? 1.0 / std::sqrt(c) : INFINITY;
+    };
     return select(farness(coverage),
                   [&](size_t k) { return farness(policy_.levels[k].screen_coverage); });
   }

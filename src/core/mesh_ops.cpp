@@ -137,9 +137,9 @@ Status validateAssetReferences(const Asset& asset) {
                    std::to_string(materials)};
   for (size_t m = 0; m < materials; ++m) {
     const Material& material = asset.materials[m];
-    for (int texture : {material.base_color_texture, material.metallic_roughness_texture,
-                        material.normal_texture, material.occlusion_texture,
-                        material.emissive_texture})
+    for (int texture :
+         {material.base_color_texture, material.metallic_roughness_texture, material.normal_texture,
+          material.occlusion_texture, material.emissive_texture})
       if (texture < -1 || (texture >= 0 && size_t(texture) >= textures))
         return Error{"material " + std::to_string(m) + " (" + material.name + ") uses texture " +
                      std::to_string(texture) + " of " + std::to_string(textures)};
@@ -149,8 +149,8 @@ Status validateAssetReferences(const Asset& asset) {
     if (texture.image.pixels.empty())
       continue;  // no pixels: undecoded (its `encoded` bytes) or a missing file's placeholder
     if (auto valid = validateImage(texture.image); !valid)
-      return Error{"texture " + std::to_string(t) + " (" + texture.name + "): " +
-                   valid.error().message};
+      return Error{"texture " + std::to_string(t) + " (" + texture.name +
+                   "): " + valid.error().message};
   }
   return okStatus();
 }

@@ -270,7 +270,9 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   FileSet files(options.replace_existing);
   for (const auto& [file, bytes] : side_files)
     if (auto added = files.add(file, bytes); !added) return added;
-  if (auto added = files.add(path, document.dump(2, ' ', false, json::error_handler_t::replace)); !added) return added;
+  if (auto added = files.add(path, document.dump(2, ' ', false, json::error_handler_t::replace));
+      !added)
+    return added;
   return files.commit();
 }
 

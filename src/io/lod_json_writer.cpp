@@ -28,7 +28,8 @@ core::Status checkParameters(const std::vector<LodJsonLevel::Parameter>& paramet
                          std::to_string(parameter.value.size()) + " values, not 1-4"};
     for (float value : parameter.value)
       if (!std::isfinite(value))
-        return core::Error{where + ": parameter '" + parameter.name + "' has a value that is not "
+        return core::Error{where + ": parameter '" + parameter.name +
+                           "' has a value that is not "
                            "a finite number"};
   }
   return core::okStatus();

@@ -84,8 +84,10 @@ core::Result<SmoothPath> smoothestPath(std::span<const std::vector<EvaluatedPair
                              std::to_string(a) + " -> " + std::to_string(level + 1) + "." +
                              std::to_string(b) + ": " + weight.error().message};
         if (!(*weight >= 0 && std::isfinite(*weight)))
-          return core::Error{"SmoothestPath: transition error must be a finite non-negative "
-                             "number, got " + std::to_string(*weight)};
+          return core::Error{
+              "SmoothestPath: transition error must be a finite non-negative "
+              "number, got " +
+              std::to_string(*weight)};
         graph.addEdge(node_of[level][a], node_of[level + 1][b], *weight);
         result.edges.push_back({.level = static_cast<int>(level),
                                 .from = static_cast<int>(a),

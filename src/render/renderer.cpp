@@ -238,7 +238,8 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
 }
 
 std::string Renderer::deviceDescription() const {
-  if (auto bound = state_->context.makeCurrent(); !bound) return "? (" + bound.error().message + ")";
+  if (auto bound = state_->context.makeCurrent(); !bound)
+    return "? (" + bound.error().message + ")";
   return state_->context.description();
 }
 bool Renderer::canCountWork() const { return state_->work_queries.available; }

@@ -62,9 +62,9 @@ class FileIncluder : public glslang::TShader::Includer {
   static constexpr size_t kMaxIncludeDepth = 64;
   // glslang's convention: an empty header name, and the message as the contents.
   IncludeResult* tooDeep(const char* header) {
-    auto* message = new std::string(std::string("#include \"") + header + "\" nested more than " +
-                                     std::to_string(kMaxIncludeDepth) +
-                                     " deep: does it include itself?");
+    auto* message =
+        new std::string(std::string("#include \"") + header + "\" nested more than " +
+                        std::to_string(kMaxIncludeDepth) + " deep: does it include itself?");
     return new IncludeResult("", message->data(), message->size(), message);
   }
   IncludeResult* tryOpen(const std::filesystem::path& path) {
