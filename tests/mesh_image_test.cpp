@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
@@ -118,6 +119,31 @@ TEST_F(ImageSimplifyTest, RefusesWithoutADistance) {
   auto result = mesh::simplifyImage(*renderer_, asset_, shader_, options);
   ASSERT_FALSE(result);
   EXPECT_NE(result.error().message.find("distance"), std::string::npos);
+}
+
+// Options out of their range are refused by name (a tile of 0 pixels or a batch of 0 candidates
+// ran a different algorithm without a word; a display 0 pixels high simplified for 1 pixel).
+TEST_F(ImageSimplifyTest, OptionsOutOfRangeAreNamed) {
+  struct Case {
+    const char* option;
+    std::function<void(mesh::ImageSimplifyOptions&)> set;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"tile_size", [](auto& o) { o.tile_size = 0; }},
+           {"refine_batch", [](auto& o) { o.refine_batch = 0; }},
+           {"supersample", [](auto& o) { o.supersample = 0; }},
+           {"max_edge_pixels", [](auto& o) { o.max_edge_pixels = -1; }},
+           {"display.height_px", [](auto& o) { o.display.height_px = 0; }},
+           {"display.fov_y_deg", [](auto& o) { o.display.fov_y_deg = 0; }},
+       }) {
+    mesh::ImageSimplifyOptions options;
+    options.distance = distanceForPixels(1.0f, 20);
+    options.target_triangles = 10;
+    c.set(options);
+    auto result = mesh::simplifyImage(*renderer_, asset_, shader_, options);
+    ASSERT_FALSE(result) << c.option;
+    EXPECT_NE(result.error().message.find(c.option), std::string::npos) << result.error().message;
+  }
 }
 
 }  // namespace

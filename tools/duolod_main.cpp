@@ -1032,7 +1032,9 @@ int runGenerate(GenerateFlags& flags) {
                 cost * 1e3, " ms", level.original_fallback ? "(original: nothing within the bound)"
                                                           : level.shader_summary.c_str());
   }
-  std::printf("\n  held-out views and lights (icosahedron, light cross turned 45 deg)\n");
+  std::printf("\n  held-out views and lights (%s, light cross turned 45 deg)\n",
+              options.views == render::ViewSet::kUpright ? "12 other views of the upright band"
+                                                         : "icosahedron");
   std::printf("  level  error      bound      within\n");
   int violations = 0;
   for (const lod::HeldOutCheck& check : result->held_out) {
@@ -1061,8 +1063,8 @@ int runGenerate(GenerateFlags& flags) {
     std::printf("          (the shader searches took %.1f s, alongside the mesh stage until it "
                 "ended; the shader stage is what they added after it)\n",
                 t.shader_search_seconds);
-  std::printf("wrote     %s/{lod.gltf, lod.json, report.html, level*.*, autolod.*}\n",
-              flags.out.c_str());
+  std::printf("wrote     %s{lod.gltf, lod.json, report.html, level*.*, autolod.*}\n",
+              (fs::path(flags.out) / "").string().c_str());  // one '/', with or without "out/"
   if (violations > 0) {
     std::fprintf(stderr, "duolod: warning: %d level(s) exceed their bound on held-out views\n",
                  violations);

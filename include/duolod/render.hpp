@@ -142,7 +142,9 @@ struct SpirvBinary {
   std::vector<uint32_t> vertex, fragment;
 };
 
-// Loads NAME.vert and NAME.frag from duolod's shaders/ folder (or a path prefix).
+// Loads NAME.vert and NAME.frag: a bare NAME from duolod's shaders/ folder (the environment
+// variable DUOLOD_SHADER_DIR replaces it), else from the working folder; a path prefix
+// ("dir/name", "./name") as it is.
 core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix);
 std::string shaderDirectory();
 

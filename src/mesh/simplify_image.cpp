@@ -18,7 +18,23 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
                                            ImageSimplifyStats* stats) {
   using core::Error;
   auto start = std::chrono::steady_clock::now();
-  if (!(options.distance > 0)) return Error{"image-driven simplification needs a distance > 0"};
+  if (!(options.distance > 0 && std::isfinite(options.distance)))
+    return Error{"image-driven simplification needs a finite distance > 0"};
+  // Each option named, with its range (a tile of 0 pixels or a batch of 0 candidates changed
+  // the algorithm without a word).
+  auto refuse = [](const std::string& option, const std::string& range, double value) {
+    return Error{"image-driven simplification: " + option + " must be " + range + ", got " +
+                 std::to_string(value)};
+  };
+  if (options.supersample < 1 || options.supersample > 16)
+    return refuse("supersample", "in [1, 16]", options.supersample);
+  if (options.tile_size < 1) return refuse("tile_size", ">= 1", options.tile_size);
+  if (options.refine_batch < 1) return refuse("refine_batch", ">= 1", double(options.refine_batch));
+  if (!(options.max_edge_pixels > 0)) return refuse("max_edge_pixels", "> 0", options.max_edge_pixels);
+  if (options.display.height_px < 1) return refuse("display.height_px", ">= 1", options.display.height_px);
+  if (!(options.display.fov_y_deg > 0 && options.display.fov_y_deg < 180))
+    return refuse("display.fov_y_deg", "in (0, 180)", options.display.fov_y_deg);
+  if (std::isnan(options.target_error)) return refuse("target_error", "a number", options.target_error);
   core::Asset prepared_asset = asset;
   prepared_asset.mesh = prepareMesh(options.start ? *options.start : asset.mesh);
   if (prepared_asset.mesh.triangleCount() == 0) return Error{"the mesh has no valid triangles"};

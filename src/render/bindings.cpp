@@ -83,8 +83,15 @@ std::string shaderDirectory() {
 
 core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix) {
   namespace fs = std::filesystem;
+  // A bare name is duolod's shader first ("pbr" must not become a ./pbr.vert that happens to be
+  // in the working folder), then one in the working folder; a path is taken as it is.
   fs::path prefix = name_or_prefix;
-  if (!fs::exists(prefix.string() + ".vert")) prefix = fs::path(shaderDirectory()) / name_or_prefix;
+  if (!prefix.has_parent_path()) {
+    const fs::path installed = fs::path(shaderDirectory()) / name_or_prefix;
+    std::error_code ec;
+    if (fs::exists(installed.string() + ".vert", ec) || !fs::exists(prefix.string() + ".vert", ec))
+      prefix = installed;
+  }
   GlslSource source;
   for (auto [extension, text, name] :
        {std::tuple{".vert", &source.vertex, &source.vertex_name},
