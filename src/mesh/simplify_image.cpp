@@ -30,11 +30,14 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
     return refuse("supersample", "in [1, 16]", options.supersample);
   if (options.tile_size < 1) return refuse("tile_size", ">= 1", options.tile_size);
   if (options.refine_batch < 1) return refuse("refine_batch", ">= 1", double(options.refine_batch));
-  if (!(options.max_edge_pixels > 0)) return refuse("max_edge_pixels", "> 0", options.max_edge_pixels);
-  if (options.display.height_px < 1) return refuse("display.height_px", ">= 1", options.display.height_px);
+  if (!(options.max_edge_pixels > 0))
+    return refuse("max_edge_pixels", "> 0", options.max_edge_pixels);
+  if (options.display.height_px < 1)
+    return refuse("display.height_px", ">= 1", options.display.height_px);
   if (!(options.display.fov_y_deg > 0 && options.display.fov_y_deg < 180))
     return refuse("display.fov_y_deg", "in (0, 180)", options.display.fov_y_deg);
-  if (std::isnan(options.target_error)) return refuse("target_error", "a number", options.target_error);
+  if (std::isnan(options.target_error))
+    return refuse("target_error", "a number", options.target_error);
   core::Asset prepared_asset = asset;
   prepared_asset.mesh = prepareMesh(options.start ? *options.start : asset.mesh);
   if (prepared_asset.mesh.triangleCount() == 0) return Error{"the mesh has no valid triangles"};
