@@ -134,6 +134,7 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
   test::CommandRun blocked = test::runCommand(DUOLOD_CLI, forced);
   EXPECT_NE(blocked.exit_code, 0);
   EXPECT_TRUE(test::contains(blocked.err, "report.html")) << blocked.err;
+  EXPECT_TRUE(test::contains(blocked.err, "taken back")) << blocked.err;  // failed moving in
   EXPECT_TRUE(contentsOf(out) == before) << "the folder changed:\n" << blocked.err;
   EXPECT_EQ(contentsOf(out.parent_path()).size(), before.size() + 1)  // no staging folder left
       << "beside the output: " << blocked.err;

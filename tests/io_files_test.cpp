@@ -2,6 +2,7 @@
 // folder of them, as `duolod generate` and `duolod shader` write). Each case checks the whole
 // folder afterwards, temporaries and kept copies included.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -105,6 +106,10 @@ TEST(OutputFolder, AFailedCommitLeavesTheFolderAsItWas) {
     auto committed = folder.commit();
     ASSERT_FALSE(committed);
     EXPECT_TRUE(test::contains(committed.error().message, "z.txt")) << committed.error().message;
+    // The rename failed, the last of the set: a.txt, b.txt and sub/c.txt had been moved in, and
+    // were taken back (a.txt's old text restored, sub/ removed again).
+    EXPECT_TRUE(test::contains(committed.error().message, "taken back"))
+        << committed.error().message;
     EXPECT_EQ(test::readText(out / "a.txt"), "old a");
     EXPECT_EQ(treeOf(out), (std::vector<std::string>{"a.txt", "z.txt/"}));
   }
@@ -157,6 +162,31 @@ TEST(OutputFolder, ASymbolicLinkIsFollowed) {
   ASSERT_TRUE(folder.commit());
   EXPECT_EQ(test::readText(parent / "real" / "a.txt"), "a");
   EXPECT_TRUE(fs::is_symlink(parent / "link"));
+}
+
+// A run that was killed left its staging folder; the next one removes it (its process is gone)
+// and keeps a live run's.
+TEST(OutputFolder, StagingFoldersOfKilledRunsAreRemoved) {
+  const fs::path out = test::scratchDir("output_folder_stale");
+  // pid_max is at most 2^22 on Linux: this process cannot exist.
+  fs::create_directories(out / ".duolod-staging-4999999-12" / "sub");
+  const std::string live = ".duolod-staging-" + std::to_string(::getpid()) + "-7";
+  fs::create_directory(out / live);
+  io::OutputFolder folder;
+  ASSERT_TRUE(folder.begin(out.string()));
+  EXPECT_FALSE(fs::exists(out / ".duolod-staging-4999999-12"));
+  EXPECT_TRUE(fs::exists(out / live));
+}
+
+// A dangling symbolic link where the folder would go is the user's: refused, never removed.
+TEST(OutputFolder, ADanglingSymbolicLinkIsKept) {
+  const fs::path parent = test::scratchDir("output_folder_dangling");
+  fs::create_directory_symlink(parent / "nowhere", parent / "out");
+  {
+    io::OutputFolder folder;
+    EXPECT_FALSE(folder.begin((parent / "out").string()));
+  }
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(parent / "out")));
 }
 
 TEST(OutputFolder, BadFolderNamesAreRefused) {

@@ -142,6 +142,15 @@ TEST(RuntimePolicy, BadPoliciesNameTheField) {
   EXPECT_NE(error.find("/nonexistent/lod.json"), std::string::npos);
 }
 
+TEST(RuntimeJson, ParsingIntoAUsedValueReplacesIt) {
+  JsonValue value;
+  std::string error;
+  ASSERT_TRUE(JsonValue::parse("[1, 2, 3]", value, &error)) << error;
+  ASSERT_TRUE(JsonValue::parse("[4]", value, &error)) << error;
+  ASSERT_EQ(value.items().size(), 1u);  // not 4: the earlier items were kept
+  EXPECT_EQ(value.items()[0].number(), 4.0);
+}
+
 TEST(RuntimePolicy, MeshNamesAFileAndANode) {
   runtime::Level level;
   level.mesh = "lod.gltf#node2";  // what `duolod generate` writes
@@ -152,6 +161,7 @@ TEST(RuntimePolicy, MeshNamesAFileAndANode) {
   EXPECT_EQ(level.meshNode(), -1);
   level.mesh = "odd#nodex";
   EXPECT_EQ(level.meshNode(), -1);
+  EXPECT_EQ(level.meshFile(), "odd#nodex");  // no node: the name is a file alone
 }
 
 // Numbers are read the same in any C locale: an engine that calls setlocale(LC_ALL, "") in a
@@ -263,7 +273,10 @@ TEST(RuntimeSelect, CrossFadeIsContinuousWithAWiderHysteresis) {
   for (runtime::SelectorOptions options :
        {runtime::SelectorOptions{.hysteresis = 0.1, .fade_band = 0.05},
         runtime::SelectorOptions{.hysteresis = 0.02, .fade_band = 0.1},
-        runtime::SelectorOptions{.hysteresis = 0.3, .fade_band = 0.02}}) {
+        runtime::SelectorOptions{.hysteresis = 0.3, .fade_band = 0.02},
+        // bands that would overlap (10 · 1.5 > 20 · 0.5) and a hysteresis past the next switch
+        runtime::SelectorOptions{.hysteresis = 0.3, .fade_band = 0.5},
+        runtime::SelectorOptions{.hysteresis = 0.9, .fade_band = 0.05}}) {
     runtime::LevelSelector selector(threeLevels(), options);
     std::vector<double> path;
     for (int i = 0; i <= 30000; ++i) path.push_back(5 + i * 0.001);  // 5 → 35

@@ -175,7 +175,8 @@ class FileSet {
   core::Status add(const std::string& path, std::span<const uint8_t> bytes);
   core::Status add(const std::string& path, std::string_view text);
   // A file already written elsewhere on the same file system, moved to `path` by commit() (and
-  // removed with the set if it is not committed).
+  // removed with the set if it is not committed). Whether `path` can take it is found by the
+  // rename in commit(), which then puts back what it had moved.
   core::Status adopt(const std::string& written, const std::string& path);
   core::Status commit();
 

@@ -198,7 +198,7 @@ struct SurfaceDistance {
 // of the 64 triangles with the largest distances measured, where the maximum most likely is.
 // Distances are to the other surface (closest point on any triangle, via a BVH). Two empty meshes
 // are at distance 0; one empty mesh is at infinity. The mean and rms are over the area samples:
-// NaN (not measured) when samples_per_mesh is 0.
+// NaN (not measured) when there are none (samples_per_mesh 0, or a mesh of zero area).
 SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
                                 size_t samples_per_mesh = 100000, uint64_t seed = 1);
 

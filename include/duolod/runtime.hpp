@@ -23,7 +23,8 @@
 //   if (!duolod::runtime::loadPolicy("lod/lod.json", policy, &error)) { ...report error... }
 //   duolod::runtime::LevelSelector selector(policy, {.hysteresis = 0.1, .fade_band = 0.05});
 //   auto pick = selector.selectByDistance(distance);   // each frame
-//   draw(pick.level); if (pick.fade_level >= 0) drawDithered(pick.fade_level, pick.fade);
+//   if (pick.fade_level < 0) draw(pick.level);
+//   else drawDithered(pick.level, 1 - pick.fade), drawDithered(pick.fade_level, pick.fade);
 #pragma once
 
 #include <algorithm>
@@ -32,6 +33,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <locale>
 #include <map>
 #include <sstream>
 #include <string>
@@ -68,6 +70,7 @@ class JsonValue {
 
   // Parses `text`; on failure returns false and sets `error` to "offset N: reason".
   static bool parse(std::string_view text, JsonValue& out, std::string* error) {
+    out = JsonValue{};  // a value parsed into before is replaced, not added to
     Parser parser{text, 0, {}};
     bool ok = parser.value(out, 0) &&
               (parser.skipSpace(),
@@ -138,12 +141,20 @@ class JsonValue {
         if (at < text.size() && (text[at] == '+' || text[at] == '-')) ++at;
         if (!digits()) return fail("invalid number");
       }
-      // from_chars, not strtod: strtod reads the C locale's decimal point, so in a comma-decimal
-      // locale (an engine that called setlocale(LC_ALL, "")) "2.5" read as 2.
+      // Not strtod: it reads the C locale's decimal point, so in a comma-decimal locale (an engine
+      // that called setlocale(LC_ALL, "")) "2.5" read as 2. from_chars where the library has it
+      // for double, else a stream in the classic locale (libc++ before LLVM 20 lacks it).
+#if defined(__cpp_lib_to_chars) && __cpp_lib_to_chars >= 201611L
       const char* first = text.data() + start;
       const auto [end, status] = std::from_chars(first, text.data() + at, out.number_);
       if (status == std::errc::result_out_of_range) return fail("number out of range");
       if (status != std::errc() || end != text.data() + at) return fail("invalid number");
+#else
+      std::istringstream stream{std::string(text.substr(start, at - start))};
+      stream.imbue(std::locale::classic());
+      stream >> out.number_;
+      if (!stream || !std::isfinite(out.number_)) return fail("number out of range");
+#endif
       out.kind_ = Kind::kNumber;
       return true;
     }
@@ -308,7 +319,7 @@ struct Level {
   };
   std::vector<Parameter> shader_parameters;
 
-  std::string meshFile() const { return mesh.substr(0, mesh.rfind("#node")); }
+  std::string meshFile() const { return meshNode() >= 0 ? mesh.substr(0, mesh.rfind("#node")) : mesh; }
   // The node after "#node", or -1 when `mesh` names a file alone.
   int meshNode() const {
     const size_t at = mesh.rfind("#node");
@@ -445,7 +456,9 @@ struct SelectorOptions {
   // switch_distance_k·(1 − hysteresis). 0 = switch exactly at the thresholds.
   double hysteresis = 0.05;
   // Relative half-width of the cross-fade band around each switch distance: within
-  // [s_k·(1 − fade_band), s_k·(1 + fade_band)] levels k−1 and k are blended. 0 = no cross-fade.
+  // [s_k·(1 − fade_band), s_k·(1 + fade_band)] levels k−1 and k are blended (a band reaches at
+  // most half-way to the next switch). 0 = no cross-fade. With a band, what is seen depends on
+  // the distance alone; the hysteresis only picks which of two blended levels is `level`.
   double fade_band = 0;
   // Both are taken in [0, 0.99]: a value outside is clamped into it, NaN is 0.
 };
@@ -501,15 +514,18 @@ class LevelSelector {
     current_ = std::clamp(current_, entered, allowed);
     Selection selection{.level = current_};
     if (options_.fade_band <= 0) return selection;
-    // What is seen is a function of the distance alone, so that it never jumps, however the
-    // hysteresis holds the drawn level: levels k−1 and k blend across the band around s_k, and
-    // elsewhere the level whose range holds the distance is seen. The held level is drawn and
-    // the fade makes up the difference (a weight of 1: the fade level alone is seen).
+    // What is seen is a function of the distance alone, so that it never jumps: levels k−1 and k
+    // blend across the band around s_k (narrowed to half the gap to a neighbouring switch, so
+    // that bands never overlap), and elsewhere the level whose range holds the distance is seen.
+    // The hysteresis cannot hold a level that is not seen: it then moves to the one that is (with
+    // a fade band the blend is what stops popping), and holds between the two blended levels.
     int seen_near = 0, seen_far = -1;
     float weight_far = 0;  // of seen_far
     for (size_t k = 1; k < count; ++k) {
-      const double low = threshold(k) * (1 - options_.fade_band),
-                   high = threshold(k) * (1 + options_.fade_band);
+      const double s = threshold(k);
+      double low = s * (1 - options_.fade_band), high = s * (1 + options_.fade_band);
+      low = std::max(low, s - 0.5 * (s - threshold(k - 1)));
+      if (k + 1 < count) high = std::min(high, s + 0.5 * (threshold(k + 1) - s));
       if (farness >= high) {
         seen_near = static_cast<int>(k);
         continue;
@@ -523,15 +539,13 @@ class LevelSelector {
       break;
     }
     if (seen_far < 0) {
-      if (seen_near != current_) selection = {current_, seen_near, 1.0f};
-    } else if (current_ == seen_near) {
-      selection = {current_, seen_far, weight_far};
-    } else if (current_ == seen_far) {
-      selection = {current_, seen_near, 1.0f - weight_far};
-    } else {  // held beyond both (a hysteresis wider than the gap between switches)
-      selection = {current_, weight_far >= 0.5f ? seen_far : seen_near, 1.0f};
+      current_ = seen_near;
+      return {.level = current_};
     }
-    return selection;
+    if (current_ != seen_near && current_ != seen_far)
+      current_ = weight_far >= 0.5f ? seen_far : seen_near;
+    if (current_ == seen_near) return {current_, seen_far, weight_far};
+    return {current_, seen_near, 1.0f - weight_far};
   }
 
   Policy policy_;

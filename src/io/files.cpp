@@ -7,10 +7,12 @@
 #include <array>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
 #include <random>
+#include <signal.h>
 #include <unistd.h>
 
 #include "duolod/io.hpp"
@@ -115,7 +117,13 @@ core::Status FileSet::add(const std::string& path, std::span<const uint8_t> byte
 }
 
 core::Status FileSet::adopt(const std::string& written, const std::string& path) {
-  if (auto target = checkTarget(path); !target) return target;
+  // Only the set's own rules: a target that cannot take the file (a folder in the way) fails
+  // its rename in commit(), which puts back what the set had moved until then.
+  std::error_code ec;
+  if (!replace_existing_ && fs::exists(fs::symlink_status(path, ec)))
+    return Error{path + ": already exists (use --force to replace it)"};
+  for (const Staged& file : staged_)
+    if (file.target == path) return Error{path + ": written twice in one set"};
   staged_.push_back({written, path});
   return core::okStatus();
 }
@@ -149,9 +157,12 @@ core::Status FileSet::commit() {
     if (i + 1 < staged_.size() && fs::exists(existing) && !fs::is_directory(existing)) {
       kept = uniqueSibling(file.target, ".old").string();
       fs::create_hard_link(file.target, kept, ec);
-      if (ec) {  // a file system without hard links
+      if (ec) {  // a file system without hard links: a copy (of the link itself, for a link)
         ec.clear();
-        fs::copy_file(file.target, kept, ec);
+        if (fs::is_symlink(existing))
+          fs::copy_symlink(file.target, kept, ec);
+        else
+          fs::copy_file(file.target, kept, ec);
       }
       if (ec) {
         const std::string reason = ec.message();
@@ -208,11 +219,24 @@ core::Status OutputFolder::begin(const std::string& folder) {
     return Error{folder + ": exists and is not a folder"};
   // The folder and the parents it lacks, innermost first (removed again, innermost first, unless
   // committed).
-  for (fs::path missing = target; !fs::exists(missing, ec) && missing != missing.root_path();
+  // (symlink_status: a dangling symbolic link is there, not missing, and is never removed.)
+  for (fs::path missing = target;
+       !fs::exists(fs::symlink_status(missing, ec)) && missing != missing.root_path();
        missing = missing.parent_path())
     created_.push_back(missing.string());
   fs::create_directories(target, ec);
   if (ec) return Error{folder + ": cannot create (" + ec.message() + ")"};
+  // Staging folders of runs that were killed (their process is gone) are removed.
+  for (fs::directory_iterator it(target, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    constexpr std::string_view kPrefix = ".duolod-staging-";
+    if (!name.starts_with(kPrefix)) continue;
+    const long pid = std::strtol(name.c_str() + kPrefix.size(), nullptr, 10);
+    std::error_code remove_ec;
+    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
+      fs::remove_all(it->path(), remove_ec);
+  }
+  ec.clear();
   // Inside the folder, hidden: on its file system even when the folder is a mount point (a
   // container's volume), so that commit() only renames.
   const fs::path staging = uniqueSibling(target / ".duolod-staging", "");

@@ -25,9 +25,13 @@ core::Status checkDirectory(const std::string& directory, const core::Asset& ass
     if (!asset_dir.empty() && out == asset_dir)
       return core::Error{directory + ": refusing to write the LOD into the asset's own folder"};
   }
-  if (fs::exists(out)) {
-    if (!fs::is_directory(out)) return core::Error{directory + ": exists and is not a folder"};
-    if (!fs::is_empty(out) && !force)
+  // (error_code overloads: an unreadable folder is an Error, not an exception after the run.)
+  if (fs::exists(out, error)) {
+    if (!fs::is_directory(out, error))
+      return core::Error{directory + ": exists and is not a folder"};
+    const bool empty = fs::is_empty(out, error);
+    if (error) return core::Error{directory + ": cannot read the folder (" + error.message() + ")"};
+    if (!empty && !force)
       return core::Error{directory + ": not empty; choose another folder or pass --force"};
   }
   return core::okStatus();

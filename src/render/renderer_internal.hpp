@@ -151,7 +151,14 @@ struct Renderer::State {
   ~State() {
     // The objects are this context's: with another one current (a second Renderer), these
     // names would delete its objects. Not current here (another thread): they go with it.
-    if (context_alive && context.makeCurrent()) {
+    if (context_alive && !context.makeCurrent()) {
+      // Not current here: the members' own destructors must not delete names in whatever context
+      // is (the textures' TextureSet); the objects go with this context.
+      for (auto& asset : assets)
+        if (asset && asset->textures) asset->textures->ids.clear();
+      return;
+    }
+    if (context_alive) {
       for (auto& asset : assets)
         if (asset) release(*asset);
       for (GLuint p : programs)

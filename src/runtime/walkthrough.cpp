@@ -107,7 +107,16 @@ core::Result<LodFolder> loadLodFolder(const std::string& directory) {
   folder.bounds.radius = float(numberAt(*sphere, {"radius"}, 0));
   if (!(folder.bounds.radius > 0))
     return Error{json_path + ": asset.bounding_sphere.radius must be positive"};
-  if (const JsonValue* source = asset->find("source")) folder.asset_source = source->string();
+  // `source` is relative to lod.json's folder (files written before session 28: to wherever
+  // generate ran, tried second).
+  if (const JsonValue* source = asset->find("source")) {
+    namespace fs = std::filesystem;
+    folder.asset_source = source->string();
+    const fs::path beside = fs::path(json_path).parent_path() / folder.asset_source;
+    std::error_code ec;
+    if (fs::path(folder.asset_source).is_relative() && fs::exists(beside, ec))
+      folder.asset_source = beside.lexically_normal().string();
+  }
   folder.display.fov_y_deg = float(numberAt(document, {"display", "fov_y_deg"}, 45));
   folder.display.height_px = int(numberAt(document, {"display", "height_px"}, 1080));
   folder.bound.d_near = float(numberAt(document, {"bound", "d_near"}, 1));
