@@ -319,7 +319,9 @@ struct Level {
   };
   std::vector<Parameter> shader_parameters;
 
-  std::string meshFile() const { return meshNode() >= 0 ? mesh.substr(0, mesh.rfind("#node")) : mesh; }
+  std::string meshFile() const {
+    return meshNode() >= 0 ? mesh.substr(0, mesh.rfind("#node")) : mesh;
+  }
   // The node after "#node", or -1 when `mesh` names a file alone.
   int meshNode() const {
     const size_t at = mesh.rfind("#node");

@@ -1,7 +1,9 @@
 // Files and images: whole-file reads, atomic writes (temporary + rename), image decode/encode
 // through stb (Debian libstb), and the format-dispatching loadAsset with its post-processing.
+#include <signal.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -12,8 +14,6 @@
 #include <filesystem>
 #include <memory>
 #include <random>
-#include <signal.h>
-#include <unistd.h>
 
 #include "duolod/io.hpp"
 
