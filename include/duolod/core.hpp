@@ -267,6 +267,9 @@ struct Asset {
 // Checks an image's size against its pixels: width and height >= 1 and pixels holding exactly
 // width × height × 4 bytes. Returns an Error saying which.
 Status validateImage(const ImageRGBA8& image);
+// Every submesh's material is below `material_count` (material 0 when there are none: the
+// default material). Returns an Error naming the first submesh that is not.
+Status validateSubmeshMaterials(const Mesh& mesh, size_t material_count);
 // Checks what an asset's parts say of each other (not the mesh: validateMesh): every submesh's
 // material and every material's textures are in range (material 0 when there are none: the
 // default material), and every texture is a valid image or

@@ -127,14 +127,19 @@ Status validateImage(const ImageRGBA8& image) {
   return okStatus();
 }
 
+Status validateSubmeshMaterials(const Mesh& mesh, size_t material_count) {
+  // With no materials at all, material 0 is the default one (glTF's; the renderer's zero block).
+  for (size_t s = 0; s < mesh.submeshes.size(); ++s)
+    if (mesh.submeshes[s].material >= std::max<size_t>(material_count, 1))
+      return Error{"submesh " + std::to_string(s) + " uses material " +
+                   std::to_string(mesh.submeshes[s].material) + " of " +
+                   std::to_string(material_count)};
+  return okStatus();
+}
+
 Status validateAssetReferences(const Asset& asset) {
   const size_t materials = asset.materials.size(), textures = asset.textures.size();
-  // With no materials at all, material 0 is the default one (glTF's; the renderer's zero block).
-  for (size_t s = 0; s < asset.mesh.submeshes.size(); ++s)
-    if (asset.mesh.submeshes[s].material >= std::max<size_t>(materials, 1))
-      return Error{"submesh " + std::to_string(s) + " uses material " +
-                   std::to_string(asset.mesh.submeshes[s].material) + " of " +
-                   std::to_string(materials)};
+  if (auto valid = validateSubmeshMaterials(asset.mesh, materials); !valid) return valid;
   for (size_t m = 0; m < materials; ++m) {
     const Material& material = asset.materials[m];
     for (int texture :

@@ -123,13 +123,10 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   if (auto consistent = core::validateAssetReferences(asset); !consistent)
     return Error{path + ": cannot write the asset: " + consistent.error().message};
   for (size_t i = 0; i < meshes.size(); ++i)
-    for (size_t s = 0; s < meshes[i].submeshes.size(); ++s)
-      if (meshes[i].submeshes[s].material >= std::max<size_t>(asset.materials.size(), 1))
-        return Error{path + ": cannot write the asset: " +
-                     (meshes.size() > 1 ? "level " + std::to_string(i) + " " : std::string()) +
-                     "submesh " + std::to_string(s) + " uses material " +
-                     std::to_string(meshes[i].submeshes[s].material) + " of " +
-                     std::to_string(asset.materials.size())};
+    if (auto valid = core::validateSubmeshMaterials(meshes[i], asset.materials.size()); !valid)
+      return Error{path + ": cannot write the asset: " +
+                   (meshes.size() > 1 ? "level " + std::to_string(i) + ": " : std::string()) +
+                   valid.error().message};
   for (size_t i = 0; i < meshes.size(); ++i)
     if (meshes[i].indices.empty())  // a mesh with no primitive is not valid glTF
       return Error{path + ": cannot write a mesh with no triangles" +

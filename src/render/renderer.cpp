@@ -304,11 +304,8 @@ core::Status uploadGeometry(const core::Mesh& source, const std::vector<core::Ma
                             GLint ubo_alignment, GpuAsset& gpu) {
   if (auto valid = core::validateMesh(source); !valid) return valid;
   if (source.triangleCount() == 0) return Error{"no triangles to render"};
-  for (size_t s = 0; s < source.submeshes.size(); ++s)  // (uploadMesh's; uploadAsset checked)
-    if (source.submeshes[s].material >= std::max<size_t>(materials.size(), 1))
-      return Error{"submesh " + std::to_string(s) + " uses material " +
-                   std::to_string(source.submeshes[s].material) + " of " +
-                   std::to_string(materials.size())};
+  // (uploadMesh's new mesh against the asset's materials; uploadAsset checked its own already.)
+  if (auto valid = core::validateSubmeshMaterials(source, materials.size()); !valid) return valid;
   gpu.bounds = core::computeBoundingSphere(source);
   core::Mesh mesh = source;
   // llvmpipe shades a vertex again whenever its index is not among the recently shaded ones: the
