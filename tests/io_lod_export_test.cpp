@@ -214,6 +214,51 @@ TEST(GltfLodChain, WaterBottleThreeLevelsValidateWithZeroErrors) {
             document["meshes"][2]["primitives"][0]["material"]);
 }
 
+// A level that changes only the shader repeats the previous level's mesh: its node shares that
+// glTF mesh, whose buffers are stored once, and reading the node gives the same triangles.
+TEST(GltfLodChain, LevelsWithEqualMeshesShareOneGltfMesh) {
+  DUOLOD_REQUIRE_ASSET(source, "gltf/WaterBottle/WaterBottle.gltf");
+  DUOLOD_REQUIRE_GLTF_VALIDATOR();
+  Chain chain = waterBottleChain(source);
+  ASSERT_EQ(chain.levels.size(), 3u);
+  const std::vector<core::Mesh> distinct = chain.levels;
+  const std::vector<core::Mesh> repeated = {chain.levels[0], chain.levels[1], chain.levels[1],
+                                            chain.levels[2]};
+  fs::path dir = test::scratchDir("gltf_lod_chain_shared");
+  const std::string distinct_path = (dir / "distinct.glb").string();
+  const std::string repeated_path = (dir / "repeated.glb").string();
+  ASSERT_TRUE(io::writeGltfLodChain(chain.asset, distinct, {{0.2, 0.05, 0.0}}, distinct_path).ok());
+  auto written =
+      io::writeGltfLodChain(chain.asset, repeated, {{0.2, 0.1, 0.05, 0.0}}, repeated_path);
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  // One more node costs a few bytes of JSON, not a second copy of level 1's buffers.
+  EXPECT_LT(fs::file_size(repeated_path), fs::file_size(distinct_path) + 200);
+
+  Validation validation = validate(repeated_path);
+  ASSERT_FALSE(validation.report.is_discarded());
+  EXPECT_EQ(validation.report["issues"]["numErrors"], 0) << validation.report.dump(1);
+
+  const std::string gltf_path = (dir / "repeated.gltf").string();
+  ASSERT_TRUE(io::writeGltfLodChain(chain.asset, repeated, {{0.2, 0.1, 0.05, 0.0}}, gltf_path).ok());
+  json document = json::parse(test::readText(gltf_path));
+  EXPECT_EQ(document["meshes"].size(), 3u);
+  EXPECT_EQ(document["nodes"].size(), 4u);
+  EXPECT_EQ(document["nodes"][1]["mesh"], 1);
+  EXPECT_EQ(document["nodes"][2]["mesh"], 1);
+  EXPECT_EQ(document["nodes"][3]["mesh"], 2);
+  EXPECT_EQ(document["nodes"][0]["extensions"]["MSFT_lod"]["ids"], json({1, 2, 3}));
+  for (int node = 1; node <= 3; ++node) {
+    io::LoadOptions options;
+    options.gltf_node = node;
+    options.weld = false;
+    options.generate_normals = options.generate_tangents = false;
+    auto level = io::loadAsset(gltf_path, options);
+    ASSERT_TRUE(level.ok()) << level.error().message;
+    EXPECT_EQ(level.value().mesh.triangleCount(), repeated[size_t(node)].triangleCount()) << node;
+    EXPECT_EQ(level.value().mesh.vertexCount(), repeated[size_t(node)].vertexCount()) << node;
+  }
+}
+
 TEST(GltfLodChain, CorruptedChainFailsValidation) {
   DUOLOD_REQUIRE_ASSET(source, "gltf/WaterBottle/WaterBottle.gltf");
   DUOLOD_REQUIRE_GLTF_VALIDATOR();

@@ -114,6 +114,26 @@ std::string uriOfFileName(const std::string& name) {
   return uri;
 }
 
+template <class T>
+bool sameElements(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+// Equal bit for bit, so that a level whose mesh another level already has (a level that changes
+// only the shader) can share that glTF mesh instead of storing its buffers again.
+bool sameMesh(const core::Mesh& a, const core::Mesh& b) {
+  if (a.submeshes.size() != b.submeshes.size()) return false;
+  for (size_t i = 0; i < a.submeshes.size(); ++i)
+    if (a.submeshes[i].first_index != b.submeshes[i].first_index ||
+        a.submeshes[i].index_count != b.submeshes[i].index_count ||
+        a.submeshes[i].material != b.submeshes[i].material)
+      return false;
+  return sameElements(a.indices, b.indices) && sameElements(a.positions, b.positions) &&
+         sameElements(a.normals, b.normals) && sameElements(a.tangents, b.tangents) &&
+         sameElements(a.uv0, b.uv0) && sameElements(a.uv1, b.uv1) &&
+         sameElements(a.colors, b.colors);
+}
+
 // Writes `meshes` (one node each) with the asset's materials and textures. With `screen_coverage`
 // non-empty, node 0 chains the others through MSFT_lod and only node 0 is in the scene.
 core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::Mesh> meshes,
@@ -147,6 +167,15 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
   json gltf_meshes = json::array(), nodes = json::array();
   for (size_t level = 0; level < meshes.size(); ++level) {
     const core::Mesh& mesh = meshes[level];
+    std::string name = target.stem().string();
+    if (meshes.size() > 1) name += "_LOD" + std::to_string(level);
+    // Levels that differ only in their shader have the same mesh: one glTF mesh, several nodes.
+    auto earlier = std::find_if(meshes.begin(), meshes.begin() + level,
+                                [&](const core::Mesh& other) { return sameMesh(other, mesh); });
+    if (earlier != meshes.begin() + level) {
+      nodes.push_back({{"mesh", nodes[size_t(earlier - meshes.begin())]["mesh"]}, {"name", name}});
+      continue;
+    }
     json attributes = {{"POSITION", builder.addFloatAccessor(mesh.positions, "VEC3", true)}};
     if (!mesh.normals.empty())
       attributes["NORMAL"] = builder.addFloatAccessor(mesh.normals, "VEC3", false);
@@ -169,10 +198,8 @@ core::Status writeGltfDocument(const core::Asset& asset, std::span<const core::M
       if (sub.material < asset.materials.size()) primitive["material"] = sub.material;
       primitives.push_back(primitive);
     }
-    std::string name = target.stem().string();
-    if (meshes.size() > 1) name += "_LOD" + std::to_string(level);
+    nodes.push_back({{"mesh", gltf_meshes.size()}, {"name", name}});
     gltf_meshes.push_back({{"primitives", primitives}, {"name", name}});
-    nodes.push_back({{"mesh", level}, {"name", name}});
   }
   const bool lod_chain = !screen_coverage.empty();
   if (lod_chain && meshes.size() > 1) {
