@@ -626,6 +626,32 @@ TEST_P(ReferenceShaderRules, EverySiteAppliesAndValidates) {
   EXPECT_GT(counts[static_cast<size_t>(RuleKind::kOperationRemoval)], 0);
 }
 
+// What a user reads in summary.json and the console: every site's description names values by
+// the shader's own words (variables, members, constants, operations), never by a raw SPIR-V id.
+TEST_P(ReferenceShaderRules, DescriptionsNameNoSpirvIds) {
+  std::string name = GetParam();
+  ShaderProgram program = programOrDie(test_rules::readShaderFile(name + ".vert"),
+                                       test_rules::readShaderFile(name + ".frag"));
+  RuleContext context;
+  for (uint32_t binding = 0; binding < 8; ++binding)
+    context.texture_averages[binding] = {0.5f, 0.4f, 0.3f, 1.0f};
+  // Only enumeration here: moving to parameter is offered once something could average.
+  context.average_value = [](const ShaderProgram&, Stage, ir::Id) -> core::Result<std::vector<float>> {
+    return core::Error{"not averaged in this test"};
+  };
+  std::vector<RuleSite> sites = enumerateSites(program, context);
+  ASSERT_FALSE(sites.empty());
+  int with_ids = 0;
+  for (const RuleSite& site : sites) {
+    const size_t percent = site.description.find('%');
+    if (percent != std::string::npos && percent + 1 < site.description.size() &&
+        std::isdigit(static_cast<unsigned char>(site.description[percent + 1]))) {
+      if (++with_ids <= 10) ADD_FAILURE() << site.description;
+    }
+  }
+  EXPECT_EQ(with_ids, 0) << "of " << sites.size() << " sites";
+}
+
 INSTANTIATE_TEST_SUITE_P(Shaders, ReferenceShaderRules,
                          ::testing::Values("pbr", "noise_phong", "blend"));
 

@@ -163,38 +163,6 @@ std::vector<uint32_t> keptOperandChoices(const ir::DefUse& uses,
   return choices;
 }
 
-// A readable name of the operation for descriptions ("mul", "mix"); the number when unnamed.
-std::string operationName(const ir::Instruction& instruction) {
-  static const std::map<uint32_t, const char*> kExtNames = {
-      {GLSLstd450Pow, "pow"},       {GLSLstd450Atan2, "atan"},   {GLSLstd450FMin, "min"},
-      {GLSLstd450FMax, "max"},      {GLSLstd450SMin, "min"},     {GLSLstd450SMax, "max"},
-      {GLSLstd450UMin, "min"},      {GLSLstd450UMax, "max"},     {GLSLstd450FClamp, "clamp"},
-      {GLSLstd450SClamp, "clamp"},  {GLSLstd450UClamp, "clamp"}, {GLSLstd450FMix, "mix"},
-      {GLSLstd450Step, "step"},     {GLSLstd450SmoothStep, "smoothstep"},
-      {GLSLstd450Fma, "fma"},       {GLSLstd450Cross, "cross"},  {GLSLstd450Reflect, "reflect"},
-      {GLSLstd450Refract, "refract"}, {GLSLstd450Distance, "distance"},
-      {GLSLstd450FaceForward, "faceforward"}, {GLSLstd450Ldexp, "ldexp"}};
-  static const std::map<spv::Op, const char*> kOpNames = {
-      {spv::OpFAdd, "add"}, {spv::OpIAdd, "add"}, {spv::OpFSub, "sub"}, {spv::OpISub, "sub"},
-      {spv::OpFMul, "mul"}, {spv::OpIMul, "mul"}, {spv::OpVectorTimesScalar, "mul"},
-      {spv::OpMatrixTimesScalar, "mul"}, {spv::OpVectorTimesMatrix, "mul"},
-      {spv::OpMatrixTimesVector, "mul"}, {spv::OpMatrixTimesMatrix, "mul"},
-      {spv::OpFDiv, "div"}, {spv::OpSDiv, "div"}, {spv::OpUDiv, "div"}, {spv::OpFMod, "mod"},
-      {spv::OpSMod, "mod"}, {spv::OpUMod, "mod"}, {spv::OpFRem, "rem"}, {spv::OpSRem, "rem"},
-      {spv::OpBitwiseAnd, "and"}, {spv::OpBitwiseOr, "or"}, {spv::OpBitwiseXor, "xor"},
-      {spv::OpShiftLeftLogical, "shl"}, {spv::OpShiftRightLogical, "shr"},
-      {spv::OpShiftRightArithmetic, "shr"}, {spv::OpSelect, "select"}, {spv::OpDot, "dot"},
-      {spv::OpOuterProduct, "outerProduct"}};
-  if (instruction.opcode == spv::OpExtInst) {
-    auto found = kExtNames.find(instruction.operands[1]);
-    return found != kExtNames.end() ? found->second
-                                    : "GLSL.std.450 #" + std::to_string(instruction.operands[1]);
-  }
-  auto found = kOpNames.find(instruction.opcode);
-  return found != kOpNames.end() ? found->second
-                                 : "op " + std::to_string(static_cast<uint32_t>(instruction.opcode));
-}
-
 }  // namespace
 
 std::vector<RuleSite> findOperationRemovalSites(const ShaderProgram& program, const RuleContext&) {

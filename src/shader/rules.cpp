@@ -3,7 +3,11 @@
 // one file per rule family (Liang et al. §4.1).
 #include "shader/rules.hpp"
 
+#include <glslang/SPIRV/GLSL.std.450.h>
+
 #include <algorithm>
+#include <map>
+#include <span>
 #include <cctype>
 #include <optional>
 #include <unordered_map>
@@ -83,31 +87,216 @@ std::string valueName(const ir::Module& module, ir::Id id) {
   return name.empty() ? "%" + std::to_string(id) : name;
 }
 
-std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id) {
+std::string operationName(const ir::Instruction& instruction) {
+  static const std::map<uint32_t, const char*> kExtNames = {
+      {GLSLstd450Round, "round"},   {GLSLstd450RoundEven, "roundEven"},
+      {GLSLstd450Trunc, "trunc"},   {GLSLstd450FAbs, "abs"},      {GLSLstd450SAbs, "abs"},
+      {GLSLstd450FSign, "sign"},    {GLSLstd450SSign, "sign"},    {GLSLstd450Floor, "floor"},
+      {GLSLstd450Ceil, "ceil"},     {GLSLstd450Fract, "fract"},   {GLSLstd450Radians, "radians"},
+      {GLSLstd450Degrees, "degrees"}, {GLSLstd450Sin, "sin"},     {GLSLstd450Cos, "cos"},
+      {GLSLstd450Tan, "tan"},       {GLSLstd450Asin, "asin"},     {GLSLstd450Acos, "acos"},
+      {GLSLstd450Atan, "atan"},     {GLSLstd450Exp, "exp"},       {GLSLstd450Log, "log"},
+      {GLSLstd450Exp2, "exp2"},     {GLSLstd450Log2, "log2"},     {GLSLstd450Sqrt, "sqrt"},
+      {GLSLstd450InverseSqrt, "inversesqrt"}, {GLSLstd450Determinant, "determinant"},
+      {GLSLstd450MatrixInverse, "inverse"}, {GLSLstd450Length, "length"},
+      {GLSLstd450Normalize, "normalize"},
+      {GLSLstd450Pow, "pow"},       {GLSLstd450Atan2, "atan"},   {GLSLstd450FMin, "min"},
+      {GLSLstd450FMax, "max"},      {GLSLstd450SMin, "min"},     {GLSLstd450SMax, "max"},
+      {GLSLstd450UMin, "min"},      {GLSLstd450UMax, "max"},     {GLSLstd450FClamp, "clamp"},
+      {GLSLstd450SClamp, "clamp"},  {GLSLstd450UClamp, "clamp"}, {GLSLstd450FMix, "mix"},
+      {GLSLstd450Step, "step"},     {GLSLstd450SmoothStep, "smoothstep"},
+      {GLSLstd450Fma, "fma"},       {GLSLstd450Cross, "cross"},  {GLSLstd450Reflect, "reflect"},
+      {GLSLstd450Refract, "refract"}, {GLSLstd450Distance, "distance"},
+      {GLSLstd450FaceForward, "faceforward"}, {GLSLstd450Ldexp, "ldexp"}};
+  static const std::map<spv::Op, const char*> kOpNames = {
+      {spv::OpFAdd, "add"}, {spv::OpIAdd, "add"}, {spv::OpFSub, "sub"}, {spv::OpISub, "sub"},
+      {spv::OpFMul, "mul"}, {spv::OpIMul, "mul"}, {spv::OpVectorTimesScalar, "mul"},
+      {spv::OpMatrixTimesScalar, "mul"}, {spv::OpVectorTimesMatrix, "mul"},
+      {spv::OpMatrixTimesVector, "mul"}, {spv::OpMatrixTimesMatrix, "mul"},
+      {spv::OpFDiv, "div"}, {spv::OpSDiv, "div"}, {spv::OpUDiv, "div"}, {spv::OpFMod, "mod"},
+      {spv::OpSMod, "mod"}, {spv::OpUMod, "mod"}, {spv::OpFRem, "rem"}, {spv::OpSRem, "rem"},
+      {spv::OpBitwiseAnd, "and"}, {spv::OpBitwiseOr, "or"}, {spv::OpBitwiseXor, "xor"},
+      {spv::OpShiftLeftLogical, "shl"}, {spv::OpShiftRightLogical, "shr"},
+      {spv::OpShiftRightArithmetic, "shr"}, {spv::OpSelect, "select"}, {spv::OpDot, "dot"},
+      {spv::OpOuterProduct, "outerProduct"}, {spv::OpFNegate, "neg"}, {spv::OpSNegate, "neg"},
+      {spv::OpTranspose, "transpose"}, {spv::OpConvertSToF, "float"},
+      {spv::OpConvertUToF, "float"}, {spv::OpConvertFToS, "int"}, {spv::OpConvertFToU, "uint"},
+      {spv::OpBitcast, "bitcast"}, {spv::OpFOrdLessThan, "lessThan"},
+      {spv::OpFOrdGreaterThan, "greaterThan"}, {spv::OpFOrdLessThanEqual, "lessThanEqual"},
+      {spv::OpFOrdGreaterThanEqual, "greaterThanEqual"}, {spv::OpFOrdEqual, "equal"},
+      {spv::OpFOrdNotEqual, "notEqual"}, {spv::OpSLessThan, "lessThan"},
+      {spv::OpSGreaterThan, "greaterThan"}, {spv::OpULessThan, "lessThan"},
+      {spv::OpUGreaterThan, "greaterThan"}, {spv::OpIEqual, "equal"},
+      {spv::OpINotEqual, "notEqual"}, {spv::OpLogicalAnd, "and"}, {spv::OpLogicalOr, "or"},
+      {spv::OpLogicalNot, "not"}, {spv::OpAny, "any"}, {spv::OpAll, "all"},
+      {spv::OpDPdx, "dFdx"}, {spv::OpDPdy, "dFdy"}, {spv::OpFwidth, "fwidth"},
+      {spv::OpImageSampleImplicitLod, "texture"}, {spv::OpImageSampleExplicitLod, "textureLod"},
+      {spv::OpImageSampleProjImplicitLod, "textureProj"},
+      {spv::OpImageSampleDrefImplicitLod, "texture"}, {spv::OpImageFetch, "texelFetch"}};
+  if (instruction.opcode == spv::OpExtInst) {
+    auto found = kExtNames.find(instruction.operands[1]);
+    return found != kExtNames.end() ? found->second
+                                    : "GLSL.std.450 #" + std::to_string(instruction.operands[1]);
+  }
+  auto found = kOpNames.find(instruction.opcode);
+  return found != kOpNames.end() ? found->second
+                                 : "op " + std::to_string(static_cast<uint32_t>(instruction.opcode));
+}
+
+namespace {
+
+// How deep describeOperand spells out unnamed operations: "mul(dot(N, L), max(…, 0.0))".
+constexpr int kDescribedDepth = 2;
+
+std::string constantText(float value) {
+  std::string text = std::to_string(value);
+  text.erase(text.find_last_not_of('0') + 1);
+  if (!text.empty() && text.back() == '.') text += '0';
+  return text;
+}
+
+// ".x", ".xz": the components `indices` of a vector, or "[i]" for matrix columns and arrays.
+std::string componentSuffix(const ir::DefUse& uses, ir::Id composite_type,
+                            std::span<const uint32_t> indices) {
+  const bool vector = ir::typeInfo(uses, composite_type).opcode == spv::OpTypeVector;
+  std::string suffix = vector ? "." : "";
+  for (uint32_t index : indices) {
+    if (vector && index < 4)
+      suffix += "xyzw"[index];
+    else
+      suffix += "[" + std::to_string(index) + "]";
+  }
+  return suffix;
+}
+
+std::string describeExpression(const ir::Module& module, const ir::DefUse& uses, ir::Id id,
+                               int depth);
+
+// What a pointer points at, as source code would name it: a variable or parameter ("vUV"), a
+// member of a uniform block, named or not ("uMaterial.roughness", "roughness"), a component
+// ("color.y") or an element ("uLights[2]", "weights[i]"); "" when it has no name to start from.
+std::string describePlace(const ir::Module& module, const ir::DefUse& uses, ir::Id pointer_id) {
+  const ir::Instruction* pointer = uses.def(pointer_id);
+  if (!pointer) return "";
+  if (pointer->opcode == spv::OpVariable || pointer->opcode == spv::OpFunctionParameter)
+    return module.name(pointer->result_id);
+  if (pointer->opcode != spv::OpAccessChain && pointer->opcode != spv::OpInBoundsAccessChain)
+    return "";
+  const ir::Instruction* base = uses.def(pointer->operands[0]);
+  if (!base) return "";
+  std::string text = describePlace(module, uses, base->result_id);
+  ir::Id type = ir::pointeeType(uses, base->type_id);
+  for (size_t i = 1; i < pointer->operands.size(); ++i) {
+    const ir::Instruction* type_definition = uses.def(type);
+    if (!type_definition) return "";
+    const std::optional<int64_t> constant = ir::constantIntValue(uses, pointer->operands[i]);
+    if (type_definition->opcode == spv::OpTypeStruct) {
+      if (!constant || *constant < 0 || size_t(*constant) >= type_definition->operands.size())
+        return "";
+      std::string member = module.memberName(type, static_cast<uint32_t>(*constant));
+      if (member.empty()) return "";
+      text = text.empty() ? member : text + "." + member;  // an anonymous block's members
+      type = type_definition->operands[size_t(*constant)];
+      continue;
+    }
+    if (text.empty() || type_definition->operands.empty()) return "";
+    if (type_definition->opcode == spv::OpTypeVector && constant && *constant >= 0 && *constant < 4)
+      text += std::string(".") + "xyzw"[*constant];
+    else
+      text += "[" + describeExpression(module, uses, pointer->operands[i], 0) + "]";
+    type = type_definition->operands[0];  // the component, column or element type
+  }
+  return text;
+}
+
+std::string describeExpression(const ir::Module& module, const ir::DefUse& uses, ir::Id id,
+                               int depth) {
   if (std::string name = module.name(id); !name.empty()) return name;
   const ir::Instruction* definition = uses.def(id);
   if (!definition) return valueName(module, id);
-  if (std::optional<float> value = ir::constantFloatValue(uses, id)) {
-    std::string text = std::to_string(*value);
-    text.erase(text.find_last_not_of('0') + 1);
-    if (!text.empty() && text.back() == '.') text += '0';
-    return text;
+  if (definition->opcode == spv::OpConstant) {
+    if (ir::isFloatType(uses, definition->type_id))
+      if (std::optional<float> value = ir::constantFloatValue(uses, id))
+        return constantText(*value);
+    if (std::optional<int64_t> value = ir::constantIntValue(uses, id))
+      return std::to_string(*value);
   }
-  if (definition->opcode == spv::OpLoad) {
-    const ir::Instruction* pointer = uses.def(definition->operands[0]);
-    if (pointer && pointer->opcode == spv::OpVariable) return valueName(module, pointer->result_id);
-    // A uniform-block member: block.member with a constant member index.
-    if (pointer && pointer->opcode == spv::OpAccessChain && pointer->operands.size() == 2) {
-      const ir::Instruction* block = uses.def(pointer->operands[0]);
-      std::optional<int64_t> member = ir::constantIntValue(uses, pointer->operands[1]);
-      if (block && member) {
-        ir::Id struct_type = ir::pointeeType(uses, block->type_id);
-        std::string name = module.memberName(struct_type, static_cast<uint32_t>(*member));
-        if (!name.empty()) return name;
-      }
+  auto call = [&](const std::string& function, std::span<const ir::Id> arguments) {
+    if (depth <= 0) return function + "(…)";
+    std::string text = function + "(";
+    for (size_t i = 0; i < arguments.size(); ++i)
+      text += (i ? ", " : "") + describeExpression(module, uses, arguments[i], depth - 1);
+    return text + ")";
+  };
+  const std::vector<ir::Id> ids = definition->idOperands();
+  switch (definition->opcode) {
+    case spv::OpLoad:
+      if (std::string place = describePlace(module, uses, definition->operands[0]); !place.empty())
+        return place;
+      break;
+    case spv::OpCompositeExtract: {
+      const ir::Instruction* composite = uses.def(definition->operands[0]);
+      if (!composite) break;
+      std::vector<uint32_t> indices(definition->operands.begin() + 1, definition->operands.end());
+      return describeExpression(module, uses, definition->operands[0], depth) +
+             componentSuffix(uses, composite->type_id, std::span<const uint32_t>(indices).first(1)) +
+             (indices.size() > 1 ? componentSuffix(uses, ir::kNoId,
+                                                   std::span<const uint32_t>(indices).subspan(1))
+                                 : "");
+    }
+    case spv::OpVectorShuffle: {
+      const ir::Instruction* first = uses.def(definition->operands[0]);
+      if (!first) break;
+      const uint32_t first_size = ir::componentCount(uses, first->type_id);
+      std::vector<uint32_t> indices(definition->operands.begin() + 2, definition->operands.end());
+      const bool from_first =
+          definition->operands[0] == definition->operands[1] ||
+          std::all_of(indices.begin(), indices.end(), [&](uint32_t i) { return i < first_size; });
+      if (!from_first) break;
+      return describeExpression(module, uses, definition->operands[0], depth) +
+             componentSuffix(uses, first->type_id, indices);
+    }
+    case spv::OpCompositeConstruct:
+    case spv::OpConstantComposite: {
+      const ir::TypeInfo type = ir::typeInfo(uses, definition->type_id);
+      std::string constructor =
+          type.opcode == spv::OpTypeVector ? "vec" + std::to_string(type.components)
+          : type.opcode == spv::OpTypeMatrix ? "mat" + std::to_string(ids.size())
+                                             : "struct";
+      // A splat as GLSL writes it: vec3(0.5).
+      const bool splat = type.opcode == spv::OpTypeVector && !ids.empty() &&
+                         std::all_of(ids.begin(), ids.end(), [&](ir::Id c) { return c == ids[0]; });
+      return call(constructor, splat ? std::span<const ir::Id>(ids).first(1) : ids);
+    }
+    case spv::OpCopyObject:
+      return describeExpression(module, uses, ids.front(), depth);
+    case spv::OpFunctionCall: {
+      std::string callee = module.name(ids.front());
+      if (callee.empty()) break;
+      return call(callee.substr(0, callee.find('(')), std::span<const ir::Id>(ids).subspan(1));
+    }
+    case spv::OpExtInst:
+      return call(operationName(*definition), std::span<const ir::Id>(ids).subspan(1));
+    case spv::OpImageSampleImplicitLod:
+    case spv::OpImageSampleExplicitLod:
+    case spv::OpImageSampleProjImplicitLod:
+    case spv::OpImageSampleDrefImplicitLod:
+    case spv::OpImageFetch:
+      // The sampler and the coordinate (image operands such as a bias or lod follow them).
+      return call(operationName(*definition), std::span<const ir::Id>(ids).first(2));
+    default: {
+      std::string function = operationName(*definition);
+      if (function.rfind("op ", 0) != 0) return call(function, ids);
+      break;
     }
   }
   return valueName(module, id);
+}
+
+}  // namespace
+
+std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id) {
+  return describeExpression(module, uses, id, kDescribedDepth);
 }
 
 std::string functionName(const ir::Module& module, size_t function_index) {
@@ -116,6 +305,7 @@ std::string functionName(const ir::Module& module, size_t function_index) {
 }
 
 std::string identifierFrom(const std::string& text) {
+  constexpr size_t kIdentifierLength = 32;
   std::string result;
   for (char c : text) {
     const bool letter_or_digit = std::isalnum(static_cast<unsigned char>(c)) != 0;
@@ -123,6 +313,7 @@ std::string identifierFrom(const std::string& text) {
       result += c;
     else if (!result.empty() && result.back() != '_')
       result += '_';
+    if (result.size() >= kIdentifierLength) break;  // a whole expression would make a long name
   }
   while (!result.empty() && result.back() == '_') result.pop_back();
   return result.empty() ? "value" : result;

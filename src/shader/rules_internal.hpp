@@ -62,8 +62,14 @@ core::Error siteError(const RuleSite& site, const std::string& reason);
 
 // A readable name for a value in descriptions: its OpName, else "%<id>".
 std::string valueName(const ir::Module& module, ir::Id id);
-// The same for an operand, looking through a load to the variable or uniform-block member it reads, and showing
-// scalar constants by value: "vUV", "uBaseColorFactor", "0.5", else "%<id>".
+// A readable name of an operation for descriptions, as its GLSL function ("mix", "normalize",
+// "texture") or a word for an operator ("mul", "add", "lessThan"); "op <number>" when unnamed.
+std::string operationName(const ir::Instruction& instruction);
+// The same for an operand, in the shader's own words: looking through a load to the variable,
+// uniform-block member or element it reads, scalar constants by value, swizzles as ".xy", and an
+// unnamed result as the operation that computes it, two calls deep ("vUV", "uBaseColorFactor",
+// "0.5", "mul(dot(N, L), max(…, 0.0))", "texture(uBaseColor, vUV).rgb"); "%<id>" only for what it
+// cannot spell.
 std::string describeOperand(const ir::Module& module, const ir::DefUse& uses, ir::Id id);
 // The source-level name of function `function_index` ("fbm" for glslang's "fbm(vf3;").
 std::string functionName(const ir::Module& module, size_t function_index);
