@@ -229,7 +229,8 @@ TEST(CliSimplify, FilesBesideTheOutputAndItsFolderAreChecked) {
         (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
     test::CommandRun run = runCli({"simplify", sphere, out, "--ratio", "0.5"});
     EXPECT_EQ(run.exit_code, 1) << run.err;
-    EXPECT_TRUE(test::contains(run.err, std::string(kept) + ": already exists")) << run.err;
+    EXPECT_TRUE(test::contains(run.err, std::string(kept) + ": already exists (use --force"))
+        << run.err;
     EXPECT_EQ(test::readText(dir / kept), "precious");
     EXPECT_FALSE(fs::exists(out));
     test::CommandRun forced = runCli({"simplify", sphere, out, "--ratio", "0.5", "--force"});

@@ -15,6 +15,9 @@
 #include <set>
 #include <span>
 #include <sstream>
+#include <string>
+#include <string_view>
+#include <utility>
 
 #include "duolod/core.hpp"
 #include "duolod/io.hpp"
@@ -57,8 +60,21 @@ CLI::Validator between(double low, double high) {  // inclusive
   return numberWhere(text, [low, high](double v) { return v >= low && v <= high; });
 }
 
+// The library says what was not asked for; on the command line, the flag that asks for it.
+std::string withFlagHints(std::string message) {
+  static const std::pair<std::string_view, std::string_view> kHints[] = {
+      {", and replacing files was not asked for", " (use --force to replace it)"},
+      {", and writing into a folder that holds files was not asked for",
+       " (use --force to write into it)"},
+      {"(ContextOptions::device)", "(--device N)"}};
+  for (const auto& [library, flag] : kHints)
+    for (size_t at = message.find(library); at != std::string::npos; at = message.find(library))
+      message.replace(at, library.size(), flag);
+  return message;
+}
+
 int fail(const std::string& message) {
-  std::fprintf(stderr, "duolod: error: %s\n", message.c_str());
+  std::fprintf(stderr, "duolod: error: %s\n", withFlagHints(message).c_str());
   return 1;
 }
 

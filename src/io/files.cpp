@@ -93,7 +93,7 @@ core::Status FileSet::checkTarget(const std::string& path) const {
   if (auto writable = checkWritablePath(path); !writable) return writable;
   std::error_code ec;
   if (!replace_existing_ && fs::exists(path, ec))
-    return Error{path + ": already exists (use --force to replace it)"};
+    return Error{path + ": already exists, and replacing files was not asked for"};
   for (const Staged& file : staged_)
     if (file.target == path) return Error{path + ": written twice in one set"};
   return core::okStatus();
@@ -121,7 +121,7 @@ core::Status FileSet::adopt(const std::string& written, const std::string& path)
   // its rename in commit(), which puts back what the set had moved until then.
   std::error_code ec;
   if (!replace_existing_ && fs::exists(fs::symlink_status(path, ec)))
-    return Error{path + ": already exists (use --force to replace it)"};
+    return Error{path + ": already exists, and replacing files was not asked for"};
   for (const Staged& file : staged_)
     if (file.target == path) return Error{path + ": written twice in one set"};
   staged_.push_back({written, path});

@@ -26,7 +26,7 @@ core::Result<GlContext> GlContext::create(const ContextOptions& options) {
   if (options.device < 0) {
     if (extensions.find("EGL_MESA_platform_surfaceless") == std::string::npos)
       return Error{"EGL has no EGL_MESA_platform_surfaceless: install Mesa (libegl-mesa0, "
-                   "libgl1-mesa-dri) or pass --device N"};
+                   "libgl1-mesa-dri) or choose an EGL device by index (ContextOptions::device)"};
     context.display_ = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
                                                 nullptr);
   } else {
