@@ -142,10 +142,12 @@ struct SpirvBinary {
   std::vector<uint32_t> vertex, fragment;
 };
 
-// Loads NAME.vert and NAME.frag: a bare NAME from duolod's shaders/ folder (the environment
-// variable DUOLOD_SHADER_DIR replaces it), else from the working folder; a path prefix
-// ("dir/name", "./name") as it is.
+// Loads NAME.vert and NAME.frag: a bare NAME from duolod's shaders/ folder (shaderDirectory),
+// else from the working folder; a path prefix ("dir/name", "./name") as it is.
 core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix);
+// duolod's shaders/ folder: the environment variable DUOLOD_SHADER_DIR when set, else the source
+// tree the library was built from while it exists, else the installed copy (share/duolod/shaders
+// under the install prefix).
 std::string shaderDirectory();
 
 // ---------------------------------------------------------------------------------------------

@@ -78,7 +78,11 @@ core::Result<Bindings> parseBindings(const std::string& json_text, const std::st
 
 std::string shaderDirectory() {
   if (const char* overridden = std::getenv("DUOLOD_SHADER_DIR")) return overridden;
-  return DUOLOD_SHADER_DIR;
+  // The source tree the library was built from, while it exists; else where `cmake --install`
+  // put the shaders.
+  std::error_code ec;
+  if (std::filesystem::is_directory(DUOLOD_SHADER_DIR, ec)) return DUOLOD_SHADER_DIR;
+  return DUOLOD_INSTALLED_SHADER_DIR;
 }
 
 core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix) {
