@@ -156,6 +156,33 @@ TEST(CliShaderTest, GreedySearchRecordsItsSteps) {
     EXPECT_FALSE(fs::exists(out / ("level02" + std::string(extension)))) << extension;
 }
 
+// An HLSL shader pair goes through the whole search and comes out as every kind of file, HLSL
+// included; an entry point the file lacks is an error naming it.
+TEST(CliShaderTest, HlslShadersAreSimplifiedToo) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const std::string vert = test::sourcePath("shaders/hlsl/lambert.vert.hlsl");
+  const std::string frag = test::sourcePath("shaders/hlsl/lambert.frag.hlsl");
+  fs::path out = test::scratchDir("cli_shader_hlsl") / "out";
+  test::CommandRun run =
+      runCli({"shader", spot, "--vert", vert, "--frag", frag, "--distance", "30", "--seed", "5",
+              "--generations", "1", "--population", "4", "--no-timing", "--out", out.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  nlohmann::json summary = nlohmann::json::parse(test::readText(out / "summary.json"));
+  ASSERT_GE(summary["levels"].size(), 2u) << run.out;
+  for (const nlohmann::json& level : summary["levels"])
+    expectLevelFiles(out, level["files"].get<std::string>());
+  // Rules describe the shader in its own names, not HLSL's plumbing or SPIR-V ids.
+  EXPECT_FALSE(test::contains(run.out, "%")) << run.out;
+  EXPECT_FALSE(test::contains(run.out, "entryPointOutput")) << run.out;
+
+  test::CommandRun missing =
+      runCli({"shader", spot, "--vert", vert, "--frag", frag, "--frag-entry", "PSMain",
+              "--distance", "30", "--out", (out.parent_path() / "other").string()});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_TRUE(test::contains(missing.err, "lambert.frag.hlsl")) << missing.err;
+  EXPECT_TRUE(test::contains(missing.err, "PSMain")) << missing.err;
+}
+
 TEST(CliShaderTest, BadFlagsAreClearErrors) {
   test::CommandRun no_distance = runCli({"shader", "missing.obj", "--out", "x"});
   EXPECT_NE(no_distance.exit_code, 0);

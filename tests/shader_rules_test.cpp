@@ -179,6 +179,32 @@ TEST(ShaderRules, OperationRemovalSitesAreTypeCorrect) {
   EXPECT_EQ(vertex_sites.size(), 2u);
 }
 
+// A position computed in a function (as HLSL's entry point returns it, in a struct) is protected
+// through the call: no operation of that function is offered, while vA's scale in main still is.
+TEST(ShaderRules, OperationRemovalKeepsAPositionComputedInAFunction) {
+  const char* vertex = R"(#version 450 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 0) out vec4 vA;
+layout(location = 1) out vec4 vB;
+layout(location = 2) out float vS;
+layout(std140, binding = 0) uniform Frame { mat4 uModel; mat4 uView; mat4 uProjection; };
+vec4 scaled(vec4 p) { return p * 2.0; }
+vec4 clipPosition(vec3 p) { return uProjection * (uView * (uModel * scaled(vec4(p, 1.0)))); }
+void main() {
+  vA = vec4(inPosition, 1.0) * 0.5;
+  vB = vec4(0.25);
+  vS = 2.0;
+  gl_Position = clipPosition(inPosition);
+}
+)";
+  ShaderProgram program = programOrDie(vertex, kProductFragment);
+  std::vector<RuleSite> sites =
+      sitesOfKind(enumerateSites(program, {}), RuleKind::kOperationRemoval, Stage::kVertex);
+  ASSERT_EQ(sites.size(), 2u);  // vA's scale: keep either operand
+  for (const RuleSite& site : sites)
+    EXPECT_TRUE(test::contains(site.description, "vertex main: mul(vec4(")) << site.description;
+}
+
 TEST(ShaderRules, OperationRemovalStoresTheKeptOperand) {
   ShaderProgram program = programOrDie(kProductVertex, R"(#version 450 core
 layout(location = 0) in vec4 vA;
@@ -308,6 +334,39 @@ TEST(ShaderRules, TextureAverageStoresTheAverageConstant) {
   auto stale = applyRule(averaged, mip[0], context);
   ASSERT_FALSE(stale.ok());
   EXPECT_NE(stale.error().message.find("no longer"), std::string::npos) << stale.error().message;
+}
+
+// In the vertex stage, a displacement map's sample and a loop summing the position (as skinning
+// does) shape the geometry: neither is offered, while a sample and a loop that feed only a varying
+// are.
+TEST(ShaderRules, VertexSamplesAndLoopsThePositionDependsOnAreNotOffered) {
+  ShaderProgram program = programOrDie(R"(#version 450 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 3) in vec2 inUV0;
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(binding = 3) uniform sampler2D uOcclusionTexture;
+layout(location = 0) out vec2 vUV;
+void main() {
+  vec3 moved = inPosition;
+  for (int i = 0; i < 4; ++i) moved += vec3(0.01 * float(i));
+  float tint = 0.0;
+  for (int j = 0; j < 3; ++j) tint += 0.1;
+  float height = textureLod(uOcclusionTexture, inUV0, 0.0).r;
+  vUV = inUV0 * textureLod(uBaseColorTexture, inUV0, 0.0).rg * tint;
+  gl_Position = vec4(moved.xy, height, 1.0);
+}
+)", kTextureFragment);
+  RuleContext context;
+  context.texture_averages[0] = {0.5f, 0.5f, 0.5f, 1.0f};
+  context.texture_averages[3] = {0.5f, 0.5f, 0.5f, 1.0f};
+  std::vector<RuleSite> sites = enumerateSites(program, context);
+  std::vector<RuleSite> averages = sitesOfKind(sites, RuleKind::kTextureAverage, Stage::kVertex);
+  ASSERT_EQ(averages.size(), 1u);
+  EXPECT_TRUE(test::contains(averages[0].description, "uBaseColorTexture")) << averages[0].description;
+  std::vector<RuleSite> loops = sitesOfKind(sites, RuleKind::kLoopTruncation, Stage::kVertex);
+  ASSERT_FALSE(loops.empty());
+  for (const RuleSite& loop : loops)
+    EXPECT_TRUE(test::contains(loop.description, "loop over j")) << loop.description;
 }
 
 // The Bias / Lod operand id of a sample (the first after the image-operand mask), or kNoId.

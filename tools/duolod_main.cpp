@@ -25,6 +25,7 @@
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
+#include "duolod/shader.hpp"
 #include "shader/lod_search.hpp"
 
 namespace {
@@ -78,10 +79,18 @@ int fail(const std::string& message) {
   return 1;
 }
 
+bool isHlslFile(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".hlsl";
+}
+
 // Options shared by the commands that render.
 struct ShadingFlags {
   std::string shader = "pbr";
   std::string vert, frag, bindings;
+  std::string vert_entry = "main", frag_entry = "main";
   int device = -1;
   float fov_y_deg = 45.0f;
   int screen_height = 1080;
@@ -104,8 +113,16 @@ struct ShadingFlags {
                          "duolod shader by name (pbr, noise_phong, blend, constant) or a path "
                          "prefix P with P.vert and P.frag")
             ->capture_default_str();
-    command->add_option("--vert", vert, "vertex shader (GLSL 450); needs --frag");
-    command->add_option("--frag", frag, "fragment shader (GLSL 450); needs --vert");
+    command->add_option("--vert", vert,
+                        "vertex shader: GLSL 450, or HLSL when the file name ends in .hlsl "
+                        "(README, Shaders); needs --frag");
+    command->add_option("--frag", frag,
+                        "fragment (pixel) shader: GLSL 450, or HLSL when the file name ends in "
+                        ".hlsl; needs --vert");
+    command->add_option("--vert-entry", vert_entry, "entry point of an HLSL --vert")
+        ->capture_default_str();
+    command->add_option("--frag-entry", frag_entry, "entry point of an HLSL --frag")
+        ->capture_default_str();
     command->add_option("--bindings", bindings,
                         "JSON file moving the shader interface's attribute locations, block and "
                         "texture bindings, e.g. {\"attributes\": {\"color\": 7}} (README, "
@@ -128,16 +145,27 @@ struct ShadingFlags {
     if (!vert.empty() && shader_option && shader_option->count() > 0)
       return core::Error{"give --shader or --vert with --frag, not both"};
     if (!vert.empty()) {
-      auto read = [](const std::string& path) -> core::Result<std::string> {
+      // GLSL as it is; HLSL translated to GLSL 450 first (shader::hlslToGlsl), which is what
+      // every later stage takes.
+      auto read = [](const std::string& path, shader::Stage stage,
+                     const std::string& entry) -> core::Result<std::string> {
         auto bytes = io::readFileBytes(path);  // names a missing file or a folder
         if (!bytes) return bytes.error();
-        return std::string(bytes->begin(), bytes->end());
+        std::string text(bytes->begin(), bytes->end());
+        if (!isHlslFile(path)) return text;
+        shader::CompileOptions options;
+        options.entry_point = entry;
+        options.include_dirs = {fs::path(path).parent_path().string()};
+        return shader::hlslToGlsl(text, stage, path, options);
       };
-      auto v = read(vert);
+      auto v = read(vert, shader::Stage::kVertex, vert_entry);
       if (!v) return v.error();
-      auto f = read(frag);
+      auto f = read(frag, shader::Stage::kFragment, frag_entry);
       if (!f) return f.error();
-      return render::GlslSource{*v, *f, vert, frag};
+      auto name = [](const std::string& path) {
+        return isHlslFile(path) ? path + " (as GLSL)" : path;
+      };
+      return render::GlslSource{*v, *f, name(vert), name(frag)};
     }
     return render::loadShaderPair(shader);
   }

@@ -48,6 +48,16 @@ const char* targetName(Target target);
 // the output reads like the input). `what` names the module in errors.
 core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Target target,
                                        const std::string& what);
+// HLSL source as GLSL 450, so that an HLSL shader goes wherever duolod takes GLSL (the renderer,
+// the rules, `duolod shader` and `generate`): compiled by glslang's HLSL front end (entry point
+// `options.entry_point`; locations and bindings the source leaves out are assigned in declaration
+// order, so both stages must declare their varyings alike), then emitted by SPIRV-Cross. Each
+// texture sampled with a SamplerState becomes one sampler2D named and bound as the texture
+// (`Texture2D uBaseColorTexture : register(t0)` → `sampler2D uBaseColorTexture` at binding 0);
+// cbuffers keep their register's binding (b0 → 0), vertex inputs their [[vk::location(N)]].
+core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
+                                     const std::string& file_name, const CompileOptions& options = {});
+
 // Re-compiles emitted source with glslang as a check: GLSL 450 to SPIR-V (validated), GLSL ES 300
 // with the ES profile, HLSL with the HLSL front end (entry "main"). The error names `what`.
 core::Status checkCrossCompiled(const std::string& source, Target target, Stage stage,

@@ -6,6 +6,7 @@
 #include <spirv_glsl.hpp>
 #include <spirv_hlsl.hpp>
 
+#include <cctype>
 #include <exception>
 
 #include "duolod/shader.hpp"
@@ -82,6 +83,53 @@ core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Targe
     return compiler.compile();
   } catch (const std::exception& error) {
     return Error{what + ": SPIRV-Cross (" + targetName(target) + "): " + error.what()};
+  }
+}
+
+core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
+                                     const std::string& file_name, const CompileOptions& options) {
+  CompileOptions hlsl = options;
+  hlsl.language = Language::kHlsl;
+  auto words = compileToSpirv(source, stage, file_name, hlsl);
+  if (!words) return words.error();
+  if (auto valid = validateSpirv(*words, file_name); !valid) return valid.error();
+  try {
+    spirv_cross::CompilerGLSL compiler(*words);
+    setGlslOptions(compiler, Target::kGlsl450);
+    // OpenGL has no separate samplers: each (texture, sampler) pair the shader samples with
+    // becomes one sampler2D, named and bound as the texture (register(tN) → binding N), which is
+    // how duolod's interface binds textures.
+    compiler.build_combined_image_samplers();
+    for (const spirv_cross::CombinedImageSampler& pair : compiler.get_combined_image_samplers()) {
+      compiler.set_name(pair.combined_id, compiler.get_name(pair.image_id));
+      if (compiler.has_decoration(pair.image_id, spv::DecorationBinding))
+        compiler.set_decoration(pair.combined_id, spv::DecorationBinding,
+                                compiler.get_decoration(pair.image_id, spv::DecorationBinding));
+    }
+    // Names for what glslang leaves unnamed or names after HLSL's plumbing, so that the GLSL,
+    // and the rules' descriptions of it, read as a GLSL author would write them: a cbuffer
+    // `Frame` is read through `frame` (not `_27`), the entry point's result is `outColor` or
+    // `out_<member>` (not `_entryPointOutput_<member>`).
+    const spirv_cross::ShaderResources resources = compiler.get_shader_resources();
+    for (const spirv_cross::Resource& block : resources.uniform_buffers) {
+      if (!compiler.get_name(block.id).empty()) continue;
+      std::string name = compiler.get_name(block.base_type_id);
+      if (name.empty()) continue;
+      name[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(name[0])));
+      if (name != compiler.get_name(block.base_type_id)) compiler.set_name(block.id, name);
+    }
+    const std::string plumbing = "@entryPointOutput";
+    for (const spirv_cross::Resource& output : resources.stage_outputs) {
+      const std::string name = compiler.get_name(output.id);
+      if (name.rfind(plumbing, 0) != 0) continue;
+      const std::string member = name.substr(plumbing.size());  // "" or ".worldPosition"
+      compiler.set_name(output.id, member.empty()
+                                       ? (stage == Stage::kFragment ? "outColor" : "outValue")
+                                       : "out_" + member.substr(1));
+    }
+    return compiler.compile();
+  } catch (const std::exception& error) {
+    return Error{file_name + ": SPIRV-Cross (GLSL 450 from HLSL): " + error.what()};
   }
 }
 

@@ -220,6 +220,18 @@ std::string loopLabel(const ir::Module& module, const CountedLoop& loop) {
          (function.empty() ? std::string() : " in " + function);
 }
 
+// Whether an instruction of the loop headed by block `header` has a result in `ids`.
+bool loopFeedsAnyOf(const ir::Function& function, const ir::Cfg& cfg, int header,
+                    const std::unordered_set<ir::Id>& ids) {
+  const std::vector<bool> in_loop = loopConstructBlocks(cfg, header);
+  for (size_t b = 0; b < in_loop.size() && b < function.blocks.size(); ++b) {
+    if (!in_loop[b]) continue;
+    for (const ir::Instruction& instruction : function.blocks[b].instructions)
+      if (instruction.hasResult() && ids.count(instruction.result_id)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<RuleSite> findLoopTruncationSites(const ShaderProgram& program, const RuleContext&) {
@@ -227,12 +239,18 @@ std::vector<RuleSite> findLoopTruncationSites(const ShaderProgram& program, cons
   for (Stage stage : {Stage::kVertex, Stage::kFragment}) {
     const ir::Module& module = stageModule(program, stage);
     ir::DefUse uses(module);
+    // A vertex-stage loop the position depends on (skinning over bones) is left alone.
+    const std::unordered_set<ir::Id> position =
+        stage == Stage::kVertex ? vertexPositionSources(module, uses) : std::unordered_set<ir::Id>{};
     for (size_t f = 0; f < module.functions.size(); ++f) {
       ir::Cfg cfg = ir::buildCfg(module.functions[f]);
       for (size_t b = 0; b < cfg.blocks.size(); ++b) {
         std::optional<CountedLoop> loop =
             recogniseLoop(module, uses, static_cast<int>(f), cfg, static_cast<int>(b));
         if (!loop) continue;
+        if (!position.empty() &&
+            loopFeedsAnyOf(module.functions[f], cfg, static_cast<int>(b), position))
+          continue;
         for (int64_t iterations : iterationChoices(loop->trip_count)) {
           if (!boundFor(*loop, iterations)) continue;
           sites.push_back({.kind = RuleKind::kLoopTruncation,

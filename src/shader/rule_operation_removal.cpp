@@ -105,36 +105,15 @@ void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
   }
 }
 
-// Ids the vertex stage writes into its position (gl_PerVertex members or a Position builtin).
-void protectVertexPosition(const ir::Module& module, const ir::DefUse& uses,
-                           std::unordered_set<ir::Id>& protect) {
-  std::set<ir::Id> position_variables;
-  for (const ir::InterfaceVariable& variable : ir::interfaceVariables(module, uses))
-    if (variable.storage == spv::StorageClassOutput && variable.builtin)
-      position_variables.insert(variable.variable);
-  auto basePointer = [&](ir::Id pointer) {
-    const ir::Instruction* definition = uses.def(pointer);
-    while (definition && (definition->opcode == spv::OpAccessChain ||
-                          definition->opcode == spv::OpInBoundsAccessChain))
-      definition = uses.def(definition->operands[0]);
-    return definition ? definition->result_id : ir::kNoId;
-  };
-  for (const ir::Function& function : module.functions)
-    for (const ir::Block& block : function.blocks)
-      for (const ir::Instruction& instruction : block.instructions)
-        if (instruction.opcode == spv::OpStore &&
-            position_variables.count(basePointer(instruction.operands[0]))) {
-          ir::ValueSources slice = ir::backwardSlice(module, uses, instruction.operands[1]);
-          protect.insert(slice.instructions.begin(), slice.instructions.end());
-        }
-}
-
 std::unordered_set<ir::Id> protectedValues(const ir::Module& module, const ir::DefUse& uses,
                                            Stage stage) {
   std::unordered_set<ir::Id> protect;
   for (const ir::Function& function : module.functions)
     protectLoopConditions(module, uses, function, protect);
-  if (stage == Stage::kVertex) protectVertexPosition(module, uses, protect);
+  if (stage == Stage::kVertex) {
+    std::unordered_set<ir::Id> position = vertexPositionSources(module, uses);
+    protect.insert(position.begin(), position.end());
+  }
   return protect;
 }
 

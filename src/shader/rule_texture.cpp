@@ -86,10 +86,13 @@ void forEachSample(const ShaderProgram& program, Visit visit) {
   for (Stage stage : {Stage::kVertex, Stage::kFragment}) {
     const ir::Module& module = stageModule(program, stage);
     ir::DefUse uses(module);
+    // A vertex-stage sample the position depends on (a displacement map) is left alone.
+    const std::unordered_set<ir::Id> position =
+        stage == Stage::kVertex ? vertexPositionSources(module, uses) : std::unordered_set<ir::Id>{};
     for (const ir::Function& function : module.functions)
       for (const ir::Block& block : function.blocks)
         for (const ir::Instruction& instruction : block.instructions)
-          if (sampleShape(instruction.opcode))
+          if (sampleShape(instruction.opcode) && !position.count(instruction.result_id))
             if (std::optional<TextureSample> sample = findSample(module, uses, instruction.result_id))
               visit(stage, module, uses, *sample);
   }

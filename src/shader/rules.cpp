@@ -10,6 +10,7 @@
 #include <span>
 #include <cctype>
 #include <optional>
+#include <set>
 #include <unordered_map>
 
 #include "shader/rules_internal.hpp"
@@ -317,6 +318,56 @@ std::string identifierFrom(const std::string& text) {
   }
   while (!result.empty() && result.back() == '_') result.pop_back();
   return result.empty() ? "value" : result;
+}
+
+namespace {
+
+// Every result of function `function_id` and of the functions it calls.
+void addFunctionResults(const ir::Module& module, ir::Id function_id,
+                        std::unordered_set<ir::Id>& ids, std::set<ir::Id>& done) {
+  if (!done.insert(function_id).second) return;
+  const ir::Function* function = module.findFunction(function_id);
+  if (!function) return;
+  for (const ir::Block& block : function->blocks)
+    for (const ir::Instruction& instruction : block.instructions) {
+      if (instruction.hasResult()) ids.insert(instruction.result_id);
+      if (instruction.opcode == spv::OpFunctionCall)
+        addFunctionResults(module, instruction.operands[0], ids, done);
+    }
+}
+
+}  // namespace
+
+std::unordered_set<ir::Id> vertexPositionSources(const ir::Module& module,
+                                                 const ir::DefUse& uses) {
+  std::unordered_set<ir::Id> sources;
+  std::set<ir::Id> position_variables, whole_functions;
+  for (const ir::InterfaceVariable& variable : ir::interfaceVariables(module, uses))
+    if (variable.storage == spv::StorageClassOutput && variable.builtin)
+      position_variables.insert(variable.variable);
+  auto basePointer = [&](ir::Id pointer) {
+    const ir::Instruction* definition = uses.def(pointer);
+    while (definition && (definition->opcode == spv::OpAccessChain ||
+                          definition->opcode == spv::OpInBoundsAccessChain))
+      definition = uses.def(definition->operands[0]);
+    return definition ? definition->result_id : ir::kNoId;
+  };
+  for (const ir::Function& function : module.functions)
+    for (const ir::Block& block : function.blocks)
+      for (const ir::Instruction& instruction : block.instructions)
+        if (instruction.opcode == spv::OpStore &&
+            position_variables.count(basePointer(instruction.operands[0]))) {
+          ir::ValueSources slice = ir::backwardSlice(module, uses, instruction.operands[1]);
+          sources.insert(slice.instructions.begin(), slice.instructions.end());
+          // The slice stops at calls (it summarises callees): a position computed in a function
+          // (HLSL's entry point returns it in a struct that main copies out) keeps that whole
+          // function, and what it calls, as it is.
+          for (ir::Id id : slice.instructions)
+            if (const ir::Instruction* call = uses.def(id);
+                call && call->opcode == spv::OpFunctionCall)
+              addFunctionResults(module, call->operands[0], sources, whole_functions);
+        }
+  return sources;
 }
 
 std::string valueTargetUnsuitability(const ir::Module& fragment, const ir::DefUse& uses,

@@ -11,6 +11,7 @@
 
 #include <set>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "shader/ir.hpp"
@@ -79,6 +80,12 @@ std::string functionName(const ir::Module& module, size_t function_index);
 // therefore rewrites, so a name with one would not be the name in the cross-compiled source that
 // the summary and lod.json list ("%316" gave "uAverage__316_40", declared as uAverage_316_40).
 std::string identifierFrom(const std::string& text);
+
+// What the vertex stage's position (gl_Position, a Position builtin) is computed from: the result
+// ids of its backward slice, and every result of a function that slice calls and of what that
+// calls. No rule changes them: moving the geometry is the mesh simplifier's business, not the
+// shader's.
+std::unordered_set<ir::Id> vertexPositionSources(const ir::Module& module, const ir::DefUse& uses);
 
 // Why fragment `value` cannot be the target of a value rule (moving to parameter, per-vertex) by
 // its definition alone: not a result of the fragment entry point, not a 32-bit float scalar or

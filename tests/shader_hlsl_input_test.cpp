@@ -1,0 +1,147 @@
+// HLSL input (shader::hlslToGlsl): an HLSL shader on duolod's interface becomes GLSL 450 that
+// renders what the same shader written in GLSL renders, with the interface's bindings and
+// readable names; broken HLSL is an error naming the file.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "duolod/io.hpp"
+#include "duolod/metric.hpp"
+#include "duolod/render.hpp"
+#include "duolod/shader.hpp"
+#include "test_support.hpp"
+
+namespace duolod::shader {
+namespace {
+
+// shaders/hlsl/lambert.*.hlsl written in GLSL by hand.
+const char* kGlslTwinVertex = R"(#version 450 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(location = 3) in vec2 inUV0;
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) out vec3 vWorldPosition;
+layout(location = 1) out vec3 vWorldNormal;
+layout(location = 2) out vec2 vUV;
+void main() {
+  vec4 world = uModel * vec4(inPosition, 1.0);
+  vWorldPosition = world.xyz;
+  vWorldNormal = mat3(uNormalMatrix) * inNormal;
+  vUV = inUV0;
+  gl_Position = uProjection * (uView * world);
+}
+)";
+const char* kGlslTwinFragment = R"(#version 450 core
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(std140, binding = 1) uniform Material {
+  vec4 uBaseColorFactor; vec4 uEmissiveFactor; vec4 uMaterialParams; vec4 uTextureFlags;
+  vec4 uTextureFlags2;
+};
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(location = 0) in vec3 vWorldPosition;
+layout(location = 1) in vec3 vWorldNormal;
+layout(location = 2) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 n = normalize(vWorldNormal);
+  vec3 l = normalize(uLightPosition.xyz - vWorldPosition);
+  vec3 albedo = uBaseColorFactor.rgb * texture(uBaseColorTexture, vUV).rgb;
+  vec3 lit = albedo * (uAmbientColor.rgb + uLightColor.rgb * max(dot(n, l), 0.0));
+  outColor = vec4(pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+}
+)";
+
+std::string exampleHlsl(const char* file) {
+  return test::readText(test::sourcePath(std::string("shaders/hlsl/") + file));
+}
+
+TEST(HlslInput, TheExampleBecomesGlslOnTheInterface) {
+  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl");
+  ASSERT_TRUE(vertex.ok()) << vertex.error().message;
+  auto fragment =
+      hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
+  ASSERT_TRUE(fragment.ok()) << fragment.error().message;
+  // The interface: attribute locations from [[vk::location]], block bindings from registers, the
+  // texture and its sampler as one sampler2D at the texture's binding.
+  for (const char* expected :
+       {"layout(location = 0) in vec3 input_position", "layout(location = 1) in vec3 input_normal",
+        "layout(location = 3) in vec2 input_uv", "layout(binding = 0, std140) uniform Frame",
+        "} frame;", "layout(location = 0) out vec3 out_worldPosition"})
+    EXPECT_TRUE(test::contains(*vertex, expected)) << expected << "\n" << *vertex;
+  for (const char* expected :
+       {"layout(binding = 1, std140) uniform Material", "} material;",
+        "layout(binding = 0) uniform sampler2D uBaseColorTexture;",
+        "layout(location = 0) out vec4 outColor;"})
+    EXPECT_TRUE(test::contains(*fragment, expected)) << expected << "\n" << *fragment;
+  EXPECT_FALSE(test::contains(*fragment, "uBaseColorSampler")) << *fragment;
+  // What it emits is GLSL duolod compiles as it compiles a user's.
+  EXPECT_TRUE(compileToSpirv(*vertex, Stage::kVertex, "vertex").ok());
+  EXPECT_TRUE(compileToSpirv(*fragment, Stage::kFragment, "fragment").ok());
+}
+
+TEST(HlslInput, TheExampleRendersAsItsGlslTwin) {
+  DUOLOD_REQUIRE_ASSET(path, "obj/spot/spot.obj");
+  std::string failure;
+  std::unique_ptr<render::Renderer> renderer(test::createRenderer(failure));
+  if (!renderer) FAIL() << failure;
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  auto id = renderer->uploadAsset(*asset);
+  ASSERT_TRUE(id.ok()) << id.error().message;
+
+  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl");
+  auto fragment =
+      hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
+  ASSERT_TRUE(vertex.ok() && fragment.ok());
+  auto from_hlsl = renderer->compileProgram({*vertex, *fragment, "hlsl.vert", "hlsl.frag"});
+  ASSERT_TRUE(from_hlsl.ok()) << from_hlsl.error().message;
+  auto twin = renderer->compileProgram({kGlslTwinVertex, kGlslTwinFragment, "twin.vert", "twin.frag"});
+  ASSERT_TRUE(twin.ok()) << twin.error().message;
+
+  const core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
+  std::vector<render::Sample> all = render::domainSamples(sphere, sphere.radius * 3.0f);
+  std::vector<render::Sample> samples;
+  for (size_t i = 0; i < all.size(); i += 23) samples.push_back(all[i]);
+  const render::RenderOptions options{.resolution = 96};
+  auto expected = renderer->render(*id, *twin, samples, options);
+  ASSERT_TRUE(expected.ok()) << expected.error().message;
+  auto actual = renderer->render(*id, *from_hlsl, samples, options);
+  ASSERT_TRUE(actual.ok()) << actual.error().message;
+  ASSERT_EQ(actual->pixels.size(), expected->pixels.size());
+  int largest = 0;
+  size_t covered = 0, lit = 0;
+  for (size_t i = 0; i < expected->pixels.size(); ++i) {
+    largest = std::max(largest, std::abs(int(actual->pixels[i]) - int(expected->pixels[i])));
+    if (i % 4 == 3 && expected->pixels[i] > 0) {
+      ++covered;
+      if (expected->pixels[i - 3] > 40) ++lit;
+    }
+  }
+  EXPECT_GT(covered, 2000u) << "the object must be visible";
+  EXPECT_GT(lit, covered / 4) << "and lit, not black";
+  // The same image up to float rounding (the HLSL path computes 1/2.2 as a constant).
+  EXPECT_LE(largest, 1);
+  renderer->releaseAsset(*id);
+}
+
+TEST(HlslInput, BrokenShadersAreErrorsNamingTheFile) {
+  auto broken = hlslToGlsl("float4 main() : SV_Target {\n  return float4(1, 2);\n}\n",
+                           Stage::kFragment, "broken.hlsl");
+  ASSERT_FALSE(broken.ok());
+  EXPECT_TRUE(test::contains(broken.error().message, "broken.hlsl")) << broken.error().message;
+  CompileOptions options;
+  options.entry_point = "PSMain";
+  auto missing = hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl",
+                            options);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_TRUE(test::contains(missing.error().message, "PSMain")) << missing.error().message;
+}
+
+}  // namespace
+}  // namespace duolod::shader
