@@ -141,6 +141,18 @@ TEST(HlslInput, BrokenShadersAreErrorsNamingTheFile) {
                             options);
   ASSERT_FALSE(missing.ok());
   EXPECT_TRUE(test::contains(missing.error().message, "PSMain")) << missing.error().message;
+  // One texture under two sampler states has no single sampler2D to become.
+  auto two_samplers = hlslToGlsl(R"(Texture2D uBaseColorTexture : register(t0);
+SamplerState uLinear : register(s0);
+SamplerState uPoint : register(s1);
+float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
+  return uBaseColorTexture.Sample(uLinear, uv) + uBaseColorTexture.Sample(uPoint, uv);
+}
+)",
+                                 Stage::kFragment, "two.hlsl");
+  ASSERT_FALSE(two_samplers.ok());
+  EXPECT_TRUE(test::contains(two_samplers.error().message, "two.hlsl: texture 'uBaseColorTexture'"))
+      << two_samplers.error().message;
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <cctype>
 #include <exception>
+#include <set>
 
 #include "duolod/shader.hpp"
 
@@ -100,6 +101,12 @@ core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
     // becomes one sampler2D, named and bound as the texture (register(tN) → binding N), which is
     // how duolod's interface binds textures.
     compiler.build_combined_image_samplers();
+    std::set<spirv_cross::VariableID> textures;
+    for (const spirv_cross::CombinedImageSampler& pair : compiler.get_combined_image_samplers())
+      if (!textures.insert(pair.image_id).second)
+        return Error{file_name + ": texture '" + compiler.get_name(pair.image_id) +
+                     "' is sampled with more than one SamplerState; OpenGL binds one sampler "
+                     "state per texture unit, so use one SamplerState per texture"};
     for (const spirv_cross::CombinedImageSampler& pair : compiler.get_combined_image_samplers()) {
       compiler.set_name(pair.combined_id, compiler.get_name(pair.image_id));
       if (compiler.has_decoration(pair.image_id, spv::DecorationBinding))
