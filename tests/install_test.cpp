@@ -63,8 +63,8 @@ std::string gridObj() {
 TEST(Install, FindPackageBuildsAnEngineProgram) {
   const fs::path dir = test::scratchDir("install");
   const fs::path prefix = dir / "prefix";
-  test::CommandRun install =
-      test::runCommand(CMAKE_COMMAND, {"--install", DUOLOD_BINARY_DIR, "--prefix", prefix.string()});
+  test::CommandRun install = test::runCommand(
+      CMAKE_COMMAND, {"--install", DUOLOD_BINARY_DIR, "--prefix", prefix.string()});
   ASSERT_EQ(install.exit_code, 0) << install.out << install.err;
   EXPECT_TRUE(fs::exists(prefix / "include/duolod/runtime.hpp"));
   EXPECT_TRUE(fs::exists(prefix / "lib/cmake/duolod/duolodConfig.cmake"));
@@ -76,7 +76,10 @@ TEST(Install, FindPackageBuildsAnEngineProgram) {
   std::ofstream(source / "CMakeLists.txt") << kConsumerCMake;
   std::ofstream(source / "engine.cpp") << kConsumerSource;
   // Only the installed prefix: not the build tree, which the library's own targets live in.
-  std::vector<std::string> configure = {"-S", source.string(), "-B", (source / "build").string(),
+  std::vector<std::string> configure = {"-S",
+                                        source.string(),
+                                        "-B",
+                                        (source / "build").string(),
                                         "-DCMAKE_PREFIX_PATH=" + prefix.string(),
                                         "-DCMAKE_BUILD_TYPE=Release"};
 #ifdef DUOLOD_TEST_SANITIZE  // the installed library is instrumented: so must the program be
@@ -89,8 +92,9 @@ TEST(Install, FindPackageBuildsAnEngineProgram) {
   ASSERT_EQ(built.exit_code, 0) << built.out << built.err;
 
   std::ofstream(dir / "grid.obj") << gridObj();
-  test::CommandRun run = test::runCommand((source / "build" / "engine").string(),
-                                          {(dir / "grid.obj").string(), (dir / "out.obj").string()});
+  test::CommandRun run =
+      test::runCommand((source / "build" / "engine").string(),
+                       {(dir / "grid.obj").string(), (dir / "out.obj").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.out, "triangles 512 -> 128, installed shaders found\n");
   EXPECT_TRUE(fs::exists(dir / "out.obj"));

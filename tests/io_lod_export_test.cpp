@@ -239,7 +239,8 @@ TEST(GltfLodChain, LevelsWithEqualMeshesShareOneGltfMesh) {
   EXPECT_EQ(validation.report["issues"]["numErrors"], 0) << validation.report.dump(1);
 
   const std::string gltf_path = (dir / "repeated.gltf").string();
-  ASSERT_TRUE(io::writeGltfLodChain(chain.asset, repeated, {{0.2, 0.1, 0.05, 0.0}}, gltf_path).ok());
+  ASSERT_TRUE(
+      io::writeGltfLodChain(chain.asset, repeated, {{0.2, 0.1, 0.05, 0.0}}, gltf_path).ok());
   json document = json::parse(test::readText(gltf_path));
   EXPECT_EQ(document["meshes"].size(), 3u);
   EXPECT_EQ(document["nodes"].size(), 4u);

@@ -74,10 +74,9 @@ TEST(HlslInput, TheExampleBecomesGlslOnTheInterface) {
         "layout(location = 3) in vec2 input_uv", "layout(binding = 0, std140) uniform Frame",
         "} frame;", "layout(location = 0) out vec3 out_worldPosition"})
     EXPECT_TRUE(test::contains(*vertex, expected)) << expected << "\n" << *vertex;
-  for (const char* expected :
-       {"layout(binding = 1, std140) uniform Material", "} material;",
-        "layout(binding = 0) uniform sampler2D uBaseColorTexture;",
-        "layout(location = 0) out vec4 outColor;"})
+  for (const char* expected : {"layout(binding = 1, std140) uniform Material", "} material;",
+                               "layout(binding = 0) uniform sampler2D uBaseColorTexture;",
+                               "layout(location = 0) out vec4 outColor;"})
     EXPECT_TRUE(test::contains(*fragment, expected)) << expected << "\n" << *fragment;
   EXPECT_FALSE(test::contains(*fragment, "uBaseColorSampler")) << *fragment;
   // What it emits is GLSL duolod compiles as it compiles a user's.
@@ -101,7 +100,8 @@ TEST(HlslInput, TheExampleRendersAsItsGlslTwin) {
   ASSERT_TRUE(vertex.ok() && fragment.ok());
   auto from_hlsl = renderer->compileProgram({*vertex, *fragment, "hlsl.vert", "hlsl.frag"});
   ASSERT_TRUE(from_hlsl.ok()) << from_hlsl.error().message;
-  auto twin = renderer->compileProgram({kGlslTwinVertex, kGlslTwinFragment, "twin.vert", "twin.frag"});
+  auto twin =
+      renderer->compileProgram({kGlslTwinVertex, kGlslTwinFragment, "twin.vert", "twin.frag"});
   ASSERT_TRUE(twin.ok()) << twin.error().message;
 
   const core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
@@ -137,8 +137,8 @@ TEST(HlslInput, BrokenShadersAreErrorsNamingTheFile) {
   EXPECT_TRUE(test::contains(broken.error().message, "broken.hlsl")) << broken.error().message;
   CompileOptions options;
   options.entry_point = "PSMain";
-  auto missing = hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl",
-                            options);
+  auto missing =
+      hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl", options);
   ASSERT_FALSE(missing.ok());
   EXPECT_TRUE(test::contains(missing.error().message, "PSMain")) << missing.error().message;
   // One texture under two sampler states has no single sampler2D to become.

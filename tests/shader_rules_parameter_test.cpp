@@ -203,7 +203,8 @@ TEST(IdentifierFrom, NoDoubleOrOuterUnderscores) {
   EXPECT_EQ(identifierFrom("%"), "value");
   EXPECT_EQ(identifierFrom(""), "value");
   // A described expression is cut at a word boundary near 32 characters.
-  const std::string long_name = identifierFrom("mul(dot(normalize(N), L), max(uObjectInfo.w, 0.5))");
+  const std::string long_name =
+      identifierFrom("mul(dot(normalize(N), L), max(uObjectInfo.w, 0.5))");
   EXPECT_LE(long_name.size(), 33u);
   EXPECT_EQ(long_name.rfind("mul_dot_normalize_N_L_max", 0), 0u) << long_name;
   EXPECT_NE(long_name.back(), '_');

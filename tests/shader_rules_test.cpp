@@ -355,14 +355,16 @@ void main() {
   vUV = inUV0 * textureLod(uBaseColorTexture, inUV0, 0.0).rg * tint;
   gl_Position = vec4(moved.xy, height, 1.0);
 }
-)", kTextureFragment);
+)",
+                                       kTextureFragment);
   RuleContext context;
   context.texture_averages[0] = {0.5f, 0.5f, 0.5f, 1.0f};
   context.texture_averages[3] = {0.5f, 0.5f, 0.5f, 1.0f};
   std::vector<RuleSite> sites = enumerateSites(program, context);
   std::vector<RuleSite> averages = sitesOfKind(sites, RuleKind::kTextureAverage, Stage::kVertex);
   ASSERT_EQ(averages.size(), 1u);
-  EXPECT_TRUE(test::contains(averages[0].description, "uBaseColorTexture")) << averages[0].description;
+  EXPECT_TRUE(test::contains(averages[0].description, "uBaseColorTexture"))
+      << averages[0].description;
   std::vector<RuleSite> loops = sitesOfKind(sites, RuleKind::kLoopTruncation, Stage::kVertex);
   ASSERT_FALSE(loops.empty());
   for (const RuleSite& loop : loops)
@@ -695,7 +697,8 @@ TEST_P(ReferenceShaderRules, DescriptionsNameNoSpirvIds) {
   for (uint32_t binding = 0; binding < 8; ++binding)
     context.texture_averages[binding] = {0.5f, 0.4f, 0.3f, 1.0f};
   // Only enumeration here: moving to parameter is offered once something could average.
-  context.average_value = [](const ShaderProgram&, Stage, ir::Id) -> core::Result<std::vector<float>> {
+  context.average_value = [](const ShaderProgram&, Stage,
+                             ir::Id) -> core::Result<std::vector<float>> {
     return core::Error{"not averaged in this test"};
   };
   std::vector<RuleSite> sites = enumerateSites(program, context);

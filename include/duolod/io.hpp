@@ -59,10 +59,11 @@ core::Status writeObj(const core::Asset& asset, const std::string& path,
 
 // The LOD chain as one glTF (.gltf or .glb): one node per level, all sharing the asset's
 // materials and textures. Each node has its own mesh, except that levels whose meshes are equal
-// (levels that change only the shader) share the first one's glTF mesh, stored once. Node 0 (level 0) lists the coarser nodes in its MSFT_lod extension and
-// `extras.MSFT_screencoverage` holds one value per level: the screen-area fraction below which the
-// next level takes over (the last is 0). Only node 0 is in the scene. Requires one coverage per
-// level, decreasing; `level_meshes` replace asset.mesh.
+// (levels that change only the shader) share the first one's glTF mesh, stored once. Node 0 (level
+// 0) lists the coarser nodes in its MSFT_lod extension and `extras.MSFT_screencoverage` holds one
+// value per level: the screen-area fraction below which the next level takes over (the last is 0).
+// Only node 0 is in the scene. Requires one coverage per level, decreasing; `level_meshes` replace
+// asset.mesh.
 core::Status writeGltfLodChain(const core::Asset& asset, std::span<const core::Mesh> level_meshes,
                                std::span<const double> screen_coverage, const std::string& path);
 

@@ -56,7 +56,8 @@ core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Targe
 // (`Texture2D uBaseColorTexture : register(t0)` → `sampler2D uBaseColorTexture` at binding 0);
 // cbuffers keep their register's binding (b0 → 0), vertex inputs their [[vk::location(N)]].
 core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
-                                     const std::string& file_name, const CompileOptions& options = {});
+                                     const std::string& file_name,
+                                     const CompileOptions& options = {});
 
 // Re-compiles emitted source with glslang as a check: GLSL 450 to SPIR-V (validated), GLSL ES 300
 // with the ES profile, HLSL with the HLSL front end (entry "main"). The error names `what`.

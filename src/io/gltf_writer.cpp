@@ -116,7 +116,8 @@ std::string uriOfFileName(const std::string& name) {
 
 template <class T>
 bool sameElements(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 // Equal bit for bit, so that a level whose mesh another level already has (a level that changes

@@ -32,7 +32,8 @@ core::Status checkDirectory(const std::string& directory, const core::Asset& ass
     const bool empty = fs::is_empty(out, error);
     if (error) return core::Error{directory + ": cannot read the folder (" + error.message() + ")"};
     if (!empty && !force)
-      return core::Error{directory + ": not empty, and writing into a folder that holds files was not asked for"};
+      return core::Error{
+          directory + ": not empty, and writing into a folder that holds files was not asked for"};
   }
   return core::okStatus();
 }

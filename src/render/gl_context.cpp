@@ -25,8 +25,9 @@ core::Result<GlContext> GlContext::create(const ContextOptions& options) {
   std::string extensions = client_extensions ? client_extensions : "";
   if (options.device < 0) {
     if (extensions.find("EGL_MESA_platform_surfaceless") == std::string::npos)
-      return Error{"EGL has no EGL_MESA_platform_surfaceless: install Mesa (libegl-mesa0, "
-                   "libgl1-mesa-dri) or choose an EGL device by index (ContextOptions::device)"};
+      return Error{
+          "EGL has no EGL_MESA_platform_surfaceless: install Mesa (libegl-mesa0, "
+          "libgl1-mesa-dri) or choose an EGL device by index (ContextOptions::device)"};
     context.display_ = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
                                                 nullptr);
   } else {

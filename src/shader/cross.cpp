@@ -3,12 +3,12 @@
 // what it emits through glslang.
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
-#include <spirv_glsl.hpp>
-#include <spirv_hlsl.hpp>
 
 #include <cctype>
 #include <exception>
 #include <set>
+#include <spirv_glsl.hpp>
+#include <spirv_hlsl.hpp>
 
 #include "duolod/shader.hpp"
 

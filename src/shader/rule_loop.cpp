@@ -240,8 +240,9 @@ std::vector<RuleSite> findLoopTruncationSites(const ShaderProgram& program, cons
     const ir::Module& module = stageModule(program, stage);
     ir::DefUse uses(module);
     // A vertex-stage loop the position depends on (skinning over bones) is left alone.
-    const std::unordered_set<ir::Id> position =
-        stage == Stage::kVertex ? vertexPositionSources(module, uses) : std::unordered_set<ir::Id>{};
+    const std::unordered_set<ir::Id> position = stage == Stage::kVertex
+                                                    ? vertexPositionSources(module, uses)
+                                                    : std::unordered_set<ir::Id>{};
     for (size_t f = 0; f < module.functions.size(); ++f) {
       ir::Cfg cfg = ir::buildCfg(module.functions[f]);
       for (size_t b = 0; b < cfg.blocks.size(); ++b) {

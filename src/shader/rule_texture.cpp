@@ -87,8 +87,9 @@ void forEachSample(const ShaderProgram& program, Visit visit) {
     const ir::Module& module = stageModule(program, stage);
     ir::DefUse uses(module);
     // A vertex-stage sample the position depends on (a displacement map) is left alone.
-    const std::unordered_set<ir::Id> position =
-        stage == Stage::kVertex ? vertexPositionSources(module, uses) : std::unordered_set<ir::Id>{};
+    const std::unordered_set<ir::Id> position = stage == Stage::kVertex
+                                                    ? vertexPositionSources(module, uses)
+                                                    : std::unordered_set<ir::Id>{};
     for (const ir::Function& function : module.functions)
       for (const ir::Block& block : function.blocks)
         for (const ir::Instruction& instruction : block.instructions)

@@ -6,11 +6,11 @@
 #include <glslang/SPIRV/GLSL.std.450.h>
 
 #include <algorithm>
-#include <map>
-#include <span>
 #include <cctype>
+#include <map>
 #include <optional>
 #include <set>
+#include <span>
 #include <unordered_map>
 
 #include "shader/rules_internal.hpp"
@@ -89,6 +89,7 @@ std::string valueName(const ir::Module& module, ir::Id id) {
 }
 
 std::string operationName(const ir::Instruction& instruction) {
+  // clang-format off
   static const std::map<uint32_t, const char*> kExtNames = {
       {GLSLstd450Round, "round"},   {GLSLstd450RoundEven, "roundEven"},
       {GLSLstd450Trunc, "trunc"},   {GLSLstd450FAbs, "abs"},      {GLSLstd450SAbs, "abs"},
@@ -134,14 +135,16 @@ std::string operationName(const ir::Instruction& instruction) {
       {spv::OpImageSampleImplicitLod, "texture"}, {spv::OpImageSampleExplicitLod, "textureLod"},
       {spv::OpImageSampleProjImplicitLod, "textureProj"},
       {spv::OpImageSampleDrefImplicitLod, "texture"}, {spv::OpImageFetch, "texelFetch"}};
+  // clang-format on
   if (instruction.opcode == spv::OpExtInst) {
     auto found = kExtNames.find(instruction.operands[1]);
     return found != kExtNames.end() ? found->second
                                     : "GLSL.std.450 #" + std::to_string(instruction.operands[1]);
   }
   auto found = kOpNames.find(instruction.opcode);
-  return found != kOpNames.end() ? found->second
-                                 : "op " + std::to_string(static_cast<uint32_t>(instruction.opcode));
+  return found != kOpNames.end()
+             ? found->second
+             : "op " + std::to_string(static_cast<uint32_t>(instruction.opcode));
 }
 
 namespace {
@@ -240,10 +243,11 @@ std::string describeExpression(const ir::Module& module, const ir::DefUse& uses,
       if (!composite) break;
       std::vector<uint32_t> indices(definition->operands.begin() + 1, definition->operands.end());
       return describeExpression(module, uses, definition->operands[0], depth) +
-             componentSuffix(uses, composite->type_id, std::span<const uint32_t>(indices).first(1)) +
-             (indices.size() > 1 ? componentSuffix(uses, ir::kNoId,
-                                                   std::span<const uint32_t>(indices).subspan(1))
-                                 : "");
+             componentSuffix(uses, composite->type_id,
+                             std::span<const uint32_t>(indices).first(1)) +
+             (indices.size() > 1
+                  ? componentSuffix(uses, ir::kNoId, std::span<const uint32_t>(indices).subspan(1))
+                  : "");
     }
     case spv::OpVectorShuffle: {
       const ir::Instruction* first = uses.def(definition->operands[0]);
@@ -261,7 +265,7 @@ std::string describeExpression(const ir::Module& module, const ir::DefUse& uses,
     case spv::OpConstantComposite: {
       const ir::TypeInfo type = ir::typeInfo(uses, definition->type_id);
       std::string constructor =
-          type.opcode == spv::OpTypeVector ? "vec" + std::to_string(type.components)
+          type.opcode == spv::OpTypeVector   ? "vec" + std::to_string(type.components)
           : type.opcode == spv::OpTypeMatrix ? "mat" + std::to_string(ids.size())
                                              : "struct";
       // A splat as GLSL writes it: vec3(0.5).
@@ -338,8 +342,7 @@ void addFunctionResults(const ir::Module& module, ir::Id function_id,
 
 }  // namespace
 
-std::unordered_set<ir::Id> vertexPositionSources(const ir::Module& module,
-                                                 const ir::DefUse& uses) {
+std::unordered_set<ir::Id> vertexPositionSources(const ir::Module& module, const ir::DefUse& uses) {
   std::unordered_set<ir::Id> sources;
   std::set<ir::Id> position_variables, whole_functions;
   for (const ir::InterfaceVariable& variable : ir::interfaceVariables(module, uses))
