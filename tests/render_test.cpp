@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <map>
 
 #include "duolod/io.hpp"
@@ -550,33 +551,38 @@ TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
   EXPECT_EQ(stats.draws, int(tiles.size()) * 5);
 }
 
-// Small views, where every tile overlaps every other: 500 tiles × 5 lights need 2500 layers, more
-// than llvmpipe's 2048. (Found by generate --views upright on WaterBottle at 16 px.) The batch is
-// split and drawn in parts; every tile still holds its region of the full view. Before it, 300
-// then 400 tiles: the layered target grows by doubling (1500 → 3000 layers) and must stop at the
-// device's limit (it failed as "incomplete" at 60 px).
+// Small views, where every tile overlaps every other: 1000 tiles × 5 lights in two columns need
+// 2500 layers, more than llvmpipe's 2048. (Found by generate --views upright on WaterBottle at
+// 16 px.) The batch is split and drawn in parts; every tile still holds its region of the full
+// view. Before it, 300 then 400 tiles: the layered target grows by doubling (750 → 1500 layers)
+// and must stop at the device's limit (it failed as "incomplete" at 60 px). One drawing context,
+// so that the parts counted are the layer limit's alone.
 TEST_F(RendererTest, RegionTilesBeyondTheLayerLimitAreDrawnInParts) {
+  auto created = render::Renderer::create({.drawing_threads = 1});
+  ASSERT_TRUE(created) << created.error().message;
+  render::Renderer& renderer = **created;
   core::Asset asset;
   asset.mesh = test::icosphere(1);
   asset.source_path = "icosphere";
-  auto id = renderer_->uploadAsset(asset);
+  auto id = renderer.uploadAsset(asset);
   ASSERT_TRUE(id);
-  auto programs = compileForRegions(*renderer_, "noise_phong");
+  auto programs = compileForRegions(renderer, "noise_phong");
   ASSERT_TRUE(programs) << programs.error().message;
   const int resolution = 16, tile = 8;
   auto samples = render::domainSamples(core::computeBoundingSphere(asset.mesh), 4.0f);
-  auto full = renderer_->render(*id, programs->plain, samples, {.resolution = resolution});
+  auto full = renderer.render(*id, programs->plain, samples, {.resolution = resolution});
   ASSERT_TRUE(full);
-  for (int tile_count : {300, 400, 500}) {
+  for (int tile_count : {300, 400, 1000}) {
   SCOPED_TRACE(tile_count);
   std::vector<render::Renderer::RegionTile> tiles;
   for (int t = 0; t < tile_count; ++t) tiles.push_back({t % 20, 4 + t % 3, 4 + t % 5});
   render::RenderStats stats;
-  auto regions = renderer_->renderRegions(*id, programs->region, soupOfWholeMesh(asset.mesh, tiles),
-                                          samples, 5, resolution, tile, &stats);
+  auto regions = renderer.renderRegions(*id, programs->region, soupOfWholeMesh(asset.mesh, tiles),
+                                        samples, 5, resolution, tile, &stats);
   ASSERT_TRUE(regions) << regions.error().message;
   ASSERT_EQ(regions->count, tile_count * 5);
-  EXPECT_EQ(stats.chunks, tile_count * 5 > 2048 ? 2 : 1);  // drawn in parts past the limit
+  // Every tile overlaps every other: a layer each, in two columns.
+  EXPECT_EQ(stats.chunks, (tile_count + 1) / 2 * 5 > 2048 ? 2 : 1);  // in parts past the limit
   size_t differing = 0, covered = 0;
   for (int t = 0; t < tile_count; ++t)
     for (int light = 0; light < 5; ++light) {
@@ -706,6 +712,54 @@ TEST(RendererDevices, ChoosesAnEglDeviceOrSaysHowManyExist) {
   auto missing = render::Renderer::create({.device = 999});
   ASSERT_FALSE(missing);
   EXPECT_NE(missing.error().message.find("999"), std::string::npos);
+}
+
+// A second drawing context (ContextOptions::drawing_threads = 2) draws part of each call's views
+// on a thread of its own, with the objects it shares with the first: its tiles must be the ones
+// a single context draws, bit for bit, with the textures, materials and program uniforms that the
+// first context set up.
+TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
+  DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset) << asset.error().message;
+  const core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
+  const int resolution = 48, tile = 16;
+  const auto samples = render::domainSamples(sphere, 3.0f);
+  // Tiles in every view, some overlapping, some at the image border, some narrower than a tile.
+  std::vector<render::Renderer::RegionTile> tiles;
+  for (int t = 0; t < 120; ++t)
+    tiles.push_back({t % 20, (t * 7) % 40, (t * 13) % 40, t % 3 == 0 ? 9 : 0, t % 5 == 0 ? 5 : 0});
+  const auto soup = soupOfWholeMesh(asset->mesh, tiles);
+  std::vector<render::ImageBatch8> images;
+  std::vector<render::RenderStats> stats(2);
+  for (int threads : {1, 2}) {
+    auto created = render::Renderer::create({.drawing_threads = threads});
+    ASSERT_TRUE(created) << created.error().message;
+    render::Renderer& renderer = **created;
+    auto id = renderer.uploadAsset(*asset);
+    ASSERT_TRUE(id) << id.error().message;
+    auto programs = compileForRegions(renderer, "pbr");
+    ASSERT_TRUE(programs) << programs.error().message;
+    // Twice: the second call reuses the helper's context and target.
+    for (int call = 0; call < 2; ++call) {
+      auto regions = renderer.renderRegions(*id, programs->region, soup, samples, 5, resolution,
+                                            tile, &stats[threads - 1]);
+      ASSERT_TRUE(regions) << regions.error().message;
+      if (call == 1) images.push_back(std::move(regions.value()));
+    }
+  }
+  ASSERT_EQ(images.size(), 2u);
+  EXPECT_EQ(stats[0].chunks, 1);
+  EXPECT_EQ(stats[1].chunks, 2) << "the views should have been split between two contexts";
+  EXPECT_EQ(stats[0].draws, stats[1].draws);
+  ASSERT_EQ(images[0].pixels.size(), images[1].pixels.size());
+  size_t differing = 0, covered = 0;
+  for (size_t i = 0; i < images[0].pixels.size(); i += 4) {
+    covered += images[0].pixels[i + 3] > 0;
+    differing += std::memcmp(&images[0].pixels[i], &images[1].pixels[i], 4) != 0;
+  }
+  EXPECT_GT(covered, images[0].pixels.size() / 4 / 4) << "the tiles should see the bottle";
+  EXPECT_EQ(differing, 0u);
 }
 
 }  // namespace

@@ -156,6 +156,11 @@ struct ContextOptions {
   // -1: Mesa's surfaceless platform (llvmpipe on a machine without a GPU). N >= 0: the Nth EGL
   // device from EGL_EXT_device_enumeration (a real GPU where one exists).
   int device = -1;
+  // Contexts that draw renderRegions() (image-driven simplification): 2 splits each call's views
+  // between this context and a second one on a thread of its own, which shares its objects; 1
+  // draws in this context only. 0 chooses: 2 on a CPU rasterizer (llvmpipe) with two or more
+  // hardware threads, else 1. The images are the same either way.
+  int drawing_threads = 0;
 };
 
 struct RenderOptions {

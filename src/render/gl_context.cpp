@@ -47,20 +47,36 @@ core::Result<GlContext> GlContext::create(const ContextOptions& options) {
   EGLint major = 0, minor = 0;
   if (!eglInitialize(context.display_, &major, &minor))
     return Error{"eglInitialize failed (" + eglErrorName() + ")"};
+  if (auto made = context.makeContext(EGL_NO_CONTEXT); !made) return made.error();
+  return context;
+}
+
+core::Result<GlContext> GlContext::createSharing(const GlContext& share) {
+  if (share.context_ == EGL_NO_CONTEXT) return Error{"render: no GL context to share"};
+  GlContext context;
+  context.display_ = share.display_;
+  if (auto made = context.makeContext(share.context_); !made) return made.error();
+  return context;
+}
+
+// The OpenGL 4.5 core context on display_, sharing `share`'s objects (EGL_NO_CONTEXT: none),
+// current on the calling thread.
+core::Status GlContext::makeContext(EGLContext share) {
+  // The client API is per thread: a thread of its own starts with OpenGL ES.
   if (!eglBindAPI(EGL_OPENGL_API)) return Error{"EGL cannot bind OpenGL (" + eglErrorName() + ")"};
   const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
                                EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-  context.context_ = eglCreateContext(context.display_, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
-  if (context.context_ == EGL_NO_CONTEXT)
+  context_ = eglCreateContext(display_, EGL_NO_CONFIG_KHR, share, attributes);
+  if (context_ == EGL_NO_CONTEXT)
     return Error{"cannot create an OpenGL 4.5 core context (" + eglErrorName() + ")"};
-  if (!eglMakeCurrent(context.display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context.context_))
+  if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
     return Error{"eglMakeCurrent failed (" + eglErrorName() + ")"};
   if (epoxy_gl_version() < 45)
     return Error{"OpenGL 4.5 is required; the context has " +
                  std::to_string(epoxy_gl_version() / 10) + "." +
                  std::to_string(epoxy_gl_version() % 10)};
-  return context;
+  return core::okStatus();
 }
 
 GlContext& GlContext::operator=(GlContext&& other) noexcept {

@@ -14,6 +14,10 @@ namespace duolod::render {
 class GlContext {
  public:
   static core::Result<GlContext> create(const ContextOptions& options);
+  // A context on `share`'s display that shares its objects (programs, buffers, textures; not
+  // framebuffers or vertex arrays), made current on the calling thread: for a second thread that
+  // draws with the first context's objects.
+  static core::Result<GlContext> createSharing(const GlContext& share);
   GlContext() = default;
   GlContext(GlContext&& other) noexcept { *this = std::move(other); }
   GlContext& operator=(GlContext&& other) noexcept;
@@ -26,6 +30,8 @@ class GlContext {
   core::Status makeCurrent() const;
 
  private:
+  core::Status makeContext(EGLContext share);
+
   EGLDisplay display_ = EGL_NO_DISPLAY;
   EGLContext context_ = EGL_NO_CONTEXT;
 };

@@ -3,6 +3,7 @@
 // bound by range, and the atlas is read back once: on llvmpipe a readback per view would cost more
 // than the drawing. References (f̄, eq. 1) are drawn k× larger and box-filtered on the GPU.
 #include <algorithm>
+#include <thread>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -217,6 +218,19 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
   State& s = *renderer->state_;
   s.context = std::move(context.value());
   s.context_alive = true;
+  if (options.drawing_threads < 0 || options.drawing_threads > 2)
+    return core::Error{"render: drawing_threads must be 0 (automatic), 1 or 2, got " +
+                       std::to_string(options.drawing_threads)};
+  s.drawing_threads = options.drawing_threads;
+  if (s.drawing_threads == 0) {
+    // On llvmpipe the thread that draws shades vertices and bins triangles, and a view-sized
+    // region target is rasterized by one thread: a second drawing context fills the other core
+    // (region_renderer.cpp). A GPU gains nothing from it.
+    const GLubyte* name = glGetString(GL_RENDERER);
+    const bool cpu_rasterizer =
+        name && std::string(reinterpret_cast<const char*>(name)).find("llvmpipe") != std::string::npos;
+    s.drawing_threads = cpu_rasterizer && std::thread::hardware_concurrency() >= 2 ? 2 : 1;
+  }
   glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &s.ubo_alignment);
   GLint max_texture = 0, max_renderbuffer = 0, max_viewport[2] = {0, 0};
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);

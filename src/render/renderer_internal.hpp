@@ -2,10 +2,16 @@
 // region_renderer.cpp: local re-rendering). Not part of the public API.
 #pragma once
 
+#include <condition_variable>
 #include <cstring>
+#include <functional>
+#include <future>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <span>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include "duolod/render.hpp"
@@ -69,6 +75,46 @@ struct Framebuffer {
   int width = 0, height = 0, samples = 0;
   GLenum format = 0;
   bool texture = false;
+};
+
+// What renderRegions() draws with in one GL context: a layered target (2D array colour + depth,
+// view-sized) and the draws' Frame blocks. Framebuffers are not shared between contexts, and the
+// Frame blocks are written per call, so each drawing context has its own.
+struct RegionTarget {
+  GLuint fbo = 0, color = 0, depth = 0;
+  int width = 0, height = 0, layers = 0;
+  GLuint frame_ubo = 0;
+  GLsizeiptr frame_ubo_size = 0;
+  void destroy();  // with its context current
+};
+
+// renderRegions()'s second drawing thread: a GL context of its own that shares the Renderer's
+// objects (programs, buffers, textures), made current on a thread that runs one job at a time.
+// llvmpipe shades vertices and bins triangles on the thread that draws, and rasterizes a scene
+// whose target is one 64×64 bin (a view of the footprint) on one of its threads: one context keeps
+// about one core busy, two keep two (region_renderer.cpp).
+class RegionHelper {
+ public:
+  // Starts the thread and creates its context; fails when the context cannot be made.
+  static core::Result<std::unique_ptr<RegionHelper>> start(const GlContext& share);
+  ~RegionHelper();  // after the job under way; its objects are deleted in its context
+  RegionHelper(const RegionHelper&) = delete;
+  RegionHelper& operator=(const RegionHelper&) = delete;
+
+  // Runs `job` on the thread, with its context current and its region target; wait() returns
+  // when it is done. One job at a time.
+  void run(std::function<void(RegionTarget&)> job);
+  void wait();
+
+ private:
+  RegionHelper() = default;
+  void loop(const GlContext* share, std::promise<core::Status>* started);
+
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::function<void(RegionTarget&)> job_;
+  bool busy_ = false, stopping_ = false;
 };
 
 
@@ -139,9 +185,12 @@ struct Renderer::State {
   GLint ubo_alignment = 256;
   GLint max_size = 4096;
   internal::Framebuffer atlas, resolved, reference_float;
-  // renderRegions(): a layered target (2D array colour + depth), view-sized.
-  GLuint region_fbo = 0, region_color = 0, region_depth = 0;
-  int region_size = 0, region_layers = 0;
+  internal::RegionTarget region;  // renderRegions() in this context
+  // renderRegions()'s second drawing thread and context (region_renderer.cpp), started at its
+  // first use when `drawing_threads` is 2; a failure to start it is kept and not retried.
+  int drawing_threads = 1;
+  std::unique_ptr<internal::RegionHelper> region_helper;
+  std::string region_helper_failure;
   GLuint downsample_program = 0;
   GLuint empty_vao = 0;
   internal::WorkQueries work_queries;
@@ -149,6 +198,8 @@ struct Renderer::State {
   int parameter_binding = -1;
 
   ~State() {
+    // First the helper's thread: its context shares these objects.
+    region_helper.reset();
     // The objects are this context's: with another one current (a second Renderer), these
     // names would delete its objects. Not current here (another thread): they go with it.
     if (context_alive && !context.makeCurrent()) {
@@ -166,9 +217,7 @@ struct Renderer::State {
       destroyFramebuffer(atlas);
       destroyFramebuffer(resolved);
       destroyFramebuffer(reference_float);
-      if (region_fbo) glDeleteFramebuffers(1, &region_fbo);
-      GLuint region_textures[] = {region_color, region_depth};
-      glDeleteTextures(2, region_textures);
+      region.destroy();
       if (downsample_program) glDeleteProgram(downsample_program);
       GLuint textures[] = {white_texture, flat_normal_texture};
       glDeleteTextures(2, textures);
@@ -223,16 +272,19 @@ inline FrameBlock makeFrameBlock(const Renderer::State& s, const core::Mat4& mod
   return block;
 }
 
-// Copies `bytes` to the start of s.frame_ubo, growing it when needed.
-inline void uploadFrameBytes(Renderer::State& s, const std::vector<uint8_t>& bytes) {
+// Copies `bytes` to the start of the buffer `ubo` of `size` bytes, growing it when needed.
+inline void uploadFrameBytes(GLuint& ubo, GLsizeiptr& size, const std::vector<uint8_t>& bytes) {
   GLsizeiptr needed = static_cast<GLsizeiptr>(bytes.size());
-  if (needed > s.frame_ubo_size) {
-    glDeleteBuffers(1, &s.frame_ubo);
-    glCreateBuffers(1, &s.frame_ubo);
-    glNamedBufferStorage(s.frame_ubo, needed, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    s.frame_ubo_size = needed;
+  if (needed > size) {
+    glDeleteBuffers(1, &ubo);
+    glCreateBuffers(1, &ubo);
+    glNamedBufferStorage(ubo, needed, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    size = needed;
   }
-  glNamedBufferSubData(s.frame_ubo, 0, needed, bytes.data());
+  glNamedBufferSubData(ubo, 0, needed, bytes.data());
+}
+inline void uploadFrameBytes(Renderer::State& s, const std::vector<uint8_t>& bytes) {
+  uploadFrameBytes(s.frame_ubo, s.frame_ubo_size, bytes);
 }
 
 // The checks every whole-view render shares (ids, sample count, sizes, work counting available).
@@ -247,7 +299,12 @@ struct ChunkDrawer {
   const GpuAsset& asset;
   GLuint program;
 
+  // Into s.frame_ubo, or the given buffer of `size` bytes (another context's).
   void uploadFrames(std::span<const Sample> samples, GLsizeiptr stride) {
+    uploadFrames(samples, stride, s.frame_ubo, s.frame_ubo_size);
+  }
+  void uploadFrames(std::span<const Sample> samples, GLsizeiptr stride, GLuint& ubo,
+                    GLsizeiptr& size) const {
     std::vector<uint8_t> bytes(samples.size() * stride);
     for (size_t i = 0; i < samples.size(); ++i) {
       const Sample& sample = samples[i];
@@ -259,7 +316,7 @@ struct ChunkDrawer {
                                         core::transformPoint(model, sample.light), asset.bounds);
       std::memcpy(bytes.data() + i * stride, &block, sizeof block);
     }
-    uploadFrameBytes(s, bytes);
+    uploadFrameBytes(ubo, size, bytes);
   }
 
   void bindInputs() {

@@ -93,8 +93,7 @@ struct RuleContext {
   std::function<core::Result<std::vector<float>>(const ShaderProgram& program, Stage stage,
                                                  ir::Id value)>
       average_value;
-  // Where new loose uniforms go (clear of the interface in shaders/INTERFACE.md and of the region
-  // renderer's uniform at location 30), and the lowest location a new varying may take: the first
+  // Where new loose uniforms go (clear of the interface in shaders/INTERFACE.md), and the lowest location a new varying may take: the first
   // one neither stage uses from there on. Low, as OpenGL 4.5 guarantees only 15 varying vectors
   // (locations 0-14; llvmpipe has 32, a minimal driver would not link locations above 14).
   uint32_t first_parameter_location = 40;
