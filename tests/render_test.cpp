@@ -762,5 +762,43 @@ TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
   EXPECT_EQ(differing, 0u);
 }
 
+// The image-driven simplifier releases its programs and meshes after each level and makes new
+// ones for the next (generate's mesh cascade), at another footprint. Deleting a program the
+// helper's context had drawn with crashed llvmpipe at the next draw (generate at its second
+// level; this test in its second round), so a released program takes the helper with it and the
+// next call starts it again.
+TEST(RendererDrawingThreads, ProgramsAndAssetsReleasedBetweenCallsAreNotUsedAgain) {
+  auto created = render::Renderer::create({.drawing_threads = 2});
+  ASSERT_TRUE(created) << created.error().message;
+  render::Renderer& renderer = **created;
+  core::Asset asset;
+  asset.mesh = test::icosphere(3);
+  asset.source_path = "icosphere";
+  const core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
+  for (int round = 0; round < 6; ++round) {
+    SCOPED_TRACE(round);
+    auto id = renderer.uploadAsset(asset);
+    ASSERT_TRUE(id) << id.error().message;
+    auto programs = compileForRegions(renderer, round % 2 ? "noise_phong" : "pbr");
+    ASSERT_TRUE(programs) << programs.error().message;
+    const int resolution = 40 + 12 * round, tile = 8 + 4 * (round % 2);
+    const auto samples = render::domainSamples(sphere, 3.0f + round);
+    std::vector<render::Renderer::RegionTile> tiles;
+    for (int t = 0; t < 60; ++t) tiles.push_back({t % 20, (t * 5) % 32, (t * 11) % 32});
+    for (int call = 0; call < 3; ++call) {
+      render::RenderStats stats;
+      auto regions = renderer.renderRegions(*id, programs->region, soupOfWholeMesh(asset.mesh, tiles),
+                                            samples, 5, resolution, tile, &stats);
+      ASSERT_TRUE(regions) << regions.error().message;
+      EXPECT_EQ(stats.chunks, 2);
+    }
+    auto full = renderer.render(*id, programs->plain, samples, {.resolution = resolution});
+    ASSERT_TRUE(full) << full.error().message;
+    renderer.releaseProgram(programs->plain);
+    renderer.releaseProgram(programs->region);
+    renderer.releaseAsset(*id);
+  }
+}
+
 }  // namespace
 }  // namespace duolod

@@ -535,6 +535,9 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return batch;
   }
+  auto& used = s.helper_programs;
+  if (std::find(used.begin(), used.end(), request.program) == used.end())
+    used.push_back(request.program);  // releaseProgram() stops the helper first
   const RegionSoup near_part = soupOfTiles(soup, here), far_part = soupOfTiles(soup, there);
   // The helper's context draws with objects this one made (the asset, the program, uniforms):
   // their commands must have reached the driver.

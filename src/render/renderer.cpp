@@ -503,11 +503,20 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const SpirvBinary& bi
 }
 
 void Renderer::releaseProgram(ProgramId program) {
-  if (!state_->context.makeCurrent()) return;
-  if (program >= 0 && program < static_cast<int>(state_->programs.size()) &&
-      state_->programs[program]) {
-    glDeleteProgram(state_->programs[program]);
-    state_->programs[program] = 0;
+  State& s = *state_;
+  if (!s.context.makeCurrent()) return;
+  if (program >= 0 && program < static_cast<int>(s.programs.size()) && s.programs[program]) {
+    // A program the helper's context drew with goes after that context: on llvmpipe, deleting a
+    // shared program from one context frees the other context's compiled variants of it through
+    // this one, and a later draw crashed inside the driver (generate's second mesh level). The
+    // helper starts again at its next use; destroying its context drops its variants cleanly.
+    auto& used = s.helper_programs;
+    if (std::find(used.begin(), used.end(), s.programs[program]) != used.end()) {
+      s.region_helper.reset();
+      used.clear();
+    }
+    glDeleteProgram(s.programs[program]);
+    s.programs[program] = 0;
   }
 }
 

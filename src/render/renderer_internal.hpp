@@ -191,6 +191,7 @@ struct Renderer::State {
   int drawing_threads = 1;
   std::unique_ptr<internal::RegionHelper> region_helper;
   std::string region_helper_failure;
+  std::vector<GLuint> helper_programs;  // the programs region_helper has drawn with
   GLuint downsample_program = 0;
   GLuint empty_vao = 0;
   internal::WorkQueries work_queries;
