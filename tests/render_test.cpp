@@ -714,52 +714,133 @@ TEST(RendererDevices, ChoosesAnEglDeviceOrSaysHowManyExist) {
   EXPECT_NE(missing.error().message.find("999"), std::string::npos);
 }
 
-// A second drawing context (ContextOptions::drawing_threads = 2) draws part of each call's views
-// on a thread of its own, with the objects it shares with the first: its tiles must be the ones
-// a single context draws, bit for bit, with the textures, materials and program uniforms that the
-// first context set up.
-TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
-  DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
-  auto asset = io::loadAsset(path);
-  ASSERT_TRUE(asset) << asset.error().message;
-  const core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
-  const int resolution = 48, tile = 16;
-  const auto samples = render::domainSamples(sphere, 3.0f);
-  // Tiles in every view, some overlapping, some at the image border, some narrower than a tile.
+// A program for region rendering whose colour comes from a plain uniform (location 40) and a
+// parameter block (binding 2), what setProgramUniforms and setParameterBlock give a simplified
+// shader, and from gl_FragCoord.x: a tile in the second column of a layer is drawn 64 or more
+// pixels to the right, so its blue channel tells which column it was drawn in.
+constexpr const char* kTintedVertex = R"(#version 450 core
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(location = 0) out vec3 vNormal;
+void main() {
+  vNormal = inNormal;
+  gl_Position = uProjection * uView * uModel * vec4(inPosition, 1.0);
+}
+)";
+constexpr const char* kTintedFragment = R"(#version 450 core
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 40) uniform vec4 uTint;
+layout(std140, binding = 2) uniform Parameters { vec4 uOffset; };
+layout(location = 0) in vec3 vNormal;
+layout(location = 0) out vec4 outColor;
+void main() {
+  float light = max(dot(normalize(vNormal), normalize(uLightPosition.xyz)), 0.0);
+  outColor = vec4(uTint.rg * light + uOffset.rg, gl_FragCoord.x / 256.0, 1.0);
+}
+)";
+
+// Tiles over the views in uneven numbers (view v has v % 3 + 1 of them, in view order: 39), so
+// that where the views are split between two contexts (about half way, after 19 or 21 tiles), the
+// second part's tiles change their place's parity: the column a tile is drawn in must come from
+// its place in the whole call. Some overlap, some lie at the image border, some are narrower than
+// a tile.
+std::vector<render::Renderer::RegionTile> unevenTiles(int resolution) {
   std::vector<render::Renderer::RegionTile> tiles;
-  for (int t = 0; t < 120; ++t)
-    tiles.push_back({t % 20, (t * 7) % 40, (t * 13) % 40, t % 3 == 0 ? 9 : 0, t % 5 == 0 ? 5 : 0});
-  const auto soup = soupOfWholeMesh(asset->mesh, tiles);
-  std::vector<render::ImageBatch8> images;
-  std::vector<render::RenderStats> stats(2);
+  for (int v = 0; v < 20; ++v)
+    for (int k = 0; k <= v % 3; ++k) {
+      const int t = int(tiles.size());
+      tiles.push_back({v, (t * 7) % (resolution - 8), (t * 13) % (resolution - 8),
+                       t % 3 == 0 ? 9 : 0, t % 5 == 0 ? 5 : 0});
+    }
+  return tiles;
+}
+
+// A second drawing context (ContextOptions::drawing_threads = 2) draws part of each call's views
+// on a thread of its own, with its own copy of the region program: its tiles must be the ones a
+// single context draws, bit for bit, also after the program's uniforms and the parameter block
+// change between calls (a uniform set in the first context never reached a shared program's
+// other context), and when a part is drawn in pieces past the layer limit.
+TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
+  core::Asset asset;
+  asset.mesh = test::icosphere(4);
+  asset.source_path = "icosphere";
+  const core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
+  struct Case {
+    const char* what;
+    int resolution, tile;
+    std::vector<render::Renderer::RegionTile> tiles;
+    core::Mesh mesh;  // drawn in every tile
+  };
+  std::vector<Case> cases;
+  cases.push_back({"uneven views at 48 px", 48, 16, unevenTiles(48), asset.mesh});
+  cases.push_back({"views wider than a bin, 100 px", 100, 16, unevenTiles(100), asset.mesh});
+  {
+    // Every tile overlaps every other: a layer each, past 2048 layers in each context.
+    std::vector<render::Renderer::RegionTile> crowded;
+    for (int t = 0; t < 1800; ++t) crowded.push_back({t % 20, 4 + t % 3, 4 + t % 5});
+    cases.push_back({"past the layer limit", 16, 8, std::move(crowded), test::icosphere(1)});
+  }
+  const render::GlslSource tinted{kTintedVertex, kTintedFragment, "tinted.vert", "tinted.frag"};
+  // images[threads - 1][case][round]
+  std::vector<render::ImageBatch8> images[2];
+  std::vector<int> chunks[2];
   for (int threads : {1, 2}) {
     auto created = render::Renderer::create({.drawing_threads = threads});
     ASSERT_TRUE(created) << created.error().message;
     render::Renderer& renderer = **created;
-    auto id = renderer.uploadAsset(*asset);
+    auto id = renderer.uploadAsset(asset);
     ASSERT_TRUE(id) << id.error().message;
-    auto programs = compileForRegions(renderer, "pbr");
-    ASSERT_TRUE(programs) << programs.error().message;
-    // Twice: the second call reuses the helper's context and target.
-    for (int call = 0; call < 2; ++call) {
-      auto regions = renderer.renderRegions(*id, programs->region, soup, samples, 5, resolution,
-                                            tile, &stats[threads - 1]);
-      ASSERT_TRUE(regions) << regions.error().message;
-      if (call == 1) images.push_back(std::move(regions.value()));
+    auto region = renderer.compileRegionProgram(tinted);
+    ASSERT_TRUE(region) << region.error().message;
+    for (const Case& c : cases) {
+      const auto samples = render::domainSamples(sphere, 4.0f);
+      const auto soup = soupOfWholeMesh(c.mesh, c.tiles);
+      for (int round = 0; round < 3; ++round) {
+        const render::UniformValue tint{
+            .location = 40, .components = 4, .value = {0.2f + 0.3f * round, 0.5f, 0.9f, 1}};
+        ASSERT_TRUE(renderer.setProgramUniforms(*region, std::span(&tint, 1)));
+        const float offset[4] = {0, 0.1f * round, 0, 0};
+        ASSERT_TRUE(renderer.setParameterBlock(
+            2, std::span(reinterpret_cast<const uint8_t*>(offset), sizeof offset)));
+        render::RenderStats stats;
+        auto regions = renderer.renderRegions(*id, *region, soup, samples, 5, c.resolution,
+                                              c.tile, &stats);
+        ASSERT_TRUE(regions) << c.what << ": " << regions.error().message;
+        images[threads - 1].push_back(std::move(regions.value()));
+        chunks[threads - 1].push_back(stats.chunks);
+      }
     }
   }
-  ASSERT_EQ(images.size(), 2u);
-  EXPECT_EQ(stats[0].chunks, 1);
-  EXPECT_EQ(stats[1].chunks, 2) << "the views should have been split between two contexts";
-  EXPECT_EQ(stats[0].draws, stats[1].draws);
-  ASSERT_EQ(images[0].pixels.size(), images[1].pixels.size());
-  size_t differing = 0, covered = 0;
-  for (size_t i = 0; i < images[0].pixels.size(); i += 4) {
-    covered += images[0].pixels[i + 3] > 0;
-    differing += std::memcmp(&images[0].pixels[i], &images[1].pixels[i], 4) != 0;
+  ASSERT_EQ(images[0].size(), images[1].size());
+  for (size_t i = 0; i < images[0].size(); ++i) {
+    const Case& c = cases[i / 3];
+    SCOPED_TRACE(std::string(c.what) + ", round " + std::to_string(i % 3));
+    // Split: one part more than one context drew (past the layer limit both draw in pieces).
+    if (chunks[0][i] == 1) {
+      EXPECT_EQ(chunks[1][i], 2) << "the views should have been split";
+    }
+    ASSERT_EQ(images[0][i].pixels.size(), images[1][i].pixels.size());
+    size_t differing = 0, covered = 0;
+    for (size_t p = 0; p < images[0][i].pixels.size(); p += 4) {
+      covered += images[0][i].pixels[p + 3] > 0;
+      differing += std::memcmp(&images[0][i].pixels[p], &images[1][i].pixels[p], 4) != 0;
+    }
+    EXPECT_GT(covered, images[0][i].pixels.size() / 4 / 8) << "the tiles should see the sphere";
+    EXPECT_EQ(differing, 0u);
+    // The rounds' tints differ, so each round's images must too (the uniform reached the shader).
+    if (i % 3 > 0) {
+      EXPECT_NE(images[1][i].pixels, images[1][i - 1].pixels);
+    }
   }
-  EXPECT_GT(covered, images[0].pixels.size() / 4 / 4) << "the tiles should see the bottle";
-  EXPECT_EQ(differing, 0u);
+  EXPECT_GE(chunks[0][6], 2) << "the crowded case should pass the layer limit";
+  EXPECT_GE(chunks[1][6], 4) << "each context's part should pass the layer limit";
 }
 
 // The image-driven simplifier releases its programs and meshes after each level and makes new

@@ -11,8 +11,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <numeric>
 #include <optional>
+#include <system_error>
+#include <utility>
 
 #include "render/renderer_internal.hpp"
 
@@ -150,10 +153,21 @@ struct RegionRequest {
 };
 
 // Draws the soup's tiles with the current context into its `target` and reads them back: output
-// tile t * lights + l for (tile t, light l).
+// tile t * lights + l for (tile t, light l). Tile t goes to the column columns[t] (0 or 1) of its
+// layer: given by the caller, from the tile's place in the whole call, so that a tile's pixels do
+// not depend on how the call was split (the second column's viewport can snap a vertex
+// differently by 1/256 px).
 core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
                                       const RegionRequest& request,
-                                      const Renderer::RegionSoup& soup, RenderStats* stats);
+                                      const Renderer::RegionSoup& soup,
+                                      std::span<const uint8_t> columns, RenderStats* stats);
+
+// Column i % 2 of each tile i of `tiles` (indices into the whole call).
+std::vector<uint8_t> columnsOf(std::span<const int> tiles) {
+  std::vector<uint8_t> columns(tiles.size());
+  for (size_t i = 0; i < tiles.size(); ++i) columns[i] = uint8_t(tiles[i] % 2);
+  return columns;
+}
 
 }  // namespace
 
@@ -175,17 +189,25 @@ core::Result<Renderer::ProgramId> Renderer::compileRegionProgram(const GlslSourc
   size_t version = wrapped.find("#version");
   size_t line_end = version == std::string::npos ? 0 : wrapped.find('\n', version);
   wrapped.insert(line_end == std::string::npos ? wrapped.size() : line_end + 1, kLayerExtension);
+  GLint vertex_storage_blocks = 0;
+  glGetIntegerv(GL_MAX_VERTEX_SHADER_STORAGE_BLOCKS, &vertex_storage_blocks);
+  if (vertex_storage_blocks < 2)
+    return Error{"region rendering needs 2 shader storage blocks in the vertex stage; this OpenGL "
+                 "context allows " + std::to_string(vertex_storage_blocks)};
   GlslSource region = source;
   region.vertex = std::move(wrapped);
   region.vertex_name = source.vertex_name + " (region wrapper)";
-  return compileProgram(region);
+  auto program = compileProgram(region);
+  if (program) state_->region_programs[state_->programs[*program]] = {std::move(region), {}, 0};
+  return program;
 }
 
 namespace {
 
 core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
                                       const RegionRequest& request,
-                                      const Renderer::RegionSoup& soup, RenderStats* stats) {
+                                      const Renderer::RegionSoup& soup,
+                                      std::span<const uint8_t> columns, RenderStats* stats) {
   using RegionSoup = Renderer::RegionSoup;
   using RegionTile = Renderer::RegionTile;
   const int tile_count = static_cast<int>(soup.tiles.size());
@@ -202,12 +224,16 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
   // Canvases. A layer holds two view-sized canvases side by side, `column_offset` pixels apart
   // (a multiple of 64), so that they lie in different 64×64 bins: llvmpipe rasterizes a scene's
   // bins on its threads at once, and a single view-sized canvas (one bin at small footprints) kept
-  // one thread busy (bench/RESULTS.md, issue 3, session 29). Tiles alternate between the
-  // columns, so the layout does not depend on the machine; in a column, tiles whose regions
-  // overlap (in any view) go to different layers: tile t is drawn for light l in layer
-  // tile_layer[t] * lights + l, column t % 2.
+  // one thread busy (bench/RESULTS.md, issue 3, session 29). Tiles alternate between the columns
+  // by their place in the whole call (`columns`), so the layout does not depend on the machine;
+  // in a column, tiles whose regions overlap (in any view) go to different layers: tile t is
+  // drawn for light l in layer tile_layer[t] * lights + l, column columns[t].
   const int R = request.view_resolution;
   const int column_offset = roundUp(std::max(R, 1), 64);
+  if (size_t(column_offset) * 2 > size_t(s.max_size))
+    return Error{"renderRegions: views of " + std::to_string(R) +
+                 " px are too large for two columns of this device's " +
+                 std::to_string(s.max_size) + "-px textures"};
   std::vector<int> tile_layer(tile_count);
   std::vector<std::vector<uint8_t>> occupied[2];
   auto regionOf = [&](const RegionTile& tile) {
@@ -218,7 +244,7 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
   };
   for (int t = 0; t < tile_count; ++t) {
     auto [x0, y0, x1, y1] = regionOf(soup.tiles[t]);
-    std::vector<std::vector<uint8_t>>& column = occupied[t % 2];
+    std::vector<std::vector<uint8_t>>& column = occupied[columns[t]];
     size_t g = 0;
     for (;; ++g) {
       if (g == column.size()) column.emplace_back(size_t(R) * R, 0);
@@ -237,19 +263,27 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
   glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
   glGetIntegerv(GL_MAX_FRAMEBUFFER_LAYERS, &max_framebuffer_layers);
   if (max_framebuffer_layers > 0) max_layers = std::min(max_layers, max_framebuffer_layers);
+  // And a memory budget: colour and depth, 4 bytes each, and the colour read back (large views
+  // would otherwise take gigabytes, and the read-back size must fit a GLsizei).
+  constexpr size_t kBudgetBytes = size_t(512) << 20;
+  max_layers = int(std::min<size_t>(size_t(max_layers),
+                                    std::max<size_t>(1, kBudgetBytes / (size_t(width) * R * 12))));
   if (layers > max_layers) {
     // More overlapping tiles than the device has layers (small views, where every tile overlaps
     // most others): draw the two halves of the tile list apart. Outputs are tile-major, so the
     // halves' batches are the whole one's, concatenated.
     if (tile_count < 2 || lights_per_view > max_layers)
       return Error{"renderRegions: one tile needs " + std::to_string(lights_per_view) +
-                   " layers, more than the device's " + std::to_string(max_layers)};
+                   " layers of " + std::to_string(width) + "x" + std::to_string(R) +
+                   " px, more than fit (" + std::to_string(max_layers) +
+                   ": the device's limit or 512 MB)"};
     const int half = tile_count / 2;
     RenderStats total;
     for (auto [first, last] : {std::pair{0, half}, std::pair{half, tile_count}}) {
       RegionSoup part = soupOfTiles(soup, tileRange(first, last));
       RenderStats part_stats;
-      auto images = drawRegions(s, target, request, part, &part_stats);
+      auto images = drawRegions(s, target, request, part, columns.subspan(first, last - first),
+                                &part_stats);
       if (!images) return images.error();
       std::copy(images->pixels.begin(), images->pixels.end(),
                 batch.pixels.begin() + ptrdiff_t(size_t(first) * lights_per_view) *
@@ -299,7 +333,7 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
     auto [x0, y0, x1, y1] = regionOf(soup.tiles[t]);
     const float r = float(R);
     float values[8] = {2 * x0 / r - 1, 2 * (r - y1) / r - 1, 2 * x1 / r - 1, 2 * (r - y0) / r - 1,
-                       float(tile_layer[t]), float(t % 2), 0, 0};
+                       float(tile_layer[t]), float(columns[t]), 0, 0};
     for (int v = 0; v < 3; ++v) std::copy_n(values, 8, placement.data() + (i * 3 + v) * 8);
   }
 
@@ -401,7 +435,7 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
     for (int t = 0; t < tile_count; ++t) {
       auto [x0, y0, x1, y1] = regionOf(soup.tiles[t]);
       const size_t layer = size_t(tile_layer[t]) * lights_per_view + light;
-      const size_t column_x = size_t(t % 2) * column_offset + x0;
+      const size_t column_x = size_t(columns[t]) * column_offset + x0;
       uint8_t* out = batch.tile(t * lights_per_view + light);
       for (int y = y0; y < y1; ++y)
         std::copy_n(
@@ -424,12 +458,17 @@ void internal::RegionTarget::destroy() {
   *this = {};
 }
 
-core::Result<std::unique_ptr<internal::RegionHelper>> internal::RegionHelper::start(const GlContext& share) {
+core::Result<std::unique_ptr<internal::RegionHelper>> internal::RegionHelper::start(
+    const GlContext& share) {
   std::unique_ptr<RegionHelper> helper(new RegionHelper());
   std::promise<core::Status> started;
   std::future<core::Status> result = started.get_future();
-  helper->thread_ = std::thread(&RegionHelper::loop, helper.get(), &share, &started);
-  core::Status status = result.get();
+  try {
+    helper->thread_ = std::thread(&RegionHelper::loop, helper.get(), &share, &started);
+  } catch (const std::system_error& e) {
+    return Error{std::string("renderRegions: cannot start a second drawing thread: ") + e.what()};
+  }
+  core::Status status = result.get();  // `share` and `started` are not used after this
   if (!status) return status.error();  // the thread has ended: the destructor joins it
   return helper;
 }
@@ -445,7 +484,7 @@ void internal::RegionHelper::loop(const GlContext* share, std::promise<core::Sta
     return;
   }
   started->set_value(core::okStatus());
-  RegionTarget target;
+  Context objects;
   std::unique_lock lock(mutex_);
   for (;;) {
     changed_.wait(lock, [&] { return stopping_ || job_; });
@@ -453,15 +492,23 @@ void internal::RegionHelper::loop(const GlContext* share, std::promise<core::Sta
     auto job = std::move(job_);
     job_ = nullptr;
     lock.unlock();
-    job(target);
+    std::exception_ptr thrown;
+    try {
+      job(objects);
+    } catch (...) {
+      thrown = std::current_exception();  // rethrown by wait(), on the caller's thread
+    }
     lock.lock();
+    thrown_ = thrown;
     busy_ = false;
     changed_.notify_all();
   }
-  target.destroy();
+  lock.unlock();
+  objects.target.destroy();
+  for (const auto& [original, copy] : objects.programs) glDeleteProgram(copy.program);
 }
 
-void internal::RegionHelper::run(std::function<void(RegionTarget&)> job) {
+void internal::RegionHelper::run(std::function<void(Context&)> job) {
   std::lock_guard lock(mutex_);
   job_ = std::move(job);
   busy_ = true;
@@ -471,6 +518,7 @@ void internal::RegionHelper::run(std::function<void(RegionTarget&)> job) {
 void internal::RegionHelper::wait() {
   std::unique_lock lock(mutex_);
   changed_.wait(lock, [&] { return !busy_; });
+  if (thrown_) std::rethrow_exception(std::exchange(thrown_, nullptr));
 }
 
 internal::RegionHelper::~RegionHelper() {
@@ -515,40 +563,85 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
 
   const RegionRequest request{&*s.assets[asset_id], s.programs[program_id],       samples,
                               lights_per_view,      view_resolution,             tile_size};
+  const std::vector<uint8_t> columns = columnsOf(tileRange(0, tile_count));
   // With a second drawing context (State::drawing_threads), the views go in two runs of about
-  // equal work, one drawn here and one on the helper's thread at the same time. A tile's pixels
-  // depend on its own triangles, view and light alone, so the images are the same either way.
+  // equal work, one drawn here and one on the helper's thread at the same time, with its own copy
+  // of the region program. A tile's pixels depend on its own triangles, view, light and column
+  // alone, so the images are the same either way.
   std::vector<int> here, there;
-  if (s.drawing_threads > 1) splitByViews(soup, view_count, tile_size, here, there);
-  if (!there.empty() && !s.region_helper && s.region_helper_failure.empty()) {
+  const auto region_program = s.region_programs.find(request.program);
+  if (s.drawing_threads > 1 && region_program != s.region_programs.end() &&
+      s.region_helper_failure.empty())
+    splitByViews(soup, view_count, tile_size, here, there);
+  if (!there.empty() && !s.region_helper) {
     auto helper = internal::RegionHelper::start(s.context);
     if (helper)
       s.region_helper = std::move(helper.value());
     else
-      s.region_helper_failure = helper.error().message;
+      s.region_helper_failure = helper.error().message;  // drawn in this context from now on
     if (auto bound = s.context.makeCurrent(); !bound) return bound.error();
   }
   if (there.empty() || !s.region_helper) {
-    auto batch = drawRegions(s, s.region, request, soup, stats);
+    auto batch = drawRegions(s, s.region, request, soup, columns, stats);
     if (batch && stats)
       stats->seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return batch;
   }
-  auto& used = s.helper_programs;
-  if (std::find(used.begin(), used.end(), request.program) == used.end())
-    used.push_back(request.program);  // releaseProgram() stops the helper first
   const RegionSoup near_part = soupOfTiles(soup, here), far_part = soupOfTiles(soup, there);
-  // The helper's context draws with objects this one made (the asset, the program, uniforms):
-  // their commands must have reached the driver.
+  const std::vector<uint8_t> near_columns = columnsOf(here), far_columns = columnsOf(there);
+  // What this context made (the asset's buffers and textures, the parameter block) must be
+  // complete before the helper's context reads it (GL 4.5 §5.3): a fence it waits for.
+  GLsync made = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   glFlush();
   std::optional<core::Result<ImageBatch8>> far_images;
   RenderStats near_stats, far_stats;
-  s.region_helper->run([&](internal::RegionTarget& target) {
-    far_images = drawRegions(s, target, request, far_part, &far_stats);
+  const internal::RegionProgram& program = region_program->second;
+  s.region_helper->run([&](internal::RegionHelper::Context& helper) {
+    glWaitSync(made, 0, GL_TIMEOUT_IGNORED);
+    internal::RegionHelper::Context::Copy& copy = helper.programs[request.program];
+    if (copy.program == 0) {
+      auto built = internal::buildProgram(program.source);
+      if (!built) {
+        helper.programs.erase(request.program);
+        far_images = built.error();
+        return;
+      }
+      copy.program = *built;
+      copy.version = ~program.version;  // uniforms still to give
+    }
+    if (copy.version != program.version) {
+      if (auto set = internal::setUniforms(copy.program, program.uniforms); !set) {
+        far_images = set.error();
+        return;
+      }
+      copy.version = program.version;
+    }
+    RegionRequest own = request;
+    own.program = copy.program;
+    far_images = drawRegions(s, helper.target, own, far_part, far_columns, &far_stats);
   });
-  auto near_images = drawRegions(s, s.region, request, near_part, &near_stats);
-  s.region_helper->wait();
+  core::Result<ImageBatch8> near_images = ImageBatch8{};
+  {
+    // The helper's job refers to this frame: it is waited for however this block is left.
+    struct WaitForHelper {
+      internal::RegionHelper& helper;
+      GLsync made;
+      int unwinding = std::uncaught_exceptions();
+      ~WaitForHelper() noexcept(false) {
+        // Its exception goes to the caller, unless this frame is already unwinding with one.
+        std::exception_ptr thrown;
+        try {
+          helper.wait();
+        } catch (...) {
+          thrown = std::current_exception();
+        }
+        glDeleteSync(made);  // after the helper's wait on it
+        if (thrown && std::uncaught_exceptions() == unwinding) std::rethrow_exception(thrown);
+      }
+    } waiting{*s.region_helper, made};
+    near_images = drawRegions(s, s.region, request, near_part, near_columns, &near_stats);
+  }
   if (!near_images) return near_images.error();
   if (!far_images || !*far_images)
     return far_images ? far_images->error() : Error{"renderRegions: the helper drew nothing"};

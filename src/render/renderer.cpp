@@ -263,9 +263,27 @@ core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const Uni
   State& s = *state_;
   if (program < 0 || program >= static_cast<int>(s.programs.size()) || !s.programs[program])
     return Error{"setProgramUniforms: unknown program id " + std::to_string(program)};
+  const GLuint id = s.programs[program];
+  if (auto set = setUniforms(id, values); !set) return set;
+  // A region program's values go to the helper's copy too, when it next draws with it.
+  if (auto region = s.region_programs.find(id); region != s.region_programs.end()) {
+    std::vector<UniformValue>& kept = region->second.uniforms;
+    for (const UniformValue& v : values) {
+      auto same = std::find_if(kept.begin(), kept.end(),
+                               [&](const UniformValue& k) { return k.location == v.location; });
+      if (same != kept.end())
+        *same = v;
+      else
+        kept.push_back(v);
+    }
+    ++region->second.version;
+  }
+  return core::okStatus();
+}
+
+core::Status internal::setUniforms(GLuint id, std::span<const UniformValue> values) {
   while (glGetError() != GL_NO_ERROR) {
   }
-  GLuint id = s.programs[program];
   for (const UniformValue& v : values) {
     if (v.location < 0 || v.components < 1 || v.components > 4)
       return Error{"setProgramUniforms: uniform at location " + std::to_string(v.location) +
@@ -442,6 +460,13 @@ void Renderer::releaseAsset(AssetId asset) {
 
 core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& source) {
   if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
+  auto program = buildProgram(source);
+  if (!program) return program.error();
+  state_->programs.push_back(*program);
+  return static_cast<ProgramId>(state_->programs.size() - 1);
+}
+
+core::Result<GLuint> internal::buildProgram(const GlslSource& source) {
   auto compile = [](GLenum stage, const std::string& text,
                     const std::string& name) -> core::Result<GLuint> {
     GLuint shader = glCreateShader(stage);
@@ -464,10 +489,7 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& sou
     glDeleteShader(*vertex);
     return fragment.error();
   }
-  auto program = linkProgram(*vertex, *fragment, source.vertex_name + " + " + source.fragment_name);
-  if (!program) return program.error();
-  state_->programs.push_back(*program);
-  return static_cast<ProgramId>(state_->programs.size() - 1);
+  return linkProgram(*vertex, *fragment, source.vertex_name + " + " + source.fragment_name);
 }
 
 core::Result<Renderer::ProgramId> Renderer::compileProgram(const SpirvBinary& binary) {
@@ -506,16 +528,18 @@ void Renderer::releaseProgram(ProgramId program) {
   State& s = *state_;
   if (!s.context.makeCurrent()) return;
   if (program >= 0 && program < static_cast<int>(s.programs.size()) && s.programs[program]) {
-    // A program the helper's context drew with goes after that context: on llvmpipe, deleting a
-    // shared program from one context frees the other context's compiled variants of it through
-    // this one, and a later draw crashed inside the driver (generate's second mesh level). The
-    // helper starts again at its next use; destroying its context drops its variants cleanly.
-    auto& used = s.helper_programs;
-    if (std::find(used.begin(), used.end(), s.programs[program]) != used.end()) {
-      s.region_helper.reset();
-      used.clear();
+    // A region program's copy in the helper's context goes with it, deleted there.
+    const GLuint id = s.programs[program];
+    if (s.region_programs.erase(id) > 0 && s.region_helper) {
+      s.region_helper->run([id](internal::RegionHelper::Context& helper) {
+        if (auto copy = helper.programs.find(id); copy != helper.programs.end()) {
+          glDeleteProgram(copy->second.program);
+          helper.programs.erase(copy);
+        }
+      });
+      s.region_helper->wait();
     }
-    glDeleteProgram(s.programs[program]);
+    glDeleteProgram(id);
     s.programs[program] = 0;
   }
 }

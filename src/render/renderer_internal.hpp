@@ -4,8 +4,10 @@
 
 #include <condition_variable>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <future>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -93,17 +95,35 @@ struct RegionTarget {
 // llvmpipe shades vertices and bins triangles on the thread that draws, and rasterizes a scene
 // whose target is one 64×64 bin (a view of the footprint) on one of its threads: one context keeps
 // about one core busy, two keep two (region_renderer.cpp).
+//
+// Each context draws with programs of its own. A program object is shared by the contexts that
+// share objects, but on llvmpipe (Mesa 22.3) that is not safe for two contexts that draw with it:
+// a uniform set in one context never reaches the other (the "changed" flags are per context),
+// deleting it from one context frees the other's compiled variants through the wrong context
+// (generate crashed at its second mesh level), and both contexts compile variants of it at once
+// into one list. So the helper compiles its own copy of each region program from its source
+// (State::region_programs) and gives it the uniform values set on the original.
 class RegionHelper {
  public:
-  // Starts the thread and creates its context; fails when the context cannot be made.
+  // What the thread keeps in its context: its region target and its copies of region programs.
+  struct Context {
+    struct Copy {
+      GLuint program = 0;
+      uint32_t version = 0;  // RegionProgram::version of the uniforms it was given
+    };
+    RegionTarget target;
+    std::map<GLuint, Copy> programs;  // by the first context's program
+  };
+
+  // Starts the thread and creates its context; fails when the thread or context cannot be made.
   static core::Result<std::unique_ptr<RegionHelper>> start(const GlContext& share);
   ~RegionHelper();  // after the job under way; its objects are deleted in its context
   RegionHelper(const RegionHelper&) = delete;
   RegionHelper& operator=(const RegionHelper&) = delete;
 
-  // Runs `job` on the thread, with its context current and its region target; wait() returns
-  // when it is done. One job at a time.
-  void run(std::function<void(RegionTarget&)> job);
+  // Runs `job` on the thread, with its context current; wait() returns when it is done and
+  // rethrows what the job threw. One job at a time.
+  void run(std::function<void(Context&)> job);
   void wait();
 
  private:
@@ -113,9 +133,23 @@ class RegionHelper {
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::function<void(RegionTarget&)> job_;
+  std::function<void(Context&)> job_;
+  std::exception_ptr thrown_;
   bool busy_ = false, stopping_ = false;
 };
+
+// A program made by compileRegionProgram(): its source, wrapped, and the uniform values set on it
+// (setProgramUniforms), for the helper's copy.
+struct RegionProgram {
+  GlslSource source;
+  std::vector<UniformValue> uniforms;  // one per location, the last value set
+  uint32_t version = 0;                // counts the setProgramUniforms calls
+};
+
+// A program from GLSL source, compiled and linked in the current context.
+core::Result<GLuint> buildProgram(const GlslSource& source);
+// glProgramUniform of each value; fails on a location or size the program lacks.
+core::Status setUniforms(GLuint program, std::span<const UniformValue> values);
 
 
 // Creates `gpu.vao` and one buffer per present attribute stream of `mesh`, bound to VAO binding
@@ -191,7 +225,7 @@ struct Renderer::State {
   int drawing_threads = 1;
   std::unique_ptr<internal::RegionHelper> region_helper;
   std::string region_helper_failure;
-  std::vector<GLuint> helper_programs;  // the programs region_helper has drawn with
+  std::map<GLuint, internal::RegionProgram> region_programs;  // by program
   GLuint downsample_program = 0;
   GLuint empty_vao = 0;
   internal::WorkQueries work_queries;
