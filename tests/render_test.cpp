@@ -844,10 +844,9 @@ TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
 }
 
 // The image-driven simplifier releases its programs and meshes after each level and makes new
-// ones for the next (generate's mesh cascade), at another footprint. Deleting a program the
-// helper's context had drawn with crashed llvmpipe at the next draw (generate at its second
-// level; this test in its second round), so a released program takes the helper with it and the
-// next call starts it again.
+// ones for the next (generate's mesh cascade), at another footprint. When both contexts drew with
+// one shared program, deleting it crashed llvmpipe at the next draw (generate at its second level;
+// this test in its second round). Now the helper's own copy is deleted in its own context.
 TEST(RendererDrawingThreads, ProgramsAndAssetsReleasedBetweenCallsAreNotUsedAgain) {
   auto created = render::Renderer::create({.drawing_threads = 2});
   ASSERT_TRUE(created) << created.error().message;
