@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
+#include <thread>
 
 namespace duolod::mesh {
 namespace {
@@ -53,7 +55,10 @@ void ImageCostModel::begin(const EngineState& state) {
   cell_pixels_ = std::max(2, R / 64);
   cells_per_side_ = (R + cell_pixels_ - 1) / cell_pixels_;
   bins_.assign(size_t(view_count_) * cells_per_side_ * cells_per_side_, {});
-  triangle_mark_.assign(state.triangle_alive.size(), 0);
+  for (TileScratch& scratch : scratch_) {
+    scratch.triangle_mark.assign(state.triangle_alive.size(), 0);
+    scratch.mark_round = 0;
+  }
   for (uint32_t t = 0; t < state.triangle_alive.size(); ++t)
     if (state.triangle_alive[t]) binTriangle(state, t);
 
@@ -197,11 +202,76 @@ void ImageCostModel::appendTriangle(const EngineState& state, const uint32_t wed
                                        : 0);
 }
 
+void ImageCostModel::buildTiles(const EngineState& state, std::span<const TileJob> jobs,
+                                std::vector<std::vector<LocalTriangle>>& triangles) {
+  if (triangles.size() < jobs.size()) triangles.resize(jobs.size());
+  auto build = [&](TileScratch& scratch, size_t first, size_t step) {
+    for (size_t i = first; i < jobs.size(); i += step)
+      buildTile(state, jobs[i], scratch, triangles[i]);
+  };
+  // Between two renders the GPU's threads are idle: this is the one stretch of the image-driven
+  // mode's work that ran on one core (bench/RESULTS.md, issue 3, session 29). Jobs alternate
+  // between the threads, which share only what they read.
+  constexpr size_t kTwoThreadJobs = 16;
+  static const bool two_threads = std::thread::hardware_concurrency() >= 2;
+  if (!two_threads || jobs.size() < kTwoThreadJobs) {
+    build(scratch_[0], 0, 1);
+    return;
+  }
+  std::exception_ptr thrown;
+  std::thread other([&] {
+    try {
+      build(scratch_[1], 1, 2);
+    } catch (...) {
+      thrown = std::current_exception();
+    }
+  });
+  try {
+    build(scratch_[0], 0, 2);
+  } catch (...) {
+    other.join();
+    throw;
+  }
+  other.join();
+  if (thrown) std::rethrow_exception(thrown);
+}
+
+void ImageCostModel::buildTile(const EngineState& state, const TileJob& job,
+                               TileScratch& scratch, std::vector<LocalTriangle>& out) const {
+  out.clear();
+  const CandidateCollapse* c = job.collapse;
+  gatherTriangles(state, job.view, job.region, c ? c->from : kAbsent, scratch, out);
+  if (c) {
+    // The moved triangles: from's corner takes the wedge (and position) it merges into.
+    state.forEachCorner(c->from, [&](uint32_t corner) {
+      uint32_t t = corner / 3;
+      LocalTriangle moved;
+      moved.group = state.groups[t];
+      bool vanishes = false;
+      for (int k = 0; k < 3; ++k) {
+        uint32_t w = state.corners[t * 3 + k];
+        uint32_t position = state.wedge_position[w];
+        vanishes |= position == c->to;
+        if (position == c->from) {
+          for (int m = 0; m < c->wedge_count; ++m)
+            if (c->from_wedges[m] == w) w = c->to_wedges[m];
+          position = c->to;
+        }
+        moved.wedges[k] = w;
+        moved.corners[k] = projected(job.view, position);
+      }
+      if (!vanishes) out.push_back(moved);
+    });
+  }
+  keepVisible(job.region, scratch, out);
+}
+
 void ImageCostModel::gatherTriangles(const EngineState& state, int view, const Region& region,
-                                     uint32_t skip_position, std::vector<LocalTriangle>& out) {
-  if (++mark_round_ == 0) {
-    std::fill(triangle_mark_.begin(), triangle_mark_.end(), 0);
-    mark_round_ = 1;
+                                     uint32_t skip_position, TileScratch& scratch,
+                                     std::vector<LocalTriangle>& out) const {
+  if (++scratch.mark_round == 0) {
+    std::fill(scratch.triangle_mark.begin(), scratch.triangle_mark.end(), 0);
+    scratch.mark_round = 1;
   }
   const int cells = cells_per_side_;
   int cx0 = std::clamp(region.x0 / cell_pixels_, 0, cells - 1);
@@ -215,8 +285,8 @@ void ImageCostModel::gatherTriangles(const EngineState& state, int view, const R
   for (int cy = cy0; cy <= cy1; ++cy)
     for (int cx = cx0; cx <= cx1; ++cx)
       for (uint32_t t : bins_[(size_t(view) * cells + cy) * cells + cx]) {
-        if (!state.triangle_alive[t] || triangle_mark_[t] == mark_round_) continue;
-        triangle_mark_[t] = mark_round_;
+        if (!state.triangle_alive[t] || scratch.triangle_mark[t] == scratch.mark_round) continue;
+        scratch.triangle_mark[t] = scratch.mark_round;
         LocalTriangle local;
         local.group = state.groups[t];
         bool skip = false;
@@ -234,9 +304,11 @@ void ImageCostModel::gatherTriangles(const EngineState& state, int view, const R
       }
 }
 
-void ImageCostModel::keepVisible(const Region& region, std::vector<LocalTriangle>& triangles) {
+void ImageCostModel::keepVisible(const Region& region, TileScratch& scratch,
+                                 std::vector<LocalTriangle>& triangles) {
   const int width = region.x1 - region.x0, height = region.y1 - region.y0;
-  depth_scratch_.assign(size_t(width) * height, 2.0f);
+  std::vector<float>& depth = scratch.depth;
+  depth.assign(size_t(width) * height, 2.0f);
   // Two passes over the front faces: the nearest depth at every pixel centre, then every triangle
   // that reaches within a tolerance of it. The tolerances keep what OpenGL might draw where our
   // rasterization and its (fixed-point, top-left-rule) one can disagree: on shared edges, and
@@ -279,12 +351,12 @@ void ImageCostModel::keepVisible(const Region& region, std::vector<LocalTriangle
   // behind it shows (at silhouettes: the background or a farther fold).
   for (const LocalTriangle& t : triangles)
     rasterize(t, -kEdgeSlackPixels,
-              [&](size_t at, float z) { depth_scratch_[at] = std::min(depth_scratch_[at], z); });
+              [&](size_t at, float z) { depth[at] = std::min(depth[at], z); });
   size_t kept = 0;
   for (size_t i = 0; i < triangles.size(); ++i) {
     bool visible = false;
     rasterize(triangles[i], kEdgeSlackPixels, [&](size_t at, float z) {
-      visible |= z <= depth_scratch_[at] + kDepthTolerance;
+      visible |= z <= depth[at] + kDepthTolerance;
     });
     if (visible) triangles[kept++] = triangles[i];  // original order: deterministic soups
   }
@@ -345,6 +417,7 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
     Region region;
   };
   std::vector<Placed> placed;
+  std::vector<TileJob> jobs;
   render::Renderer::RegionSoup soup;
   std::vector<uint8_t> usable(batch.size(), 1);
   for (uint32_t i = 0; i < batch.size(); ++i) {
@@ -365,36 +438,15 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
         ++stats_.unseen_views;
         continue;
       }
-      uint32_t tile = uint32_t(soup.tiles.size());
       soup.tiles.push_back({p.view, p.region.x0, p.region.y0, p.region.x1 - p.region.x0,
                             p.region.y1 - p.region.y0});
-      local_.clear();
-      gatherTriangles(state, p.view, p.region, c.from, local_);
-      // The moved triangles: from's corner takes the wedge (and position) it merges into.
-      state.forEachCorner(c.from, [&](uint32_t corner) {
-        uint32_t t = corner / 3;
-        LocalTriangle moved;
-        moved.group = state.groups[t];
-        bool vanishes = false;
-        for (int k = 0; k < 3; ++k) {
-          uint32_t w = state.corners[t * 3 + k];
-          uint32_t position = state.wedge_position[w];
-          vanishes |= position == c.to;
-          if (position == c.from) {
-            for (int m = 0; m < c.wedge_count; ++m)
-              if (c.from_wedges[m] == w) w = c.to_wedges[m];
-            position = c.to;
-          }
-          moved.wedges[k] = w;
-          moved.corners[k] = projected(p.view, position);
-        }
-        if (!vanishes) local_.push_back(moved);
-      });
-      keepVisible(p.region, local_);
-      appendToSoup(state, local_, tile, soup);
+      jobs.push_back({p.view, p.region, &c});
       placed.push_back(p);
     }
   }
+  buildTiles(state, jobs, tile_triangles_);
+  for (uint32_t tile = 0; tile < jobs.size(); ++tile)
+    appendToSoup(state, tile_triangles_[tile], tile, soup);
 
   const int R = setup_.resolution, T = setup_.tile_size, L = setup_.lights_per_view;
   double build_s = since(build_start);
@@ -595,15 +647,14 @@ void ImageCostModel::refreshPendingRegions(const EngineState& state) {
         pieces.push_back({view, Region{x, y, std::min(x + T, region.x1), std::min(y + T, region.y1)}});
   pending_.clear();
   render::Renderer::RegionSoup soup;
-  for (uint32_t tile = 0; tile < pieces.size(); ++tile) {
-    const Region& piece = pieces[tile].second;
-    soup.tiles.push_back({pieces[tile].first, piece.x0, piece.y0, piece.x1 - piece.x0,
-                          piece.y1 - piece.y0});
-    local_.clear();
-    gatherTriangles(state, pieces[tile].first, pieces[tile].second, kAbsent, local_);
-    keepVisible(pieces[tile].second, local_);
-    appendToSoup(state, local_, tile, soup);
+  std::vector<TileJob> jobs;
+  for (const auto& [view, piece] : pieces) {
+    soup.tiles.push_back({view, piece.x0, piece.y0, piece.x1 - piece.x0, piece.y1 - piece.y0});
+    jobs.push_back({view, piece, nullptr});
   }
+  buildTiles(state, jobs, tile_triangles_);
+  for (uint32_t tile = 0; tile < jobs.size(); ++tile)
+    appendToSoup(state, tile_triangles_[tile], tile, soup);
   auto tiles = setup_.renderer->renderRegions(setup_.asset, setup_.region_program, soup,
                                               setup_.samples, L, R, T);
   if (!tiles) {

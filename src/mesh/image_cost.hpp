@@ -99,14 +99,35 @@ class ImageCostModel final : public CostModel {
   // of them cover a pixel, and the other triangles do not change.
   bool collapseUnseen(const EngineState& state, uint32_t from, uint32_t to, int view) const;
   void binTriangle(const EngineState& state, uint32_t triangle);
+  // One thread's scratch for building tiles.
+  struct TileScratch {
+    std::vector<uint32_t> triangle_mark;  // per triangle: the last gather that took it
+    uint32_t mark_round = 0;
+    std::vector<float> depth;  // region depth buffer
+  };
+  // A tile of a soup: the region of a view, drawn with `collapse` applied (its `from` triangles
+  // moved to `to`, those on the edge gone) or, without one, as the mesh is.
+  struct TileJob {
+    int view = 0;
+    Region region;
+    const CandidateCollapse* collapse = nullptr;
+  };
+  // The triangles to draw for each job, in job order (so the soups do not depend on the number
+  // of threads): on two threads when there are many jobs and two hardware threads.
+  void buildTiles(const EngineState& state, std::span<const TileJob> jobs,
+                  std::vector<std::vector<LocalTriangle>>& triangles);
+  void buildTile(const EngineState& state, const TileJob& job, TileScratch& scratch,
+                 std::vector<LocalTriangle>& out) const;
   // The live triangles that may cover a pixel centre of `region` in `view`, except those at
   // `skip_position` (kAbsent: none), appended to `out`.
   void gatherTriangles(const EngineState& state, int view, const Region& region,
-                       uint32_t skip_position, std::vector<LocalTriangle>& out);
+                       uint32_t skip_position, TileScratch& scratch,
+                       std::vector<LocalTriangle>& out) const;
   // Keeps only the triangles that are front-facing and nearest at some pixel centre of `region`
   // (a depth-buffered CPU rasterization with OpenGL's sampling rule): at small footprints a region
   // overlaps hundreds of triangles but shows a few dozen, and only those need shading on the GPU.
-  void keepVisible(const Region& region, std::vector<LocalTriangle>& triangles);
+  static void keepVisible(const Region& region, TileScratch& scratch,
+                          std::vector<LocalTriangle>& triangles);
   void appendToSoup(const EngineState& state, const std::vector<LocalTriangle>& triangles,
                     uint32_t tile, render::Renderer::RegionSoup& soup) const;
   void appendTriangle(const EngineState& state, const uint32_t wedges[3], uint32_t tile,
@@ -135,10 +156,8 @@ class ImageCostModel final : public CostModel {
   int cell_pixels_ = 2;
   int cells_per_side_ = 0;
   std::vector<std::vector<uint32_t>> bins_;  // [view * cells² + cell]
-  std::vector<uint32_t> triangle_mark_;
-  std::vector<LocalTriangle> local_;    // scratch for one tile
-  std::vector<float> depth_scratch_;    // scratch: region depth buffer
-  uint32_t mark_round_ = 0;
+  TileScratch scratch_[2];  // one per thread of buildTiles
+  std::vector<std::vector<LocalTriangle>> tile_triangles_;  // buildTiles' output, reused
   std::vector<double> sample_error_;  // per sample: Σ pixels |current − reference|²
   std::vector<std::pair<int, Region>> pending_;  // (view, region) to refresh
   // The last refine's tiles: a candidate applied before anything near it changed has its new
