@@ -843,6 +843,60 @@ TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
   EXPECT_GE(chunks[1][6], 4) << "each context's part should pass the layer limit";
 }
 
+// Regions that show only background have no triangles to draw: the tiles come back empty (zero),
+// also when the whole call or one context's part has none. (An empty vertex buffer was a GL error:
+// the image-driven mode failed at 96 px once its regions held only the pixels a collapse can
+// change.)
+TEST(RendererDrawingThreads, TilesWithoutTrianglesAreBackground) {
+  auto created = render::Renderer::create({.drawing_threads = 2});
+  ASSERT_TRUE(created) << created.error().message;
+  render::Renderer& renderer = **created;
+  core::Asset asset;
+  asset.mesh = test::icosphere(2);
+  asset.source_path = "icosphere";
+  auto id = renderer.uploadAsset(asset);
+  ASSERT_TRUE(id) << id.error().message;
+  auto programs = compileForRegions(renderer, "noise_phong");
+  ASSERT_TRUE(programs) << programs.error().message;
+  const auto samples = render::domainSamples(core::computeBoundingSphere(asset.mesh), 3.0f);
+  std::vector<render::Renderer::RegionTile> tiles;
+  for (int t = 0; t < 40; ++t) tiles.push_back({t % 20, 20 + t % 5, 20 + t % 7, 4, 3});
+  // No triangle at all; then triangles only in the tiles of views 0-4, so that the views the
+  // second context draws have none.
+  render::Renderer::RegionSoup empty;
+  empty.tiles = tiles;
+  auto some = soupOfWholeMesh(asset.mesh, tiles);
+  render::Renderer::RegionSoup first_views;
+  first_views.tiles = tiles;
+  for (size_t t = 0; t < some.triangle_tile.size(); ++t) {
+    if (tiles[some.triangle_tile[t]].view_index >= 5) continue;
+    first_views.triangle_tile.push_back(some.triangle_tile[t]);
+    first_views.triangle_material.push_back(some.triangle_material[t]);
+    for (int k = 0; k < 3; ++k) {
+      first_views.triangles.positions.push_back(some.triangles.positions[t * 3 + k]);
+      if (!some.triangles.normals.empty())
+        first_views.triangles.normals.push_back(some.triangles.normals[t * 3 + k]);
+    }
+  }
+  for (const auto* soup : {&empty, &first_views}) {
+    auto regions = renderer.renderRegions(*id, programs->region, *soup, samples, 5, 48, 8);
+    ASSERT_TRUE(regions) << regions.error().message;
+    ASSERT_EQ(regions->count, int(tiles.size()) * 5);
+    size_t covered_first = 0, covered_later = 0;
+    for (size_t t = 0; t < tiles.size(); ++t)
+      for (int light = 0; light < 5; ++light) {
+        const uint8_t* tile = regions->tile(int(t) * 5 + light);
+        for (int p = 0; p < 8 * 8; ++p)
+          (tiles[t].view_index < 5 ? covered_first : covered_later) += tile[p * 4 + 3] > 0;
+      }
+    EXPECT_EQ(covered_later, 0u);
+    if (soup == &empty)
+      EXPECT_EQ(covered_first, 0u);
+    else
+      EXPECT_GT(covered_first, 0u);
+  }
+}
+
 // The image-driven simplifier releases its programs and meshes after each level and makes new
 // ones for the next (generate's mesh cascade), at another footprint. When both contexts drew with
 // one shared program, deleting it crashed llvmpipe at the next draw (generate at its second level;

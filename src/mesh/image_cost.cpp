@@ -168,13 +168,28 @@ bool ImageCostModel::collapseRegion(const EngineState& state, const CandidateCol
       min_y = std::min(min_y, q.y), max_y = std::max(max_y, q.y);
     }
   });
-  const int R = setup_.resolution;
-  // One pixel of margin: a pixel centre on the box edge may flip either way.
-  region.x0 = std::clamp(int(std::floor(min_x)) - 1, 0, R);
-  region.y0 = std::clamp(int(std::floor(min_y)) - 1, 0, R);
-  region.x1 = std::clamp(int(std::ceil(max_x)) + 1, 0, R);
-  region.y1 = std::clamp(int(std::ceil(max_y)) + 1, 0, R);
+  region = pixelCentresWithin(min_x, min_y, max_x, max_y, setup_.resolution);
   return region.x1 - region.x0 <= setup_.tile_size && region.y1 - region.y0 <= setup_.tile_size;
+}
+
+ImageCostModel::Region ImageCostModel::pixelCentresWithin(float min_x, float min_y, float max_x,
+                                                          float max_y, int resolution) {
+  // A triangle covers only pixel centres inside its box. OpenGL snaps vertices to 1/256 pixel,
+  // so a centre within that of the box may be covered too: keepVisible's slack, 1/64 pixel, is
+  // ample. (The region had a whole pixel of margin on each side: at small footprints, where a
+  // one-ring spans two or three pixels, most of its pixels, and the triangles seen there, were
+  // ones no collapse could change.)
+  constexpr float kSlack = 1.0f / 64.0f;
+  auto first = [&](float low) {
+    return std::clamp(int(std::ceil(low - 0.5f - kSlack)), 0, resolution);
+  };
+  auto end = [&](float high) {
+    return std::clamp(int(std::floor(high - 0.5f + kSlack)) + 1, 0, resolution);
+  };
+  Region region{first(min_x), first(min_y), end(max_x), end(max_y)};
+  if (region.x1 < region.x0) region.x1 = region.x0;
+  if (region.y1 < region.y0) region.y1 = region.y0;
+  return region;
 }
 
 void ImageCostModel::appendTriangle(const EngineState& state, const uint32_t wedges[3],
@@ -434,7 +449,8 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
     }
     for (const Placed& p : mine) {
       // Nothing to render where the collapse shows nowhere: its change of eq. (6) there is 0.
-      if (collapseUnseen(state, c.from, c.to, p.view)) {
+      const bool no_pixel = p.region.x1 == p.region.x0 || p.region.y1 == p.region.y0;
+      if (no_pixel || collapseUnseen(state, c.from, c.to, p.view)) {
         ++stats_.unseen_views;
         continue;
       }
@@ -568,10 +584,7 @@ void ImageCostModel::onCollapse(const EngineState& state, const AppliedCollapse&
         min_y = std::min(min_y, q.y), max_y = std::max(max_y, q.y);
       }
     });
-    Region region{std::clamp(int(std::floor(min_x)) - 1, 0, R),
-                  std::clamp(int(std::floor(min_y)) - 1, 0, R),
-                  std::clamp(int(std::ceil(max_x)) + 1, 0, R),
-                  std::clamp(int(std::ceil(max_y)) + 1, 0, R)};
+    const Region region = pixelCentresWithin(min_x, min_y, max_x, max_y, R);
     if (region.x1 > region.x0 && region.y1 > region.y0) {
       pending_.push_back({v, region});
       changed_since_refine_.push_back({v, region});

@@ -45,7 +45,9 @@ struct ImageCostStats {
   size_t full_renders = 0;       // whole-domain re-renders of the current mesh
   size_t rejected_long_edges = 0;
   size_t rejected_wide_regions = 0;
-  size_t unseen_views = 0;  // (candidate, view) tiles skipped: the collapse shows nowhere there
+  // (candidate, view) tiles skipped: the collapse shows nowhere there (its triangles face away,
+  // or cover no pixel centre)
+  size_t unseen_views = 0;
   double render_seconds = 0;
   double predicted_change = 0;  // sum of the rendered costs of the applied collapses
 };
@@ -88,8 +90,12 @@ class ImageCostModel final : public CostModel {
   PixelPoint projected(int view, uint32_t position) const {
     return projected_[size_t(view) * position_count_ + position];
   }
-  // The rectangle covering the survivor's and the removed vertex's neighbourhood in a view, or
-  // false when it is wider than a tile.
+  // The pixels whose centres lie in the box [min, max] (pixel coordinates), clamped to the view;
+  // empty when there are none.
+  static Region pixelCentresWithin(float min_x, float min_y, float max_x, float max_y,
+                                   int resolution);
+  // The pixels the collapse may change in a view (centres in the box of the removed vertex's
+  // one-ring, which holds the survivor; may be empty), or false when it is wider than a tile.
   bool collapseRegion(const EngineState& state, const CandidateCollapse& candidate, int view,
                       Region& region) const;
   bool edgeTooLong(uint32_t from, uint32_t to) const;

@@ -219,7 +219,12 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
   batch.width = batch.height = tile_size;
   batch.count = tile_count * lights_per_view;
   batch.pixels.assign(size_t(batch.count) * tile_size * tile_size * 4, 0);
-  if (tile_count == 0) return batch;
+  // Nothing to draw (the regions show only background): the cleared target's zeros. (An empty
+  // vertex buffer would be a GL error.)
+  if (tile_count == 0 || triangle_count == 0) {
+    if (stats) *stats = {};
+    return batch;
+  }
 
   // Canvases. A layer holds two view-sized canvases side by side, `column_offset` pixels apart
   // (a multiple of 64), so that they lie in different 64×64 bins: llvmpipe rasterizes a scene's
