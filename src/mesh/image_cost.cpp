@@ -174,17 +174,15 @@ bool ImageCostModel::collapseRegion(const EngineState& state, const CandidateCol
 
 ImageCostModel::Region ImageCostModel::pixelCentresWithin(float min_x, float min_y, float max_x,
                                                           float max_y, int resolution) {
-  // A triangle covers only pixel centres inside its box. OpenGL snaps vertices to 1/256 pixel,
-  // so a centre within that of the box may be covered too: keepVisible's slack, 1/64 pixel, is
-  // ample. (The region had a whole pixel of margin on each side: at small footprints, where a
-  // one-ring spans two or three pixels, most of its pixels, and the triangles seen there, were
-  // ones no collapse could change.)
-  constexpr float kSlack = 1.0f / 64.0f;
+  // A triangle covers only pixel centres inside its box, up to OpenGL's snapping (kPixelSlack).
+  // (The region had a whole pixel of margin on each side: at small footprints, where a one-ring
+  // spans two or three pixels, most of its pixels, and the triangles seen there, were ones no
+  // collapse could change.)
   auto first = [&](float low) {
-    return std::clamp(int(std::ceil(low - 0.5f - kSlack)), 0, resolution);
+    return std::clamp(int(std::ceil(low - 0.5f - kPixelSlack)), 0, resolution);
   };
   auto end = [&](float high) {
-    return std::clamp(int(std::floor(high - 0.5f + kSlack)) + 1, 0, resolution);
+    return std::clamp(int(std::floor(high - 0.5f + kPixelSlack)) + 1, 0, resolution);
   };
   Region region{first(min_x), first(min_y), end(max_x), end(max_y)};
   if (region.x1 < region.x0) region.x1 = region.x0;
@@ -294,9 +292,9 @@ void ImageCostModel::gatherTriangles(const EngineState& state, int view, const R
   int cy0 = std::clamp(region.y0 / cell_pixels_, 0, cells - 1);
   int cy1 = std::clamp((region.y1 - 1) / cell_pixels_, 0, cells - 1);
   // Pixel centres of the region lie in [x0 + 0.5, x1 − 0.5]: a triangle whose box misses that
-  // range covers none of them.
-  const float min_cx = region.x0 + 0.5f, max_cx = region.x1 - 0.5f;
-  const float min_cy = region.y0 + 0.5f, max_cy = region.y1 - 0.5f;
+  // range (by more than OpenGL's snapping) covers none of them.
+  const float min_cx = region.x0 + 0.5f - kPixelSlack, max_cx = region.x1 - 0.5f + kPixelSlack;
+  const float min_cy = region.y0 + 0.5f - kPixelSlack, max_cy = region.y1 - 0.5f + kPixelSlack;
   for (int cy = cy0; cy <= cy1; ++cy)
     for (int cx = cx0; cx <= cx1; ++cx)
       for (uint32_t t : bins_[(size_t(view) * cells + cy) * cells + cx]) {
@@ -329,7 +327,7 @@ void ImageCostModel::keepVisible(const Region& region, TileScratch& scratch,
   // rasterization and its (fixed-point, top-left-rule) one can disagree: on shared edges, and
   // within 1/64 pixel of an edge.
   constexpr float kDepthTolerance = 1e-5f;
-  constexpr float kEdgeSlackPixels = 1.0f / 64.0f;
+  constexpr float kEdgeSlackPixels = kPixelSlack;
   auto rasterize = [&](const LocalTriangle& t, float slack, auto&& visit) {
     const PixelPoint* c = t.corners;
     // Rows top first flip the winding: OpenGL's counter-clockwise front faces have negative area.

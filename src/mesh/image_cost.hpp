@@ -90,8 +90,11 @@ class ImageCostModel final : public CostModel {
   PixelPoint projected(int view, uint32_t position) const {
     return projected_[size_t(view) * position_count_ + position];
   }
-  // The pixels whose centres lie in the box [min, max] (pixel coordinates), clamped to the view;
-  // empty when there are none.
+  // How far outside a triangle (in pixels) OpenGL may still cover a pixel centre: it snaps
+  // vertices to 1/256 pixel, so 1/64 is ample.
+  static constexpr float kPixelSlack = 1.0f / 64.0f;
+  // The pixels whose centres lie in the box [min, max] (pixel coordinates, widened by
+  // kPixelSlack), clamped to the view; empty when there are none.
   static Region pixelCentresWithin(float min_x, float min_y, float max_x, float max_y,
                                    int resolution);
   // The pixels the collapse may change in a view (centres in the box of the removed vertex's
