@@ -501,6 +501,31 @@ core::Result<RegionPrograms> compileForRegions(render::Renderer& renderer, const
   return RegionPrograms{*plain, *region};
 }
 
+// A renderer of its own with `drawing_threads`, an icosphere uploaded and a duolod shader compiled
+// plain and for regions.
+struct RegionSetup {
+  std::unique_ptr<render::Renderer> renderer;
+  core::Asset asset;
+  render::Renderer::AssetId id = -1;
+  RegionPrograms programs;
+};
+core::Result<RegionSetup> regionSetup(int drawing_threads, int subdivisions,
+                                      const std::string& shader) {
+  RegionSetup setup;
+  auto created = render::Renderer::create({.drawing_threads = drawing_threads});
+  if (!created) return created.error();
+  setup.renderer = std::move(created.value());
+  setup.asset.mesh = test::icosphere(subdivisions);
+  setup.asset.source_path = "icosphere";
+  auto id = setup.renderer->uploadAsset(setup.asset);
+  if (!id) return id.error();
+  setup.id = *id;
+  auto programs = compileForRegions(*setup.renderer, shader);
+  if (!programs) return programs.error();
+  setup.programs = *programs;
+  return setup;
+}
+
 TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
   auto asset = io::loadAsset(path);
@@ -558,26 +583,22 @@ TEST_F(RendererTest, RegionTilesReproduceTheFullViewPixels) {
 // and must stop at the device's limit (it failed as "incomplete" at 60 px). One drawing context,
 // so that the parts counted are the layer limit's alone.
 TEST_F(RendererTest, RegionTilesBeyondTheLayerLimitAreDrawnInParts) {
-  auto created = render::Renderer::create({.drawing_threads = 1});
-  ASSERT_TRUE(created) << created.error().message;
-  render::Renderer& renderer = **created;
-  core::Asset asset;
-  asset.mesh = test::icosphere(1);
-  asset.source_path = "icosphere";
-  auto id = renderer.uploadAsset(asset);
-  ASSERT_TRUE(id);
-  auto programs = compileForRegions(renderer, "noise_phong");
-  ASSERT_TRUE(programs) << programs.error().message;
+  auto setup = regionSetup(1, 1, "noise_phong");
+  ASSERT_TRUE(setup) << setup.error().message;
+  render::Renderer& renderer = *setup->renderer;
+  const core::Asset& asset = setup->asset;
+  const render::Renderer::AssetId id = setup->id;
+  const RegionPrograms& programs = setup->programs;
   const int resolution = 16, tile = 8;
   auto samples = render::domainSamples(core::computeBoundingSphere(asset.mesh), 4.0f);
-  auto full = renderer.render(*id, programs->plain, samples, {.resolution = resolution});
+  auto full = renderer.render(id, programs.plain, samples, {.resolution = resolution});
   ASSERT_TRUE(full);
   for (int tile_count : {300, 400, 1000}) {
   SCOPED_TRACE(tile_count);
   std::vector<render::Renderer::RegionTile> tiles;
   for (int t = 0; t < tile_count; ++t) tiles.push_back({t % 20, 4 + t % 3, 4 + t % 5});
   render::RenderStats stats;
-  auto regions = renderer.renderRegions(*id, programs->region, soupOfWholeMesh(asset.mesh, tiles),
+  auto regions = renderer.renderRegions(id, programs.region, soupOfWholeMesh(asset.mesh, tiles),
                                         samples, 5, resolution, tile, &stats);
   ASSERT_TRUE(regions) << regions.error().message;
   ASSERT_EQ(regions->count, tile_count * 5);
@@ -718,11 +739,13 @@ TEST(RendererDevices, ChoosesAnEglDeviceOrSaysHowManyExist) {
 // parameter block (binding 2), what setProgramUniforms and setParameterBlock give a simplified
 // shader, and from gl_FragCoord.x: a tile in the second column of a layer is drawn 64 or more
 // pixels to the right, so its blue channel tells which column it was drawn in.
-constexpr const char* kTintedVertex = R"(#version 450 core
+constexpr const char* kFrameBlock = R"(
 layout(std140, binding = 0) uniform Frame {
   mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
   vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
 };
+)";
+constexpr const char* kTintedVertex = R"(
 layout(location = 0) in vec3 inPosition;
 layout(location = 1) in vec3 inNormal;
 layout(location = 0) out vec3 vNormal;
@@ -731,11 +754,7 @@ void main() {
   gl_Position = uProjection * uView * uModel * vec4(inPosition, 1.0);
 }
 )";
-constexpr const char* kTintedFragment = R"(#version 450 core
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
+constexpr const char* kTintedFragment = R"(
 layout(location = 40) uniform vec4 uTint;
 layout(std140, binding = 2) uniform Parameters { vec4 uOffset; };
 layout(location = 0) in vec3 vNormal;
@@ -745,6 +764,10 @@ void main() {
   outColor = vec4(uTint.rg * light + uOffset.rg, gl_FragCoord.x / 256.0, 1.0);
 }
 )";
+render::GlslSource tintedShader() {
+  const std::string header = std::string("#version 450 core\n") + kFrameBlock;
+  return {header + kTintedVertex, header + kTintedFragment, "tinted.vert", "tinted.frag"};
+}
 
 // Tiles over the views in uneven numbers (view v has v % 3 + 1 of them, in view order: 39), so
 // that where the views are split between two contexts (about half way, after 19 or 21 tiles), the
@@ -787,7 +810,7 @@ TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
     for (int t = 0; t < 1800; ++t) crowded.push_back({t % 20, 4 + t % 3, 4 + t % 5});
     cases.push_back({"past the layer limit", 16, 8, std::move(crowded), test::icosphere(1)});
   }
-  const render::GlslSource tinted{kTintedVertex, kTintedFragment, "tinted.vert", "tinted.frag"};
+  const render::GlslSource tinted = tintedShader();
   // images[threads - 1][case][round]
   std::vector<render::ImageBatch8> images[2];
   std::vector<int> chunks[2];
@@ -848,16 +871,12 @@ TEST(RendererDrawingThreads, TwoContextsDrawTheTilesOneContextDraws) {
 // the image-driven mode failed at 96 px once its regions held only the pixels a collapse can
 // change.)
 TEST(RendererDrawingThreads, TilesWithoutTrianglesAreBackground) {
-  auto created = render::Renderer::create({.drawing_threads = 2});
-  ASSERT_TRUE(created) << created.error().message;
-  render::Renderer& renderer = **created;
-  core::Asset asset;
-  asset.mesh = test::icosphere(2);
-  asset.source_path = "icosphere";
-  auto id = renderer.uploadAsset(asset);
-  ASSERT_TRUE(id) << id.error().message;
-  auto programs = compileForRegions(renderer, "noise_phong");
-  ASSERT_TRUE(programs) << programs.error().message;
+  auto setup = regionSetup(2, 2, "noise_phong");
+  ASSERT_TRUE(setup) << setup.error().message;
+  render::Renderer& renderer = *setup->renderer;
+  const core::Asset& asset = setup->asset;
+  const render::Renderer::AssetId id = setup->id;
+  const RegionPrograms& programs = setup->programs;
   const auto samples = render::domainSamples(core::computeBoundingSphere(asset.mesh), 3.0f);
   std::vector<render::Renderer::RegionTile> tiles;
   for (int t = 0; t < 40; ++t) tiles.push_back({t % 20, 20 + t % 5, 20 + t % 7, 4, 3});
@@ -879,7 +898,7 @@ TEST(RendererDrawingThreads, TilesWithoutTrianglesAreBackground) {
     }
   }
   for (const auto* soup : {&empty, &first_views}) {
-    auto regions = renderer.renderRegions(*id, programs->region, *soup, samples, 5, 48, 8);
+    auto regions = renderer.renderRegions(id, programs.region, *soup, samples, 5, 48, 8);
     ASSERT_TRUE(regions) << regions.error().message;
     ASSERT_EQ(regions->count, int(tiles.size()) * 5);
     size_t covered_first = 0, covered_later = 0;
