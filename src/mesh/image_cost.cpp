@@ -215,6 +215,16 @@ void ImageCostModel::appendTriangle(const EngineState& state, const uint32_t wed
                                        : 0);
 }
 
+void ImageCostModel::buildSoup(const EngineState& state, std::span<const TileJob> jobs,
+                               render::Renderer::RegionSoup& soup) {
+  buildTiles(state, jobs, tile_triangles_);
+  for (uint32_t tile = 0; tile < jobs.size(); ++tile) {
+    const Region& r = jobs[tile].region;
+    soup.tiles.push_back({jobs[tile].view, r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0});
+    appendToSoup(state, tile_triangles_[tile], tile, soup);
+  }
+}
+
 void ImageCostModel::buildTiles(const EngineState& state, std::span<const TileJob> jobs,
                                 std::vector<std::vector<LocalTriangle>>& triangles) {
   if (triangles.size() < jobs.size()) triangles.resize(jobs.size());
@@ -327,7 +337,6 @@ void ImageCostModel::keepVisible(const Region& region, TileScratch& scratch,
   // rasterization and its (fixed-point, top-left-rule) one can disagree: on shared edges, and
   // within 1/64 pixel of an edge.
   constexpr float kDepthTolerance = 1e-5f;
-  constexpr float kEdgeSlackPixels = kPixelSlack;
   auto rasterize = [&](const LocalTriangle& t, float slack, auto&& visit) {
     const PixelPoint* c = t.corners;
     // Rows top first flip the winding: OpenGL's counter-clockwise front faces have negative area.
@@ -363,12 +372,12 @@ void ImageCostModel::keepVisible(const Region& region, TileScratch& scratch,
   // edge passes within the slack of a centre may not be drawn there by OpenGL, and then what lies
   // behind it shows (at silhouettes: the background or a farther fold).
   for (const LocalTriangle& t : triangles)
-    rasterize(t, -kEdgeSlackPixels,
+    rasterize(t, -kPixelSlack,
               [&](size_t at, float z) { depth[at] = std::min(depth[at], z); });
   size_t kept = 0;
   for (size_t i = 0; i < triangles.size(); ++i) {
     bool visible = false;
-    rasterize(triangles[i], kEdgeSlackPixels, [&](size_t at, float z) {
+    rasterize(triangles[i], kPixelSlack, [&](size_t at, float z) {
       visible |= z <= depth[at] + kDepthTolerance;
     });
     if (visible) triangles[kept++] = triangles[i];  // original order: deterministic soups
@@ -452,15 +461,11 @@ void ImageCostModel::refine(const EngineState& state, std::span<CandidateCollaps
         ++stats_.unseen_views;
         continue;
       }
-      soup.tiles.push_back({p.view, p.region.x0, p.region.y0, p.region.x1 - p.region.x0,
-                            p.region.y1 - p.region.y0});
       jobs.push_back({p.view, p.region, &c});
       placed.push_back(p);
     }
   }
-  buildTiles(state, jobs, tile_triangles_);
-  for (uint32_t tile = 0; tile < jobs.size(); ++tile)
-    appendToSoup(state, tile_triangles_[tile], tile, soup);
+  buildSoup(state, jobs, soup);
 
   const int R = setup_.resolution, T = setup_.tile_size, L = setup_.lights_per_view;
   double build_s = since(build_start);
@@ -659,13 +664,8 @@ void ImageCostModel::refreshPendingRegions(const EngineState& state) {
   pending_.clear();
   render::Renderer::RegionSoup soup;
   std::vector<TileJob> jobs;
-  for (const auto& [view, piece] : pieces) {
-    soup.tiles.push_back({view, piece.x0, piece.y0, piece.x1 - piece.x0, piece.y1 - piece.y0});
-    jobs.push_back({view, piece, nullptr});
-  }
-  buildTiles(state, jobs, tile_triangles_);
-  for (uint32_t tile = 0; tile < jobs.size(); ++tile)
-    appendToSoup(state, tile_triangles_[tile], tile, soup);
+  for (const auto& [view, piece] : pieces) jobs.push_back({view, piece, nullptr});
+  buildSoup(state, jobs, soup);
   auto tiles = setup_.renderer->renderRegions(setup_.asset, setup_.region_program, soup,
                                               setup_.samples, L, R, T);
   if (!tiles) {

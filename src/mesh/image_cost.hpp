@@ -121,6 +121,9 @@ class ImageCostModel final : public CostModel {
     Region region;
     const CandidateCollapse* collapse = nullptr;
   };
+  // The jobs' tiles and triangles appended to `soup`, tile i for job i.
+  void buildSoup(const EngineState& state, std::span<const TileJob> jobs,
+                 render::Renderer::RegionSoup& soup);
   // The triangles to draw for each job, in job order (so the soups do not depend on the number
   // of threads): on two threads when there are many jobs and two hardware threads.
   void buildTiles(const EngineState& state, std::span<const TileJob> jobs,

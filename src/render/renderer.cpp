@@ -223,8 +223,8 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
                        std::to_string(options.drawing_threads)};
   s.drawing_threads = options.drawing_threads;
   if (s.drawing_threads == 0) {
-    // On llvmpipe the thread that draws shades vertices and bins triangles, and a view-sized
-    // region target is rasterized by one thread: a second drawing context fills the other core
+    // On llvmpipe the thread that draws shades vertices, clips and bins triangles while the
+    // rasterizer threads wait, and the reverse: a second drawing context keeps both cores busy
     // (region_renderer.cpp). A GPU gains nothing from it.
     const GLubyte* name = glGetString(GL_RENDERER);
     const bool cpu_rasterizer =

@@ -92,9 +92,9 @@ struct RegionTarget {
 
 // renderRegions()'s second drawing thread: a GL context of its own that shares the Renderer's
 // objects (programs, buffers, textures), made current on a thread that runs one job at a time.
-// llvmpipe shades vertices and bins triangles on the thread that draws, and rasterizes a scene
-// whose target is one 64×64 bin (a view of the footprint) on one of its threads: one context keeps
-// about one core busy, two keep two (region_renderer.cpp).
+// llvmpipe shades vertices, clips and bins triangles on the thread that draws, and rasterizes
+// when the scene is read back, so with one context one stage waits for the other; with two, one
+// context's drawing runs beside the other's rasterizing (region_renderer.cpp).
 //
 // Each context draws with programs of its own. A program object is shared by the contexts that
 // share objects, but on llvmpipe (Mesa 22.3) that is not safe for two contexts that draw with it:
