@@ -582,8 +582,14 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
     auto helper = internal::RegionHelper::start(s.context);
     if (helper)
       s.region_helper = std::move(helper.value());
-    else
-      s.region_helper_failure = helper.error().message;  // drawn in this context from now on
+    else {
+      // Drawn in this context from now on: the images are the same, only slower, so the run goes
+      // on and the user is told why it is not using the second core.
+      s.region_helper_failure = helper.error().message;
+      core::log(core::LogLevel::kWarning,
+                "render: the second drawing context could not start (" + s.region_helper_failure +
+                    "); region renders use one context from now on");
+    }
     if (auto bound = s.context.makeCurrent(); !bound) return bound.error();
   }
   if (there.empty() || !s.region_helper) {
