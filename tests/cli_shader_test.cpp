@@ -194,6 +194,14 @@ TEST(CliShaderTest, BadFlagsAreClearErrors) {
                                      (test::scratchDir("cli_shader_bad") / "out").string()});
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_TRUE(test::contains(missing.err, "missing.obj")) << missing.err;
+  // An entry point for a GLSL pair (always main()) was ignored; now it is an error.
+  test::CommandRun glsl_entry =
+      runCli({"shader", "missing.obj", "--distance", "3", "--shader", "pbr", "--vert-entry", "VS",
+              "--out", (test::scratchDir("cli_shader_bad") / "out").string()});
+  EXPECT_NE(glsl_entry.exit_code, 0);
+  EXPECT_TRUE(
+      test::contains(glsl_entry.err, "--vert-entry names the entry point of an HLSL --vert"))
+      << glsl_entry.err;
 }
 
 TEST(CliShaderTest, RefusesToWriteIntoTheAssetsFolderEvenWithForce) {

@@ -98,6 +98,19 @@ TEST(Install, FindPackageBuildsAnEngineProgram) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.out, "triangles 512 -> 128, installed shaders found\n");
   EXPECT_TRUE(fs::exists(dir / "out.obj"));
+
+  // The installed tool reads the shaders installed beside it, not the source tree's (which exists
+  // here): with its copy of pbr.frag gone, --shader pbr fails naming the prefix's path.
+  fs::remove(prefix / "share/duolod/shaders/pbr.frag");
+  test::CommandRun rendered = test::runCommand(
+      (prefix / "bin/duolod").string(), {"render", (dir / "grid.obj").string(), "--shader", "pbr",
+                                         "--pixels", "8", "--out", (dir / "grid.png").string()});
+  EXPECT_NE(rendered.exit_code, 0);
+  EXPECT_TRUE(test::contains(rendered.err, (prefix / "share/duolod/shaders/pbr.frag").string() +
+                                               ": shader file not found"))
+      << rendered.err;
+  EXPECT_TRUE(test::contains(rendered.err, "DUOLOD_SHADER_DIR")) << rendered.err;
+  EXPECT_FALSE(fs::exists(dir / "grid.png"));
 }
 
 }  // namespace

@@ -280,6 +280,26 @@ TEST_F(RendererTest, CompileErrorsCarryTheShaderLog) {
   EXPECT_NE(bad_spirv.error().message.find("magic"), std::string::npos);
 }
 
+TEST_F(RendererTest, AVertexStageThatNeverWritesThePositionIsRefused) {
+  // A fragment shader given as the vertex stage compiles as one: it would draw nothing.
+  const std::string fragment =
+      "#version 450 core\nlayout(location=0) out vec4 c;\n"
+      "void main() { c = vec4(1); } // gl_Position = vec4(0); in a comment\n"
+      "/* gl_Position */ float my_gl_Position_x;\n";
+  auto program =
+      renderer_->compileProgram(render::GlslSource{fragment, fragment, "red.frag", "red.frag"});
+  ASSERT_FALSE(program);
+  EXPECT_TRUE(test::contains(program.error().message,
+                             "red.frag: the vertex stage never writes gl_Position"))
+      << program.error().message;
+  // The same with a write of gl_Position compiles.
+  const std::string vertex = "#version 450 core\nvoid main(){gl_Position=vec4(0);}\n";
+  auto good =
+      renderer_->compileProgram(render::GlslSource{vertex, fragment, "ok.vert", "red.frag"});
+  ASSERT_TRUE(good) << good.error().message;
+  renderer_->releaseProgram(*good);
+}
+
 TEST(Domain, DodecahedronHasTwentyUnitViewsAndFiveLightsEach) {
   auto directions = render::viewDirections(render::ViewSet::kDodecahedron);
   ASSERT_EQ(directions.size(), 20u);

@@ -155,5 +155,94 @@ float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
       << two_samplers.error().message;
 }
 
+// What a fragment shader of the interface reads, for the tests below.
+const char* kFragmentHeader = R"(Texture2D uBaseColorTexture : register(t0);
+SamplerState uBaseColorSampler : register(s0);
+Texture2D uNormalTexture : register(t2);
+SamplerState uNormalSampler : register(s2);
+)";
+
+TEST(HlslInput, TexturesPassedToFunctionsKeepTheirBindings) {
+  // Before legalization the texture reached the sample as a function-local copy, which
+  // SPIRV-Cross declared as a uniform of its own ('param') with no binding: unit 0 was sampled.
+  auto glsl = hlslToGlsl(std::string(kFragmentHeader) + R"(
+float3 fetch(Texture2D t, SamplerState s, float2 uv) { return t.Sample(s, uv).rgb; }
+float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
+  return float4(fetch(uBaseColorTexture, uBaseColorSampler, uv) +
+                fetch(uNormalTexture, uNormalSampler, uv), 1);
+}
+)",
+                         Stage::kFragment, "helper.hlsl");
+  ASSERT_TRUE(glsl.ok()) << glsl.error().message;
+  EXPECT_TRUE(test::contains(*glsl, "layout(binding = 2) uniform sampler2D uNormalTexture;"))
+      << *glsl;
+  EXPECT_TRUE(test::contains(*glsl, "layout(binding = 0) uniform sampler2D uBaseColorTexture;"))
+      << *glsl;
+  EXPECT_FALSE(test::contains(*glsl, "param")) << *glsl;
+  // One function: the entry point is inlined into main(), so the shader rules see its values as
+  // values of the entry point (they refused everything in a separate _main()).
+  EXPECT_FALSE(test::contains(*glsl, "_main(")) << *glsl;
+  auto example =
+      hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
+  ASSERT_TRUE(example.ok()) << example.error().message;
+  EXPECT_FALSE(test::contains(*example, "_main(")) << *example;
+
+  // Two sampler states on one texture through a helper are the same error as directly.
+  auto two_samplers = hlslToGlsl(std::string(kFragmentHeader) + R"(
+float4 fetch(Texture2D t, SamplerState s, float2 uv) { return t.Sample(s, uv); }
+float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
+  return fetch(uBaseColorTexture, uBaseColorSampler, uv) + fetch(uBaseColorTexture, uNormalSampler, uv);
+}
+)",
+                                 Stage::kFragment, "two.hlsl");
+  ASSERT_FALSE(two_samplers.ok());
+  EXPECT_TRUE(test::contains(two_samplers.error().message, "two.hlsl: texture 'uBaseColorTexture'"))
+      << two_samplers.error().message;
+}
+
+TEST(HlslInput, TextureLoadNeedsNoSamplerState) {
+  auto glsl = hlslToGlsl(std::string(kFragmentHeader) + R"(
+float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
+  return uBaseColorTexture.Load(int3(int2(position.xy), 0)) +
+         uBaseColorTexture.Sample(uBaseColorSampler, uv);
+}
+)",
+                         Stage::kFragment, "load.hlsl");
+  ASSERT_TRUE(glsl.ok()) << glsl.error().message;
+  EXPECT_TRUE(test::contains(*glsl, "texelFetch(uBaseColorTexture")) << *glsl;
+  EXPECT_TRUE(test::contains(*glsl, "layout(binding = 0) uniform sampler2D uBaseColorTexture;"))
+      << *glsl;
+}
+
+TEST(HlslInput, ResourcesWithoutARegisterAreErrorsNamingThem) {
+  // The interface binds by number: without register() they would all sit at binding 0.
+  auto texture = hlslToGlsl(R"(Texture2D uLooseTexture;
+SamplerState uLooseSampler;
+float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
+  return uLooseTexture.Sample(uLooseSampler, uv);
+}
+)",
+                            Stage::kFragment, "loose.hlsl");
+  ASSERT_FALSE(texture.ok()) << *texture;
+  EXPECT_TRUE(test::contains(texture.error().message, "loose.hlsl: ")) << texture.error().message;
+  EXPECT_TRUE(test::contains(texture.error().message, "has no register()"))
+      << texture.error().message;
+  auto block = hlslToGlsl(R"(cbuffer Tint { float4 uTint; };
+float4 main(float4 position : SV_Position) : SV_Target { return uTint; }
+)",
+                          Stage::kFragment, "block.hlsl");
+  ASSERT_FALSE(block.ok());
+  EXPECT_TRUE(test::contains(block.error().message, "block.hlsl: cbuffer 'Tint' has no register()"))
+      << block.error().message;
+  auto global = hlslToGlsl(R"(float4 gTint;
+float4 main(float4 position : SV_Position) : SV_Target { return gTint; }
+)",
+                           Stage::kFragment, "global.hlsl");
+  ASSERT_FALSE(global.ok());
+  EXPECT_TRUE(test::contains(global.error().message,
+                             "global.hlsl: global variables outside a cbuffer are not supported"))
+      << global.error().message;
+}
+
 }  // namespace
 }  // namespace duolod::shader

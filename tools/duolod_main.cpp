@@ -98,6 +98,8 @@ struct ShadingFlags {
   int pixels = 0;
   std::string views = "sphere";
   CLI::Option* shader_option = nullptr;
+  CLI::Option* vert_entry_option = nullptr;
+  CLI::Option* frag_entry_option = nullptr;
 
   void add(CLI::App* command) {
     command
@@ -119,10 +121,12 @@ struct ShadingFlags {
     command->add_option("--frag", frag,
                         "fragment (pixel) shader: GLSL 450, or HLSL when the file name ends in "
                         ".hlsl; needs --vert");
-    command->add_option("--vert-entry", vert_entry, "entry point of an HLSL --vert")
-        ->capture_default_str();
-    command->add_option("--frag-entry", frag_entry, "entry point of an HLSL --frag")
-        ->capture_default_str();
+    vert_entry_option =
+        command->add_option("--vert-entry", vert_entry, "entry point of an HLSL --vert")
+            ->capture_default_str();
+    frag_entry_option =
+        command->add_option("--frag-entry", frag_entry, "entry point of an HLSL --frag")
+            ->capture_default_str();
     command->add_option("--bindings", bindings,
                         "JSON file moving the shader interface's attribute locations, block and "
                         "texture bindings, e.g. {\"attributes\": {\"color\": 7}} (README, "
@@ -144,6 +148,14 @@ struct ShadingFlags {
     if (vert.empty() != frag.empty()) return core::Error{"--vert and --frag go together"};
     if (!vert.empty() && shader_option && shader_option->count() > 0)
       return core::Error{"give --shader or --vert with --frag, not both"};
+    // An entry point names a function of an HLSL file; GLSL's is always main().
+    for (auto [option, file, flag] : {std::tuple{vert_entry_option, &vert, "--vert"},
+                                      std::tuple{frag_entry_option, &frag, "--frag"}})
+      if (option && option->count() > 0 && !isHlslFile(*file))
+        return core::Error{option->get_name() + " names the entry point of an HLSL " + flag +
+                           " file (.hlsl); " +
+                           (file->empty() ? std::string("there is none")
+                                          : *file + " is GLSL, whose entry point is main()")};
     if (!vert.empty()) {
       // GLSL as it is; HLSL translated to GLSL 450 first (shader::hlslToGlsl), which is what
       // every later stage takes.

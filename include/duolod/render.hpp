@@ -146,8 +146,9 @@ struct SpirvBinary {
 // else from the working folder; a path prefix ("dir/name", "./name") as it is.
 core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix);
 // duolod's shaders/ folder: the environment variable DUOLOD_SHADER_DIR when set, else the source
-// tree the library was built from while it exists, else the installed copy (share/duolod/shaders
-// under the install prefix).
+// share/duolod/shaders beside the running program's bin/ folder when it exists (an installed
+// program, whatever --prefix it was installed with), else the source tree the library was built
+// from while it exists, else the configured install prefix's share/duolod/shaders.
 std::string shaderDirectory();
 
 // ---------------------------------------------------------------------------------------------

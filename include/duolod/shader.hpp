@@ -20,8 +20,10 @@ struct CompileOptions {
   std::vector<std::string> include_dirs;  // for #include "..."
   std::vector<std::pair<std::string, std::string>> defines;
   // Let glslang assign locations to stage inputs/outputs and loose uniforms, and bindings to
-  // samplers and blocks, that the source leaves unqualified (WebGL-style shaders). Always on for
-  // HLSL. The assignment follows declaration order, so stages must declare varyings alike.
+  // samplers and blocks, that the source leaves unqualified (WebGL-style shaders). The assignment
+  // follows declaration order, so stages must declare varyings alike. HLSL's stage inputs and
+  // outputs are always assigned so; its resources are bound by register(), and without this
+  // option a live resource without one (or a global outside a cbuffer) is an error naming it.
   bool auto_map_locations = false;
 };
 

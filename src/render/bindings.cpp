@@ -80,8 +80,17 @@ std::string shaderDirectory() {
   if (const char* overridden = std::getenv("DUOLOD_SHADER_DIR")) return overridden;
   // The source tree the library was built from, while it exists; else where `cmake --install`
   // put the shaders.
+  namespace fs = std::filesystem;
   std::error_code ec;
-  if (std::filesystem::is_directory(DUOLOD_SHADER_DIR, ec)) return DUOLOD_SHADER_DIR;
+  // An installed program uses the shaders installed with it (`cmake --install` with any
+  // --prefix, or the tree moved since): share/duolod/shaders beside its bin/ folder. Programs in
+  // the build tree have none there.
+  const fs::path program = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path beside = program.parent_path().parent_path() / "share" / "duolod" / "shaders";
+    if (fs::is_directory(beside, ec)) return beside.string();
+  }
+  if (fs::is_directory(DUOLOD_SHADER_DIR, ec)) return DUOLOD_SHADER_DIR;
   return DUOLOD_INSTALLED_SHADER_DIR;
 }
 
@@ -102,7 +111,16 @@ core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix) {
         std::tuple{".frag", &source.fragment, &source.fragment_name}}) {
     std::string path = prefix.string() + extension;
     std::ifstream in(path);
-    if (!in) return Error{path + ": shader file not found"};
+    if (!in) {
+      if (prefix.parent_path() == fs::path(shaderDirectory()))
+        return Error{path +
+                     ": shader file not found (duolod's own shaders are looked for in "
+                     "$DUOLOD_SHADER_DIR, then share/duolod/shaders beside the program's "
+                     "bin/, then the source tree the library was built from, then the "
+                     "install prefix; set DUOLOD_SHADER_DIR to the folder that holds " +
+                     name_or_prefix + ".vert)"};
+      return Error{path + ": shader file not found"};
+    }
     std::stringstream buffer;
     buffer << in.rdbuf();
     *text = buffer.str();

@@ -3,13 +3,15 @@
 // bound by range, and the atlas is read back once: on llvmpipe a readback per view would cost more
 // than the drawing. References (f̄, eq. 1) are drawn k× larger and box-filtered on the GPU.
 #include <algorithm>
-#include <thread>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <string_view>
+#include <thread>
 
 #include "duolod/render.hpp"
 #include "render/renderer_internal.hpp"
@@ -466,7 +468,37 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& sou
   return static_cast<ProgramId>(state_->programs.size() - 1);
 }
 
+namespace {
+// Whether GLSL source names gl_Position outside comments: a vertex stage that never does draws
+// nothing, with no error from the GL (a fragment shader given as the vertex stage compiles as one
+// when it uses no fragment-only built-in).
+bool namesGlPosition(std::string_view text) {
+  constexpr std::string_view kName = "gl_Position";
+  auto identifier = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (size_t i = 0; i < text.size();) {
+    if (text.compare(i, 2, "//") == 0) {
+      i = text.find('\n', i);
+      if (i == std::string_view::npos) return false;
+    } else if (text.compare(i, 2, "/*") == 0) {
+      i = text.find("*/", i + 2);
+      if (i == std::string_view::npos) return false;
+      i += 2;
+    } else if (text.compare(i, kName.size(), kName) == 0 && (i == 0 || !identifier(text[i - 1])) &&
+               (i + kName.size() == text.size() || !identifier(text[i + kName.size()]))) {
+      return true;
+    } else {
+      ++i;
+    }
+  }
+  return false;
+}
+}  // namespace
+
 core::Result<GLuint> internal::buildProgram(const GlslSource& source) {
+  if (!namesGlPosition(source.vertex))
+    return Error{source.vertex_name +
+                 ": the vertex stage never writes gl_Position, so nothing would be drawn (is it "
+                 "the fragment stage?)"};
   auto compile = [](GLenum stage, const std::string& text,
                     const std::string& name) -> core::Result<GLuint> {
     GLuint shader = glCreateShader(stage);

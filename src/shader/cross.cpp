@@ -7,6 +7,7 @@
 #include <cctype>
 #include <exception>
 #include <set>
+#include <spirv-tools/optimizer.hpp>
 #include <spirv_glsl.hpp>
 #include <spirv_hlsl.hpp>
 
@@ -45,6 +46,30 @@ void setGlslOptions(spirv_cross::CompilerGLSL& compiler, Target target) {
     options.enable_420pack_extension = true;
   }
   compiler.set_common_options(options);
+}
+
+// HLSL as glslang emits it is not yet legal for OpenGL: a texture or sampler passed to a function
+// is copied into a function-local variable (SPIRV-Cross then declared such a copy a uniform of its
+// own, with no binding: sampled from unit 0), and the entry point is a function called from
+// main(). SPIRV-Tools' legalization passes (the ones DXC and glslang's optimizer run for HLSL:
+// exhaustive inlining, then forwarding loads and stores through locals) make each sample read the
+// resource itself, and leave one function, so the rules see the whole shader as they see GLSL's.
+core::Result<std::vector<uint32_t>> legalizeHlsl(const std::vector<uint32_t>& words,
+                                                 const std::string& file_name) {
+  spvtools::Optimizer optimizer(SPV_ENV_OPENGL_4_5);
+  std::string messages;
+  optimizer.SetMessageConsumer(
+      [&](spv_message_level_t severity, const char*, const spv_position_t&, const char* message) {
+        if (severity <= SPV_MSG_ERROR) messages += std::string(message) + "\n";
+      });
+  optimizer.RegisterLegalizationPasses();
+  std::vector<uint32_t> legal;
+  spvtools::OptimizerOptions options;
+  options.set_run_validator(false);  // validated before and after, with our messages
+  if (!optimizer.Run(words.data(), words.size(), &legal, options))
+    return Error{file_name + ": SPIRV-Tools could not legalize the HLSL's SPIR-V: " + messages};
+  if (auto valid = validateSpirv(legal, file_name + " (legalized)"); !valid) return valid.error();
+  return legal;
 }
 
 }  // namespace
@@ -94,16 +119,22 @@ core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
   auto words = compileToSpirv(source, stage, file_name, hlsl);
   if (!words) return words.error();
   if (auto valid = validateSpirv(*words, file_name); !valid) return valid.error();
+  auto legal = legalizeHlsl(*words, file_name);
+  if (!legal) return legal.error();
   try {
-    spirv_cross::CompilerGLSL compiler(*words);
+    spirv_cross::CompilerGLSL compiler(*legal);
     setGlslOptions(compiler, Target::kGlsl450);
     // OpenGL has no separate samplers: each (texture, sampler) pair the shader samples with
     // becomes one sampler2D, named and bound as the texture (register(tN) → binding N), which is
     // how duolod's interface binds textures.
+    // Texture.Load reads without a sampler: GLSL's texelFetch still needs a sampler2D, so such
+    // reads are paired with a dummy sampler (not a second SamplerState of the texture).
+    const spirv_cross::VariableID dummy_sampler =
+        compiler.build_dummy_sampler_for_combined_images();
     compiler.build_combined_image_samplers();
     std::set<spirv_cross::VariableID> textures;
     for (const spirv_cross::CombinedImageSampler& pair : compiler.get_combined_image_samplers())
-      if (!textures.insert(pair.image_id).second)
+      if (pair.sampler_id != dummy_sampler && !textures.insert(pair.image_id).second)
         return Error{file_name + ": texture '" + compiler.get_name(pair.image_id) +
                      "' is sampled with more than one SamplerState; OpenGL binds one sampler "
                      "state per texture unit, so use one SamplerState per texture"};

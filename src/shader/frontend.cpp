@@ -127,9 +127,9 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   shader.setEnvClient(glslang::EShClientOpenGL, glslang::EShTargetOpenGL_450);
   shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_0);
   if (hlsl || options.auto_map_locations) {
-    // HLSL (and WebGL-style GLSL) has no explicit locations/bindings; let glslang assign them.
+    // HLSL (and WebGL-style GLSL) has no explicit locations; let glslang assign them.
     shader.setAutoMapLocations(true);
-    shader.setAutoMapBindings(true);
+    shader.setAutoMapBindings(options.auto_map_locations);
   }
   FileIncluder includer(options.include_dirs);
   EShMessages messages = static_cast<EShMessages>(
@@ -142,6 +142,31 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   // glslang only warns, and emits an empty function, when the entry point matches nothing.
   if (std::string(program.getInfoLog()).find("Entry point not found") != std::string::npos)
     return Error{file_name + ": entry point '" + options.entry_point + "' not found"};
+  if (hlsl && !options.auto_map_locations) {
+    // duolod's interface binds by number (INTERFACE.md): a resource without a register() would
+    // get binding 0 (glslang's default) beside whatever else is there and draw with the wrong
+    // data, so it is named instead. Globals outside a cbuffer form the block "$Global".
+    program.buildReflection();
+    for (int i = 0; i < program.getNumLiveUniformBlocks(); ++i) {
+      const glslang::TObjectReflection& block = program.getUniformBlock(i);
+      if (block.name == "$Global")
+        return Error{file_name +
+                     ": global variables outside a cbuffer are not supported (the "
+                     "interface binds blocks by number): put them in a cbuffer with "
+                     "a register(bN)"};
+      if (block.getBinding() < 0)
+        return Error{file_name + ": cbuffer '" + block.name +
+                     "' has no register(); duolod's interface binds resources by number "
+                     "(shaders/INTERFACE.md), so give it one"};
+    }
+    for (int i = 0; i < program.getNumLiveUniformVariables(); ++i) {
+      const glslang::TObjectReflection& uniform = program.getUniform(i);
+      if (uniform.index < 0 && uniform.getBinding() < 0)  // not a block member: a texture, sampler
+        return Error{file_name + ": '" + uniform.name +
+                     "' has no register(); duolod's interface binds resources by number "
+                     "(shaders/INTERFACE.md), so give it one"};
+    }
+  }
   std::vector<uint32_t> words;
   glslang::SpvOptions spv_options;
   spv_options.generateDebugInfo = false;
