@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
 #include "duolod/shader.hpp"
+#include "shader/rules.hpp"
 #include "test_support.hpp"
 
 namespace duolod::shader {
@@ -198,6 +200,37 @@ float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {
   ASSERT_FALSE(two_samplers.ok());
   EXPECT_TRUE(test::contains(two_samplers.error().message, "two.hlsl: texture 'uBaseColorTexture'"))
       << two_samplers.error().message;
+}
+
+TEST(HlslInput, TheExampleOffersTheRulesWhatItsGlslTwinOffers) {
+  // Before legalization the HLSL entry point was a function of its own: the value rules refused
+  // its values and the whole vertex stage counted as computing the position (23 sites against
+  // the twin's 46, none per-vertex).
+  auto sitesOf = [](const std::string& vertex, const std::string& fragment) {
+    auto v = compileToSpirv(vertex, Stage::kVertex, "vertex");
+    auto f = compileToSpirv(fragment, Stage::kFragment, "fragment");
+    EXPECT_TRUE(v.ok() && f.ok());
+    std::array<int, 6> per_rule{};
+    if (!v.ok() || !f.ok()) return per_rule;
+    auto program = parseProgram(*v, *f);
+    EXPECT_TRUE(program.ok());
+    if (!program.ok()) return per_rule;
+    RuleContext context;
+    context.average_value = [](const ShaderProgram&, Stage, ir::Id) -> core::Result<std::vector<float>> {
+      return std::vector<float>{0.5f};
+    };
+    context.texture_averages[0] = {0.5f, 0.5f, 0.5f, 1.0f};
+    for (const RuleSite& site : enumerateSites(*program, context)) ++per_rule.at(size_t(site.kind));
+    return per_rule;
+  };
+  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl");
+  auto fragment =
+      hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
+  ASSERT_TRUE(vertex.ok() && fragment.ok());
+  const std::array<int, 6> from_hlsl = sitesOf(*vertex, *fragment);
+  const std::array<int, 6> from_glsl = sitesOf(kGlslTwinVertex, kGlslTwinFragment);
+  EXPECT_EQ(from_hlsl, from_glsl);
+  EXPECT_GT(from_hlsl[size_t(RuleKind::kPerVertex)], 0);
 }
 
 TEST(HlslInput, TextureLoadNeedsNoSamplerState) {
