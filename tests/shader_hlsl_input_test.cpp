@@ -233,6 +233,45 @@ TEST(HlslInput, TheExampleOffersTheRulesWhatItsGlslTwinOffers) {
   EXPECT_GT(from_hlsl[size_t(RuleKind::kPerVertex)], 0);
 }
 
+TEST(HlslInput, APairsVaryingsMatchBySemantic) {
+  // The example's vertex stage writes worldPosition (TEXCOORD0), worldNormal (TEXCOORD1) and uv
+  // (TEXCOORD2); this pixel shader reads two of them, in another order, one in lower case. By
+  // declaration order they were locations 0 and 1: uv read worldPosition, with no error.
+  const std::string fragment = R"(cbuffer Frame : register(b0) { float4x4 uModel; };
+struct PixelInput {
+  float4 position : SV_Position;
+  float2 uv : TEXCOORD2;
+  float3 worldNormal : texcoord1;
+};
+float4 main(PixelInput input) : SV_Target {
+  return float4(input.uv, input.worldNormal.x, 1);
+}
+)";
+  auto pair = hlslPairToGlsl(exampleHlsl("lambert.vert.hlsl"), "lambert.vert.hlsl", fragment,
+                             "subset.frag.hlsl");
+  ASSERT_TRUE(pair.ok()) << pair.error().message;
+  EXPECT_TRUE(test::contains(pair->vertex, "layout(location = 1) out vec3")) << pair->vertex;
+  EXPECT_TRUE(test::contains(pair->vertex, "layout(location = 2) out vec2")) << pair->vertex;
+  EXPECT_TRUE(test::contains(pair->fragment, "layout(location = 2) in vec2")) << pair->fragment;
+  EXPECT_TRUE(test::contains(pair->fragment, "layout(location = 1) in vec3")) << pair->fragment;
+  // What one stage alone gives: declaration order.
+  auto alone = hlslToGlsl(fragment, Stage::kFragment, "subset.frag.hlsl");
+  ASSERT_TRUE(alone.ok()) << alone.error().message;
+  EXPECT_TRUE(test::contains(*alone, "layout(location = 0) in vec2")) << *alone;
+
+  // An input that no output writes is an error naming it, its semantic and what is written.
+  std::string unwritten = fragment;
+  unwritten.replace(unwritten.find("TEXCOORD2"), 9, "COLOR");
+  auto missing = hlslPairToGlsl(exampleHlsl("lambert.vert.hlsl"), "lambert.vert.hlsl", unwritten,
+                                "missing.frag.hlsl");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_TRUE(test::contains(missing.error().message, "missing.frag.hlsl: input '")) << missing.error().message;
+  EXPECT_TRUE(test::contains(missing.error().message,
+                             "(COLOR0) is not written by the vertex stage (its outputs: TEXCOORD0, "
+                             "TEXCOORD1, TEXCOORD2)"))
+      << missing.error().message;
+}
+
 TEST(HlslInput, TextureLoadNeedsNoSamplerState) {
   auto glsl = hlslToGlsl(std::string(kFragmentHeader) + R"(
 float4 main(float4 position : SV_Position, float2 uv : TEXCOORD0) : SV_Target {

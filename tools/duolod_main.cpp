@@ -170,13 +170,31 @@ struct ShadingFlags {
         options.include_dirs = {fs::path(path).parent_path().string()};
         return shader::hlslToGlsl(text, stage, path, options);
       };
+      auto name = [](const std::string& path) {
+        return isHlslFile(path) ? path + " (as GLSL)" : path;
+      };
+      if (isHlslFile(vert) && isHlslFile(frag)) {
+        // An HLSL pair: its varyings are matched by semantic, as Direct3D matches them.
+        auto vertex_text = io::readFileBytes(vert);
+        if (!vertex_text) return vertex_text.error();
+        auto fragment_text = io::readFileBytes(frag);
+        if (!fragment_text) return fragment_text.error();
+        shader::CompileOptions vertex_options, fragment_options;
+        vertex_options.entry_point = vert_entry;
+        vertex_options.include_dirs = {fs::path(vert).parent_path().string()};
+        fragment_options.entry_point = frag_entry;
+        fragment_options.include_dirs = {fs::path(frag).parent_path().string()};
+        auto pair = shader::hlslPairToGlsl(
+            std::string(vertex_text->begin(), vertex_text->end()), vert,
+            std::string(fragment_text->begin(), fragment_text->end()), frag, vertex_options,
+            fragment_options);
+        if (!pair) return pair.error();
+        return render::GlslSource{pair->vertex, pair->fragment, name(vert), name(frag)};
+      }
       auto v = read(vert, shader::Stage::kVertex, vert_entry);
       if (!v) return v.error();
       auto f = read(frag, shader::Stage::kFragment, frag_entry);
       if (!f) return f.error();
-      auto name = [](const std::string& path) {
-        return isHlslFile(path) ? path + " (as GLSL)" : path;
-      };
       return render::GlslSource{*v, *f, name(vert), name(frag)};
     }
     return render::loadShaderPair(shader);

@@ -52,14 +52,31 @@ core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Targe
                                        const std::string& what);
 // HLSL source as GLSL 450, so that an HLSL shader goes wherever duolod takes GLSL (the renderer,
 // the rules, `duolod shader` and `generate`): compiled by glslang's HLSL front end (entry point
-// `options.entry_point`; locations and bindings the source leaves out are assigned in declaration
-// order, so both stages must declare their varyings alike), then emitted by SPIRV-Cross. Each
+// `options.entry_point`; stage inputs and outputs get locations in declaration order), legalized
+// by SPIRV-Tools (every function inlined into the entry point), then emitted by SPIRV-Cross. Each
 // texture sampled with a SamplerState becomes one sampler2D named and bound as the texture
 // (`Texture2D uBaseColorTexture : register(t0)` → `sampler2D uBaseColorTexture` at binding 0);
-// cbuffers keep their register's binding (b0 → 0), vertex inputs their [[vk::location(N)]].
+// cbuffers keep their register's binding (b0 → 0), vertex inputs their [[vk::location(N)]]. A
+// resource without a register() is an error. One stage alone cannot match varyings by semantic:
+// use hlslPairToGlsl for a vertex + pixel pair.
 core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
                                      const std::string& file_name,
                                      const CompileOptions& options = {});
+
+// An HLSL vertex + pixel shader pair as GLSL 450, each stage as hlslToGlsl, with the varyings
+// matched by semantic as Direct3D matches them (case-insensitive, TEXCOORD = TEXCOORD0): each
+// fragment input takes the location of the vertex output with its semantic, whatever order the
+// two stages declare them in, and may read a subset of them. A fragment input that no vertex
+// output writes is an error naming it and its semantic.
+struct GlslPair {
+  std::string vertex, fragment;
+};
+core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
+                                      const std::string& vertex_file,
+                                      const std::string& fragment_source,
+                                      const std::string& fragment_file,
+                                      const CompileOptions& vertex_options = {},
+                                      const CompileOptions& fragment_options = {});
 
 // Re-compiles emitted source with glslang as a check: GLSL 450 to SPIR-V (validated), GLSL ES 300
 // with the ES profile, HLSL with the HLSL front end (entry "main"). The error names `what`.

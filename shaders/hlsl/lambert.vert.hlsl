@@ -1,7 +1,7 @@
 // duolod example shader "lambert" in HLSL (vertex stage): what an HLSL author writes for duolod's
 // interface (shaders/INTERFACE.md). Inputs take the interface's attribute locations through
 // [[vk::location(N)]], cbuffers its block bindings through register(bN); the varyings are the
-// members of VertexOutput, which both stages declare alike (locations go by declaration order).
+// members of VertexOutput, matched to the pixel shader's inputs by semantic.
 // Use it as `--vert shaders/hlsl/lambert.vert.hlsl --frag shaders/hlsl/lambert.frag.hlsl`.
 
 cbuffer Frame : register(b0) {

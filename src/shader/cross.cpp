@@ -6,6 +6,7 @@
 
 #include <cctype>
 #include <exception>
+#include <map>
 #include <set>
 #include <spirv-tools/optimizer.hpp>
 #include <spirv_glsl.hpp>
@@ -112,8 +113,75 @@ core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Targe
   }
 }
 
+namespace {
+
+using SemanticLocations = std::map<std::string, uint32_t>;
+core::Result<std::string> hlslStageToGlsl(const std::string& source, Stage stage,
+                                          const std::string& file_name,
+                                          const CompileOptions& options,
+                                          const SemanticLocations* input_locations,
+                                          SemanticLocations* output_locations);
+
+// A varying's semantic as Direct3D compares them: case-insensitive, and a missing index is 0
+// ("texcoord" is "TEXCOORD0").
+std::string canonicalSemantic(std::string semantic) {
+  for (char& c : semantic) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (!semantic.empty() && !std::isdigit(static_cast<unsigned char>(semantic.back())))
+    semantic += '0';
+  return semantic;
+}
+
+// The semantic, name and location of each stage input or output that is not a built-in.
+struct Varying {
+  spirv_cross::VariableID id;
+  std::string semantic, name;
+  uint32_t location = 0;
+};
+std::vector<Varying> varyingsOf(const spirv_cross::CompilerGLSL& compiler,
+                                const spirv_cross::SmallVector<spirv_cross::Resource>& list) {
+  std::vector<Varying> varyings;
+  for (const spirv_cross::Resource& resource : list) {
+    const std::string semantic =
+        compiler.get_decoration_string(resource.id, spv::DecorationHlslSemanticGOOGLE);
+    if (semantic.empty()) continue;
+    varyings.push_back({resource.id, canonicalSemantic(semantic), compiler.get_name(resource.id),
+                        compiler.get_decoration(resource.id, spv::DecorationLocation)});
+  }
+  return varyings;
+}
+
+}  // namespace
+
 core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
                                      const std::string& file_name, const CompileOptions& options) {
+  return hlslStageToGlsl(source, stage, file_name, options, nullptr, nullptr);
+}
+
+core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
+                                      const std::string& vertex_file,
+                                      const std::string& fragment_source,
+                                      const std::string& fragment_file,
+                                      const CompileOptions& vertex_options,
+                                      const CompileOptions& fragment_options) {
+  SemanticLocations written;
+  auto vertex = hlslStageToGlsl(vertex_source, Stage::kVertex, vertex_file, vertex_options,
+                                     nullptr, &written);
+  if (!vertex) return vertex.error();
+  auto fragment = hlslStageToGlsl(fragment_source, Stage::kFragment, fragment_file,
+                                       fragment_options, &written, nullptr);
+  if (!fragment) return fragment.error();
+  return GlslPair{*vertex, *fragment};
+}
+
+namespace {
+// One stage of hlslToGlsl / hlslPairToGlsl: the fragment stage's inputs take the locations of
+// `input_locations` (by semantic) when given; the vertex stage's outputs are reported in
+// `output_locations` when given.
+core::Result<std::string> hlslStageToGlsl(const std::string& source, Stage stage,
+                                          const std::string& file_name,
+                                          const CompileOptions& options,
+                                          const SemanticLocations* input_locations,
+                                          SemanticLocations* output_locations) {
   CompileOptions hlsl = options;
   hlsl.language = Language::kHlsl;
   auto words = compileToSpirv(source, stage, file_name, hlsl);
@@ -156,6 +224,26 @@ core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
       name[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(name[0])));
       if (name != compiler.get_name(block.base_type_id)) compiler.set_name(block.id, name);
     }
+    // Varyings by semantic: the vertex stage's outputs keep the locations glslang gave them
+    // (declaration order) and are reported; the fragment stage's inputs take the location of the
+    // output with the same semantic, whatever order either stage declares them in, and one that
+    // no output writes is an error naming both sides.
+    if (output_locations)
+      for (const Varying& varying : varyingsOf(compiler, resources.stage_outputs))
+        (*output_locations)[varying.semantic] = varying.location;
+    if (input_locations)
+      for (const Varying& varying : varyingsOf(compiler, resources.stage_inputs)) {
+        const auto written = input_locations->find(varying.semantic);
+        if (written == input_locations->end()) {
+          std::string list;
+          for (const auto& [semantic, location] : *input_locations)
+            if (semantic.rfind("SV_", 0) != 0) list += (list.empty() ? "" : ", ") + semantic;
+          return Error{file_name + ": input '" + varying.name + "' (" + varying.semantic +
+                       ") is not written by the vertex stage (its outputs: " +
+                       (list.empty() ? std::string("none") : list) + ")"};
+        }
+        compiler.set_decoration(varying.id, spv::DecorationLocation, written->second);
+      }
     const std::string plumbing = "@entryPointOutput";
     for (const spirv_cross::Resource& output : resources.stage_outputs) {
       const std::string name = compiler.get_name(output.id);
@@ -170,6 +258,8 @@ core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
     return Error{file_name + ": SPIRV-Cross (GLSL 450 from HLSL): " + error.what()};
   }
 }
+
+}  // namespace
 
 core::Status checkCrossCompiled(const std::string& source, Target target, Stage stage,
                                 const std::string& what) {

@@ -1,5 +1,11 @@
 // GLSL/HLSL → SPIR-V through glslang's public API (Debian glslang-dev 12), targeting OpenGL 4.5
 // with ARB_gl_spirv; validation through SPIRV-Tools' public API.
+// Debian's glslang is built with its HLSL front end (ENABLE_HLSL), but its header shows the
+// HLSL-only setters (setEnvTargetHlslFunctionality1, an inline one) only to code that defines it
+// too; nothing else in the header depends on it.
+#ifndef ENABLE_HLSL
+#define ENABLE_HLSL 1
+#endif
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
 #include <glslang/SPIRV/GlslangToSpv.h>
@@ -126,6 +132,9 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
                      glslang::EShClientOpenGL, 450);
   shader.setEnvClient(glslang::EShClientOpenGL, glslang::EShTargetOpenGL_450);
   shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_0);
+  // HLSL's semantics as decorations (SPV_GOOGLE_hlsl_functionality1), so that a pair's varyings
+  // can be matched by semantic as Direct3D matches them (hlslPairToGlsl).
+  if (hlsl) shader.setEnvTargetHlslFunctionality1();
   if (hlsl || options.auto_map_locations) {
     // HLSL (and WebGL-style GLSL) has no explicit locations; let glslang assign them.
     shader.setAutoMapLocations(true);
