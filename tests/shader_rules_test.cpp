@@ -714,6 +714,34 @@ TEST_P(ReferenceShaderRules, DescriptionsNameNoSpirvIds) {
   EXPECT_EQ(with_ids, 0) << "of " << sites.size() << " sites";
 }
 
+// Constants read back exactly (six decimals printed 1/16777216 as 0.0), integer vectors and
+// unsigned constants as GLSL spells them (uvec2(8u), not vec2(8)), members by name and a column's
+// component by letter.
+TEST(RuleDescriptions, ConstantsVectorsAndMembersAsGlslWritesThem) {
+  ShaderProgram program = programOrDie(kQuadVertex, R"(#version 450 core
+struct Light { vec3 color; float power; };
+layout(std140, binding = 2) uniform Lights { Light uLight; };
+layout(location = 0) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+float scaled(Light light, float x) { return light.color.y * x; }
+void main() {
+  uvec2 cell = uvec2(vUV * 4096.0) >> uvec2(8u);
+  float tiny = float(cell.x) * (1.0 / 16777216.0);
+  float corner = (mat2(vUV, vUV.yx) * 3.0)[1].y * vUV.x;  // an OpCompositeExtract, two indices
+  outColor = vec4(tiny, scaled(uLight, vUV.y), 0.25, corner);
+}
+)");
+  std::vector<RuleSite> sites = enumerateSites(program, {});
+  ASSERT_FALSE(sites.empty());
+  std::string all;
+  for (const RuleSite& site : sites) all += site.description + "\n";
+  EXPECT_TRUE(test::contains(all, "5.9604645e-08")) << all;
+  EXPECT_TRUE(test::contains(all, "uvec2(8u)")) << all;
+  EXPECT_FALSE(test::contains(all, " 0.0)")) << all;
+  EXPECT_TRUE(test::contains(all, "light.color.y")) << all;
+  EXPECT_TRUE(test::contains(all, "[1].y")) << all;  // a column's component, not "[1][1]"
+}
+
 INSTANTIATE_TEST_SUITE_P(Shaders, ReferenceShaderRules,
                          ::testing::Values("pbr", "noise_phong", "blend"));
 

@@ -3,10 +3,13 @@
 // one file per rule family (Liang et al. §4.1).
 #include "shader/rules.hpp"
 
+#include <charconv>
 #include <glslang/SPIRV/GLSL.std.450.h>
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <system_error>
 #include <map>
 #include <optional>
 #include <set>
@@ -152,11 +155,27 @@ namespace {
 // How deep describeOperand spells out unnamed operations: "mul(dot(N, L), max(…, 0.0))".
 constexpr int kDescribedDepth = 2;
 
+// The shortest text that reads back as the same float, spelled as a GLSL float literal ("2.0",
+// "0.0625", "5.9604645e-08"): std::to_string's six decimals printed 1/16777216 as "0.0".
 std::string constantText(float value) {
-  std::string text = std::to_string(value);
-  text.erase(text.find_last_not_of('0') + 1);
-  if (!text.empty() && text.back() == '.') text += '0';
+  char buffer[64];
+  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  if (error != std::errc()) return std::to_string(value);
+  std::string text(buffer, end);
+  if (text.find_first_of(".einn") == std::string::npos) text += ".0";
   return text;
+}
+
+// GLSL's name for a vector of the scalar type `scalar_type`: vec, dvec, ivec, uvec or bvec.
+std::string vectorPrefix(const ir::DefUse& uses, ir::Id scalar_type) {
+  const ir::Instruction* scalar = uses.def(scalar_type);
+  if (!scalar) return "vec";
+  if (scalar->opcode == spv::OpTypeBool) return "bvec";
+  if (scalar->opcode == spv::OpTypeInt)
+    return scalar->operands.size() > 1 && scalar->operands[1] == 0 ? "uvec" : "ivec";
+  if (scalar->opcode == spv::OpTypeFloat && !scalar->operands.empty() && scalar->operands[0] == 64)
+    return "dvec";
+  return "vec";
 }
 
 // ".x", ".xz": the components `indices` of a vector, or "[i]" for matrix columns and arrays.
@@ -222,8 +241,12 @@ std::string describeExpression(const ir::Module& module, const ir::DefUse& uses,
     if (ir::isFloatType(uses, definition->type_id))
       if (std::optional<float> value = ir::constantFloatValue(uses, id))
         return constantText(*value);
-    if (std::optional<int64_t> value = ir::constantIntValue(uses, id))
-      return std::to_string(*value);
+    if (std::optional<int64_t> value = ir::constantIntValue(uses, id)) {
+      const ir::Instruction* type = uses.def(definition->type_id);
+      const bool is_unsigned = type && type->opcode == spv::OpTypeInt &&
+                               type->operands.size() > 1 && type->operands[1] == 0;
+      return std::to_string(*value) + (is_unsigned ? "u" : "");
+    }
   }
   auto call = [&](const std::string& function, std::span<const ir::Id> arguments) {
     if (depth <= 0) return function + "(…)";
@@ -241,13 +264,27 @@ std::string describeExpression(const ir::Module& module, const ir::DefUse& uses,
     case spv::OpCompositeExtract: {
       const ir::Instruction* composite = uses.def(definition->operands[0]);
       if (!composite) break;
-      std::vector<uint32_t> indices(definition->operands.begin() + 1, definition->operands.end());
-      return describeExpression(module, uses, definition->operands[0], depth) +
-             componentSuffix(uses, composite->type_id,
-                             std::span<const uint32_t>(indices).first(1)) +
-             (indices.size() > 1
-                  ? componentSuffix(uses, ir::kNoId, std::span<const uint32_t>(indices).subspan(1))
-                  : "");
+      // Each index by the type it selects from: a struct's member by name, a vector's component
+      // by letter, a column or element by number ("light.color.x", "m[2].y").
+      std::string text = describeExpression(module, uses, definition->operands[0], depth);
+      ir::Id type = composite->type_id;
+      for (size_t i = 1; i < definition->operands.size(); ++i) {
+        const uint32_t index = definition->operands[i];
+        const ir::Instruction* type_definition = uses.def(type);
+        const std::string member = type_definition && type_definition->opcode == spv::OpTypeStruct
+                                       ? module.memberName(type, index)
+                                       : std::string();
+        if (!member.empty())
+          text += "." + member;
+        else
+          text += componentSuffix(uses, type, std::span<const uint32_t>(&index, 1));
+        if (!type_definition || type_definition->operands.empty()) break;
+        type = type_definition->opcode == spv::OpTypeStruct
+                   ? (index < type_definition->operands.size() ? type_definition->operands[index]
+                                                               : ir::kNoId)
+                   : type_definition->operands[0];
+      }
+      return text;
     }
     case spv::OpVectorShuffle: {
       const ir::Instruction* first = uses.def(definition->operands[0]);
@@ -265,7 +302,8 @@ std::string describeExpression(const ir::Module& module, const ir::DefUse& uses,
     case spv::OpConstantComposite: {
       const ir::TypeInfo type = ir::typeInfo(uses, definition->type_id);
       std::string constructor =
-          type.opcode == spv::OpTypeVector   ? "vec" + std::to_string(type.components)
+          type.opcode == spv::OpTypeVector
+              ? vectorPrefix(uses, type.scalar_type) + std::to_string(type.components)
           : type.opcode == spv::OpTypeMatrix ? "mat" + std::to_string(ids.size())
                                              : "struct";
       // A splat as GLSL writes it: vec3(0.5).
