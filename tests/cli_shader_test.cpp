@@ -181,6 +181,7 @@ TEST(CliShaderTest, HlslShadersAreSimplifiedToo) {
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_TRUE(test::contains(missing.err, "lambert.frag.hlsl")) << missing.err;
   EXPECT_TRUE(test::contains(missing.err, "PSMain")) << missing.err;
+  EXPECT_TRUE(test::contains(missing.err, "--frag-entry")) << missing.err;
 }
 
 TEST(CliShaderTest, BadFlagsAreClearErrors) {

@@ -67,7 +67,8 @@ std::string withFlagHints(std::string message) {
       {", and replacing files was not asked for", " (use --force to replace it)"},
       {", and writing into a folder that holds files was not asked for",
        " (use --force to write into it)"},
-      {"(ContextOptions::device)", "(--device N)"}};
+      {"(ContextOptions::device)", "(--device N)"},
+      {"(CompileOptions::entry_point)", "(name the entry with --vert-entry / --frag-entry)"}};
   for (const auto& [library, flag] : kHints)
     for (size_t at = message.find(library); at != std::string::npos; at = message.find(library))
       message.replace(at, library.size(), flag);

@@ -150,7 +150,8 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   if (!program.link(messages)) return Error{file_name + ": link: " + trimLog(program.getInfoLog())};
   // glslang only warns, and emits an empty function, when the entry point matches nothing.
   if (std::string(program.getInfoLog()).find("Entry point not found") != std::string::npos)
-    return Error{file_name + ": entry point '" + options.entry_point + "' not found"};
+    return Error{file_name + ": entry point '" + options.entry_point +
+                 "' not found (CompileOptions::entry_point)"};
   if (hlsl && !options.auto_map_locations) {
     // duolod's interface binds by number (INTERFACE.md): a resource without a register() would
     // get binding 0 (glslang's default) beside whatever else is there and draw with the wrong
