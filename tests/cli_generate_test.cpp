@@ -171,5 +171,75 @@ TEST(CliGenerate, BadInputIsAClearError) {
   EXPECT_NE(views.err.find("--views"), std::string::npos) << views.err;
 }
 
+// The output folder is checked before the asset is even loaded (a bad one was found after the
+// whole run, 78 s for the Avocado), and generate and shader never mix their results in one
+// folder, even with --force (the other's manifest would point at replaced or removed files).
+TEST(CliGenerate, TheOutputFolderIsCheckedBeforeAnyWork) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  test::CommandRun unwritable =
+      test::runCommand(DUOLOD_CLI, {"generate", spot, "--out", "/proc/duolod-lod"});
+  EXPECT_EQ(unwritable.exit_code, 1);
+  EXPECT_TRUE(test::contains(unwritable.err, "/proc/duolod-lod: cannot create files in /proc"))
+      << unwritable.err;
+  EXPECT_FALSE(test::contains(unwritable.out, "generate  ")) << "the run started:\n" << unwritable.out;
+
+  const fs::path dir = test::scratchDir("cli_generate_folder");
+  const fs::path shader_result = dir / "shader_result";
+  fs::create_directories(shader_result);
+  std::ofstream(shader_result / "summary.json") << "{}";
+  test::CommandRun mixed = test::runCommand(
+      DUOLOD_CLI, {"generate", spot, "--force", "--out", shader_result.string()});
+  EXPECT_EQ(mixed.exit_code, 1);
+  EXPECT_TRUE(test::contains(mixed.err, "holds a `duolod shader` result (summary.json)"))
+      << mixed.err;
+  const fs::path lod_result = dir / "lod_result";
+  fs::create_directories(lod_result);
+  std::ofstream(lod_result / "lod.json") << "{}";
+  test::CommandRun reverse = test::runCommand(
+      DUOLOD_CLI,
+      {"shader", spot, "--pixels", "16", "--force", "--out", lod_result.string()});
+  EXPECT_EQ(reverse.exit_code, 1);
+  EXPECT_TRUE(test::contains(reverse.err, "holds a `duolod generate` result (lod.json)"))
+      << reverse.err;
+
+  // A file where the folder should be is named as such (it was "not an empty folder (use
+  // --force)", and --force then failed too).
+  std::ofstream(dir / "a_file") << "x";
+  test::CommandRun file = test::runCommand(DUOLOD_CLI, {"generate", spot, "--out", (dir / "a_file").string()});
+  EXPECT_TRUE(test::contains(file.err, "a_file: exists and is not a folder")) << file.err;
+
+  // A killed run's staging folder does not make the folder "not empty".
+  const fs::path killed = dir / "killed";
+  fs::create_directories(killed / ".duolod-staging-999999999-1");
+  auto holds = io::folderHoldsFiles(killed.string());
+  ASSERT_TRUE(holds.ok()) << holds.error().message;
+  EXPECT_FALSE(*holds);
+  std::ofstream(killed / "x.txt") << "x";
+  EXPECT_TRUE(*io::folderHoldsFiles(killed.string()));
+}
+
+// A viewpoint the renderer cannot take is refused before any work, naming the flag and the limit
+// (the renderer's own message named neither, and simplify had written its output by then).
+TEST(CliGenerate, ViewpointsBeyondTheRendererAreRefusedFirst) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_viewpoint");
+  test::CommandRun big = test::runCommand(DUOLOD_CLI, {"error", spot, spot, "--pixels", "5000"});
+  EXPECT_EQ(big.exit_code, 1);
+  EXPECT_TRUE(test::contains(big.err, "with --pixels 5000 the object spans")) << big.err;
+  EXPECT_TRUE(test::contains(big.err, "give at most --pixels 4095")) << big.err;
+  test::CommandRun inside = test::runCommand(
+      DUOLOD_CLI, {"simplify", spot, (dir / "out.obj").string(), "--ratio", "0.5", "--distance",
+                   "0.001"});
+  EXPECT_EQ(inside.exit_code, 1);
+  EXPECT_TRUE(test::contains(inside.err, "--distance 0.001 puts the camera inside")) << inside.err;
+  EXPECT_FALSE(fs::exists(dir / "out.obj"));
+  test::CommandRun render = test::runCommand(
+      DUOLOD_CLI, {"render", spot, "--pixels", "2000", "--supersample", "9", "--out",
+                   (dir / "r.png").string()});
+  EXPECT_EQ(render.exit_code, 1);
+  EXPECT_TRUE(test::contains(render.err, "the render (--supersample 9), rendered 9×9")) << render.err;
+  EXPECT_FALSE(fs::exists(dir / "r.png"));
+}
+
 }  // namespace
 }  // namespace duolod

@@ -264,15 +264,15 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
       {{"--ratio", "0"}, "(0, 1]"},
       {{"--ratio", "1.5"}, "(0, 1]"},
       {{"--ratio", "-0.2"}, "(0, 1]"},
-      {{"--triangles", "0"}, "at least 1"},
-      {{"--triangles", "-5"}, "at least 1"},
+      {{"--triangles", "0"}, "must be >= 1"},
+      {{"--triangles", "-5"}, "must be >= 1"},
       {{"--error", "-1"}, "--error"},
       {{"--mode", "image", "--ratio", "0.5"}, "--distance D or --pixels N"},
       {{"--ratio", "0.5", "--distance", "3", "--pixels", "64"}, "at most one of --distance"},
       {{"--ratio", "0.5", "--grid", "8"}, "--grid applies to --mode cluster"},
       {{"--mode", "cluster", "--ratio", "0.5", "--grid", "8"}, "cluster mode: give exactly one"},
       {{"--mode", "cluster", "--grid", "8", "--lock-border"}, "--lock-border"},
-      {{"--mode", "cluster", "--grid", "0"}, "--grid must be at least 1"},
+      {{"--mode", "cluster", "--grid", "0"}, "must be >= 1, got 0"},
       // One cell holds the whole sphere: no triangle is left, and no empty file is written.
       {{"--mode", "cluster", "--grid", "1"}, "the result has no triangles (grid 1"},
       {{"--mode", "image", "--pixels", "32", "--ratio", "0.5", "--placement", "optimal"},
@@ -295,6 +295,21 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
     EXPECT_TRUE(test::contains(run.err, c.message)) << run.err;
     EXPECT_FALSE(fs::exists(out)) << "a failed run wrote its output";
   }
+  // A value out of a flag's range is the parser's error (exit code 2, as the README says), with
+  // the flag's name; the ranges show in --help.
+  for (const std::vector<std::string>& flags :
+       std::vector<std::vector<std::string>>{{"--ratio", "1.5"},
+                                             {"--ratio", "nan"},
+                                             {"--triangles", "0"},
+                                             {"--error", "-1"},
+                                             {"--mode", "cluster", "--grid", "0"}}) {
+    std::vector<std::string> args = {"simplify", sphere, out};
+    args.insert(args.end(), flags.begin(), flags.end());
+    test::CommandRun run = runCli(args);
+    EXPECT_EQ(run.exit_code, 2) << flags[0] << " " << flags[1] << ": " << run.err;
+  }
+  test::CommandRun help = runCli({"simplify", "--help"});
+  EXPECT_TRUE(test::contains(help.out, "in (0, 1]")) << help.out;
 
   test::CommandRun extension = runCli({"simplify", sphere, (dir / "out.png").string(), "--ratio", "0.5"});
   EXPECT_NE(extension.exit_code, 0);

@@ -68,7 +68,10 @@ std::string withFlagHints(std::string message) {
       {", and writing into a folder that holds files was not asked for",
        " (use --force to write into it)"},
       {"(ContextOptions::device)", "(--device N)"},
-      {"(CompileOptions::entry_point)", "(name the entry with --vert-entry / --frag-entry)"}};
+      {"(CompileOptions::entry_point)", "(name the entry with --vert-entry / --frag-entry)"},
+      {"-pixel tile exceeds the device's 16384 limit",
+       "-pixel tile (the footprint × the reference's 4×4 supersampling) exceeds the renderer's "
+       "16384 px: fewer --near-pixels or --pixels, or a larger --d-near or --distance"}};
   for (const auto& [library, flag] : kHints)
     for (size_t at = message.find(library); at != std::string::npos; at = message.find(library))
       message.replace(at, library.size(), flag);
@@ -336,6 +339,60 @@ float resolveDistance(const ShadingFlags& flags, const core::Sphere& sphere) {
 std::string lowerExtension(const std::string& path);
 std::string formatNumber(double value);
 
+// A render's viewpoint, checked before any work: the camera outside the asset's bounding sphere,
+// and a tile (the footprint, × `supersample` for a supersampled reference) the renderer takes.
+core::Status checkViewpoint(const std::string& path, const ShadingFlags& flags,
+                            const core::Sphere& sphere, float distance, int supersample,
+                            const char* supersample_note) {
+  const std::string how = flags.distance > 0 ? "--distance " + formatNumber(flags.distance)
+                                             : "--pixels " + std::to_string(flags.pixels);
+  if (!(distance > sphere.radius))
+    return core::Error{path + ": " + how + " puts the camera inside the asset's bounding sphere "
+                       "(radius " + formatNumber(sphere.radius) + ", distance " +
+                       formatNumber(distance) + "); the domain's views look at it from outside"};
+  const double across = render::projectedDiameterPixels(sphere, distance, flags.display());
+  const double tile = std::ceil(across) * supersample;
+  if (supersample > 1 && tile > render::kMaxTileSize)
+    return core::Error{path + ": with " + how + " the object spans " +
+                       formatNumber(std::ceil(across)) + " px, and " + supersample_note +
+                       ", rendered " + std::to_string(supersample) + "×" +
+                       std::to_string(supersample) + " supersampled, would be " +
+                       formatNumber(tile) + " px across, above the renderer's " +
+                       std::to_string(render::kMaxTileSize) + " px: give at most --pixels " +
+                       // (--pixels N spans a hair over N: its footprint rounds up to N + 1.)
+                       std::to_string(render::kMaxTileSize / supersample - 1) +
+                       " (or a larger --distance)"};
+  return core::okStatus();
+}
+
+// An output folder (generate, shader), checked before any work: a folder or not there yet, where
+// files can be created; not the folder of an input, even with --force; empty unless --force
+// (leftovers of killed runs' staging do not count); and never holding the other command's
+// result, whose manifest would be left pointing at files this run replaces or removes.
+core::Status checkOutputFolder(const std::string& out, bool force,
+                               const std::vector<std::string>& inputs, const char* other_manifest,
+                               const char* other_command) {
+  if (out.empty()) return core::Error{"--out: empty path; give the folder to write into"};
+  if (auto ok = io::checkWritableFolder(out); !ok) return ok;
+  std::error_code ec;
+  const fs::path target = fs::weakly_canonical(fs::absolute(out), ec);
+  for (const std::string& input : inputs) {
+    if (input.empty()) continue;
+    if (target == fs::weakly_canonical(fs::absolute(input).parent_path(), ec))
+      return core::Error{out + ": is the folder of the input " + input + "; choose another --out"};
+  }
+  if (!fs::is_directory(target, ec)) return core::okStatus();
+  auto holds_files = io::folderHoldsFiles(target.string());
+  if (!holds_files) return holds_files.error();
+  if (*holds_files && !force)
+    return core::Error{out + ": exists and is not empty (use --force to write into it)"};
+  if (fs::exists(target / other_manifest, ec))
+    return core::Error{out + ": holds a `duolod " + other_command + "` result (" +
+                       other_manifest + "), whose files this run would replace or remove; " +
+                       "choose another --out"};
+  return core::okStatus();
+}
+
 int runRender(const std::string& path, ShadingFlags& flags, int view, int light, int supersample,
               const std::string& out, bool force) {
   if ((flags.distance > 0) == (flags.pixels > 0))
@@ -345,8 +402,8 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   std::vector<std::string> inputs = {path, flags.vert, flags.frag, flags.bindings};
   if (flags.vert.empty())
     inputs.insert(inputs.end(), {flags.shader + ".vert", flags.shader + ".frag"});
-  if (auto ok = checkOutputPath(out, inputs, force); !ok) return fail(ok.error().message);
   if (auto ok = io::checkWritablePath(out); !ok) return fail(ok.error().message);
+  if (auto ok = checkOutputPath(out, inputs, force); !ok) return fail(ok.error().message);
   if (lowerExtension(out) != ".png")
     return fail(out + ": the render is written as PNG: name it .png");
   auto asset = loadWithWarnings(path);
@@ -355,21 +412,20 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   if (auto ok = io::refuseSourceFile(*asset, out); !ok) return fail(ok.error().message);
   core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
   float distance = resolveDistance(flags, sphere);
-  if (!(distance > sphere.radius))
-    return fail(path + ": distance " + formatNumber(distance) +
-                " puts the camera inside the asset's bounding sphere (radius " +
-                formatNumber(sphere.radius) + "); the domain's views look at it from outside");
+  if (auto ok = checkViewpoint(path, flags, sphere, distance, supersample,
+                               ("the render (--supersample " + std::to_string(supersample) + ")").c_str()); !ok)
+    return fail(ok.error().message);
   auto session = openSession(flags);
   if (!session) return fail(session.error().message);
   auto& renderer = *session->renderer;
   auto asset_id = renderer.uploadAsset(*asset);
   if (!asset_id) return fail(asset_id.error().message);
   int resolution = render::footprintPixels(sphere, distance, flags.display());
-  if (resolution >= 16384)
+  if (render::projectedDiameterPixels(sphere, distance, flags.display()) > render::kMaxTileSize)
     std::fprintf(stderr,
-                 "duolod: warning: %s: at distance %g the object spans more than 16384 px; "
-                 "rendered at 16384 px\n",
-                 path.c_str(), distance);
+                 "duolod: warning: %s: at distance %g the object spans more than %d px; "
+                 "rendered at %d px\n",
+                 path.c_str(), distance, render::kMaxTileSize, render::kMaxTileSize);
   std::vector<render::Sample> all =
       render::domainSamples(sphere, distance, {.views = flags.viewSet()});
   std::vector<render::Sample> chosen;
@@ -446,11 +502,22 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
                 formatNumber(bound.d_far) + ")");
   auto a = loadWithWarnings(path_a);
   if (!a) return fail(a.error().message);
+  const core::Sphere sphere = core::computeBoundingSphere(a->mesh);
+  float distance = resolveDistance(flags, sphere);
+  if (auto ok = checkViewpoint(path_a, flags, sphere, distance, supersample,
+                               ("the reference (--supersample " + std::to_string(supersample) +
+                                ")").c_str());
+      !ok)
+    return fail(ok.error().message);
   auto b = loadWithWarnings(path_b);
   if (!b) return fail(b.error().message);
   auto session = openSession(flags);
   if (!session) return fail(session.error().message);
-  float distance = resolveDistance(flags, core::computeBoundingSphere(a->mesh));
+  // The renders take seconds to minutes on a CPU rasterizer: say what is being done.
+  std::fprintf(stderr,
+               "duolod: rendering 100 samples at %d px: %s %d×%d supersampled, then %s\n",
+               render::footprintPixels(sphere, distance, flags.display()), path_a.c_str(),
+               supersample, supersample, path_b.c_str());
   const core::Asset* approximations[] = {&*b};
   auto comparison =
       compareRendered(*session, *a, approximations, distance, flags, supersample);
@@ -516,17 +583,25 @@ struct SimplifyFlags {
     command->add_option("in", in, "glTF/GLB/OBJ/PLY/OFF file to simplify")->required();
     command->add_option("out", out, "output: .gltf (+ .bin and PNGs beside it), .glb or .obj")
         ->required();
-    ratio_option =
-        command->add_option("--ratio", ratio, "target fraction of the triangles, (0, 1]");
-    triangles_option = command->add_option("--triangles", triangles, "target triangle count");
-    error_option = command->add_option(
-        "--error", error,
-        "error target: geometric distance in asset units (quadric: the collapse error; cluster: "
-        "how far a vertex may move), or the image error epsilon of eq. (6) (image)");
+    // Ranges as validators, like every other numeric flag: refused by the parser (exit code 2)
+    // with the range in --help.
+    ratio_option = command->add_option("--ratio", ratio, "target fraction of the triangles")
+                       ->check(numberWhere("in (0, 1]", [](double v) { return v > 0 && v <= 1; }));
+    triangles_option =
+        command->add_option("--triangles", triangles, "target triangle count")->check(atLeast(1));
+    error_option =
+        command
+            ->add_option(
+                "--error", error,
+                "error target: geometric distance in asset units (quadric: the collapse error; "
+                "cluster: how far a vertex may move), or the image error epsilon of eq. (6) "
+                "(image)")
+            ->check(atLeast(0));
     command
         ->add_option("--mode", mode,
-                     "quadric (fast), image (the paper's, needs a distance) or "
-                     "cluster (very fast, coarse)")
+                     "quadric (fast), image (the paper's, needs a distance; never collapses "
+                     "an edge longer than 1 pixel there, so it reaches coarse targets only at "
+                     "small footprints) or cluster (very fast, coarse)")
         ->check(CLI::IsMember({"quadric", "image", "cluster"}))
         ->capture_default_str();
     placement_option =
@@ -534,8 +609,11 @@ struct SimplifyFlags {
             ->add_option("--placement", placement, "quadric mode: where a collapse puts the vertex")
             ->check(CLI::IsMember({"optimal", "endpoint"}))
             ->capture_default_str();
-    grid_option = command->add_option(
-        "--grid", grid, "cluster mode: cells along the longest side (instead of a target)");
+    grid_option = command
+                      ->add_option("--grid", grid,
+                                   "cluster mode: cells along the longest side (instead of a "
+                                   "target)")
+                      ->check(atLeast(1));
     command->add_flag("--lock-border", lock_border, "open-boundary vertices never move");
     command->add_flag("--simplify-generated-normals", simplify_generated_normals,
                       "for a file of positions only: generate normals first and simplify them "
@@ -634,10 +712,10 @@ mesh::SimplifyResult clusterToTarget(const core::Mesh& input, size_t target_tria
 
 int runSimplify(SimplifyFlags& flags) {
   if (auto ok = flags.check(); !ok) return fail(ok.error().message);
-  if (auto ok = checkOutputPath(flags.out, {flags.in}, flags.force); !ok)
-    return fail(ok.error().message);
   // Before the work, not after it (an image-mode run takes minutes).
   if (auto ok = io::checkWritablePath(flags.out); !ok) return fail(ok.error().message);
+  if (auto ok = checkOutputPath(flags.out, {flags.in}, flags.force); !ok)
+    return fail(ok.error().message);
 
   auto start = std::chrono::steady_clock::now();
   // A file of positions only (OFF, a bare OBJ or PLY): the quadric and cluster modes simplify the
@@ -693,10 +771,16 @@ int runSimplify(SimplifyFlags& flags) {
   Session session;
   float distance = 0;
   if (flags.wantsImageError()) {
+    const core::Sphere sphere = core::computeBoundingSphere(input);
+    distance = resolveDistance(flags.shading, sphere);
+    // The image error's reference is rendered 4×4 supersampled (below).
+    if (auto ok = checkViewpoint(flags.in, flags.shading, sphere, distance, 4,
+                                 "the image error's reference");
+        !ok)
+      return fail(ok.error().message);
     auto opened = openSession(flags.shading);
     if (!opened) return fail(opened.error().message);
     session = std::move(*opened);
-    distance = resolveDistance(flags.shading, core::computeBoundingSphere(input));
   }
 
   start = std::chrono::steady_clock::now();
@@ -1046,7 +1130,12 @@ class ProgressLine {
 int runGenerate(GenerateFlags& flags) {
   auto start = std::chrono::steady_clock::now();
   if (auto valid = flags.check(); !valid) return fail(valid.error().message);
-  if (flags.out.empty()) return fail("--out: empty path; give the folder to write into");
+  // Refuse a bad output folder before the long work, not after.
+  if (auto ok = checkOutputFolder(flags.out, flags.force,
+                                  {flags.in, flags.shading.vert, flags.shading.frag},
+                                  "summary.json", "shader");
+      !ok)
+    return fail(ok.error().message);
   auto asset = loadWithWarnings(flags.in);
   if (!asset) return fail(asset.error().message);
   auto source = flags.shading.source();
@@ -1069,11 +1158,6 @@ int runGenerate(GenerateFlags& flags) {
       flags.cost == "measured" ? lod::CostSource::kMeasured : lod::CostSource::kPredicted;
   options.mesh_mode = flags.mesh_mode == "quadric" ? lod::MeshCandidateMode::kQuadric
                                                    : lod::MeshCandidateMode::kImage;
-  // Refuse a bad output folder before the long work, not after.
-  std::error_code ec;
-  if (fs::exists(flags.out, ec) && !flags.force &&
-      (!fs::is_directory(flags.out, ec) || !fs::is_empty(flags.out, ec)))
-    return fail(flags.out + ": exists and is not an empty folder (use --force to write into it)");
   // llvmpipe reads LP_NUM_THREADS when the context is created (generateLod creates it).
   if (flags.jobs > 0) setenv("LP_NUM_THREADS", std::to_string(flags.jobs).c_str(), 1);
   ProgressLine line(!flags.quiet && !flags.verbose && isatty(fileno(stderr)), flags.verbose);
@@ -1202,13 +1286,27 @@ struct ShaderFlags {
   }
 };
 
-// "operation removal: ... (+3 more)": the first rule of a variant and how many follow, cut or
-// padded to `width` characters.
+// One rule in words ("per-vertex: fragment: ..."), or for several how many of each kind ("3
+// rules: per-vertex, texture average, operation removal ×2"; summary.json spells them out), cut
+// or padded to `width` characters.
 std::string rulesInWords(const std::vector<shader::RuleSite>& sites, size_t width) {
   std::string text = shader::describeSites(sites);
   if (sites.size() > 1) {
-    std::string first = shader::describeSites({sites.front()});
-    text = first + " (+" + std::to_string(sites.size() - 1) + " more)";
+    std::vector<std::pair<std::string, int>> kinds;  // in order of first appearance
+    for (const shader::RuleSite& site : sites) {
+      const std::string words = shader::describeSites({site});
+      const std::string kind = words.substr(0, words.find(':'));
+      auto found = std::find_if(kinds.begin(), kinds.end(),
+                                [&](const auto& entry) { return entry.first == kind; });
+      if (found == kinds.end())
+        kinds.emplace_back(kind, 1);
+      else
+        ++found->second;
+    }
+    text = std::to_string(sites.size()) + " rules:";
+    for (size_t i = 0; i < kinds.size(); ++i)
+      text += (i ? ", " : " ") + kinds[i].first +
+              (kinds[i].second > 1 ? " ×" + std::to_string(kinds[i].second) : "");
   }
   // Width in characters, cut between UTF-8 sequences (the rules' words hold "→", 3 bytes).
   auto isContinuation = [](char c) { return (static_cast<unsigned char>(c) & 0xC0) == 0x80; };
@@ -1229,24 +1327,25 @@ std::string rulesInWords(const std::vector<shader::RuleSite>& sites, size_t widt
 int runShader(ShaderFlags& flags) {
   if (!(flags.shading.distance > 0) && !(flags.shading.pixels > 0))
     return fail("shader: give --distance D (> 0) or --pixels N");
-  if (flags.out.empty()) return fail("--out: empty path; give the folder to write into");
+  // Refuse a bad output folder before the long work, not after.
+  if (auto ok = checkOutputFolder(flags.out, flags.force,
+                                  {flags.in, flags.shading.vert, flags.shading.frag}, "lod.json",
+                                  "generate");
+      !ok)
+    return fail(ok.error().message);
   auto source = flags.shading.source();
   if (!source) return fail(source.error().message);
-  std::error_code ec;
-  if (fs::exists(flags.out, ec) && !fs::is_empty(flags.out, ec) && !flags.force)
-    return fail(flags.out + ": already exists and is not empty (use --force to write into it)");
-  // Never over an input, even with --force: not into the folder of the asset or its shaders.
-  for (const std::string& input : {flags.in, flags.shading.vert, flags.shading.frag}) {
-    if (input.empty()) continue;
-    fs::path input_dir = fs::weakly_canonical(fs::absolute(input).parent_path(), ec);
-    if (fs::weakly_canonical(fs::absolute(flags.out), ec) == input_dir)
-      return fail(flags.out + ": is the folder of the input " + input + "; choose another --out");
-  }
   auto asset = loadWithWarnings(flags.in);
   if (!asset) return fail(asset.error().message);
 
   shader::ShaderLodOptions options;
-  options.distance = resolveDistance(flags.shading, core::computeBoundingSphere(asset->mesh));
+  const core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
+  options.distance = resolveDistance(flags.shading, sphere);
+  // Variants are compared with the original's reference, rendered 4×4 supersampled.
+  if (auto ok = checkViewpoint(flags.in, flags.shading, sphere, options.distance, 4,
+                               "the original's reference");
+      !ok)
+    return fail(ok.error().message);
   options.display = flags.shading.display();
   options.evaluation.domain.views = flags.shading.viewSet();
   options.device = flags.shading.device;

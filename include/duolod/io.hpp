@@ -217,8 +217,14 @@ class OutputFolder {
   std::vector<std::string> created_;  // by begin(), innermost first
 };
 
-// Checks, before any work, that files can be written at `path`: its folder exists and is a
-// folder, and `path` itself is not a folder.
+// Checks, before any work, that files can be written at `path`: its folder exists, is a folder
+// and takes a new file (a probe file is created and removed), and `path` itself is not a folder.
 core::Status checkWritablePath(const std::string& path);
+// The same for an output folder (OutputFolder): `folder` is a folder or does not exist yet, and
+// it, or the nearest existing folder above it, takes a new file.
+core::Status checkWritableFolder(const std::string& folder);
+// Whether an existing folder holds anything but the staging folders of OutputFolders (runs that
+// were killed leave theirs; the next begin() removes them).
+core::Result<bool> folderHoldsFiles(const std::string& folder);
 
 }  // namespace duolod::io

@@ -81,9 +81,13 @@ struct Sample {
 
 std::vector<core::Vec3> viewDirections(ViewSet views);
 
+// The largest tile side (footprint × supersampling) a render takes: OpenGL 4.5's guaranteed
+// minimum texture and viewport size, so that the same request works on every device.
+inline constexpr int kMaxTileSize = 16384;
+
 // Pixels across the object's bounding sphere when seen from `distance` on `display`: the side of
-// the square footprint images are rendered at. At least 1. Distances inside the sphere are clamped
-// to just outside it.
+// the square footprint images are rendered at. At least 1, at most kMaxTileSize. Distances inside
+// the sphere are clamped to just outside it.
 int footprintPixels(const core::Sphere& bounds, float distance, const Display& display);
 // The same before rounding up: the bounding sphere's projected diameter in (fractional) pixels.
 // What screen coverage is computed from (lod::screenCoverage), so that coverage and distance

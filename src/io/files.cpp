@@ -1,5 +1,6 @@
 // Files and images: whole-file reads, atomic writes (temporary + rename), image decode/encode
 // through stb (Debian libstb), and the format-dispatching loadAsset with its post-processing.
+#include <fcntl.h>
 #include <signal.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
@@ -51,6 +52,21 @@ core::Result<std::vector<uint8_t>> readFileBytes(const std::string& path) {
   return bytes;
 }
 
+namespace {
+// Whether a file can be created in `folder` (permissions, a read-only or pseudo file system such
+// as /proc): a probe file is created and removed. "" when it can, else the reason.
+std::string cannotCreateIn(const fs::path& folder) {
+  std::random_device entropy;
+  const fs::path probe = folder / (".duolod-probe-" + std::to_string(::getpid()) + "-" +
+                                   std::to_string(entropy() % 1000000));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+  if (fd < 0) return std::strerror(errno);
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return "";
+}
+}  // namespace
+
 core::Status checkWritablePath(const std::string& path) {
   if (path.empty()) return Error{"empty output path"};
   fs::path target(path);
@@ -61,6 +77,38 @@ core::Status checkWritablePath(const std::string& path) {
   if (!fs::is_directory(folder, ec))
     return Error{path + ": " + folder.string() + " is not a folder"};
   if (fs::is_directory(target, ec)) return Error{path + ": is a folder"};
+  if (std::string reason = cannotCreateIn(folder); !reason.empty())
+    return Error{path + ": cannot create files in " + folder.string() + " (" + reason + ")"};
+  return core::okStatus();
+}
+
+core::Result<bool> folderHoldsFiles(const std::string& folder) {
+  std::error_code ec;
+  fs::directory_iterator it(folder, ec), end;
+  if (ec) return Error{folder + ": cannot read the folder (" + ec.message() + ")"};
+  for (; it != end; it.increment(ec)) {
+    if (ec) return Error{folder + ": cannot read the folder (" + ec.message() + ")"};
+    // A killed run's staging folder is not the user's: OutputFolder::begin removes it.
+    if (!it->path().filename().string().starts_with(".duolod-staging-")) return true;
+  }
+  return false;
+}
+
+core::Status checkWritableFolder(const std::string& folder) {
+  if (folder.empty()) return Error{"empty output folder name"};
+  std::error_code ec;
+  const fs::path target = fs::absolute(folder, ec);
+  const fs::file_status status = fs::status(target, ec);
+  if (fs::exists(status) && !fs::is_directory(status))
+    return Error{folder + ": exists and is not a folder"};
+  // The folder, or the nearest folder above it that exists (the missing ones are created).
+  fs::path existing = target;
+  while (!fs::exists(existing, ec) && existing != existing.root_path())
+    existing = existing.parent_path();
+  if (!fs::is_directory(existing, ec))
+    return Error{folder + ": " + existing.string() + " is not a folder"};
+  if (std::string reason = cannotCreateIn(existing); !reason.empty())
+    return Error{folder + ": cannot create files in " + existing.string() + " (" + reason + ")"};
   return core::okStatus();
 }
 

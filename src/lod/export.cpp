@@ -29,9 +29,9 @@ core::Status checkDirectory(const std::string& directory, const core::Asset& ass
   if (fs::exists(out, error)) {
     if (!fs::is_directory(out, error))
       return core::Error{directory + ": exists and is not a folder"};
-    const bool empty = fs::is_empty(out, error);
-    if (error) return core::Error{directory + ": cannot read the folder (" + error.message() + ")"};
-    if (!empty && !force)
+    auto holds = io::folderHoldsFiles(out.string());
+    if (!holds) return holds.error();
+    if (*holds && !force)
       return core::Error{
           directory + ": not empty, and writing into a folder that holds files was not asked for"};
   }

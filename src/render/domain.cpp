@@ -118,7 +118,7 @@ int footprintPixels(const core::Sphere& bounds, float distance, const Display& d
   const double pixels = projectedDiameterPixels(bounds, distance, display);
   // (NaN, a distance or display that is not a number, is 1, not an undefined conversion.)
   if (!(pixels >= 1)) return 1;
-  return pixels >= 16384 ? 16384 : static_cast<int>(std::ceil(pixels));
+  return pixels >= kMaxTileSize ? kMaxTileSize : static_cast<int>(std::ceil(pixels));
 }
 
 std::vector<Sample> domainSamples(const core::Sphere& bounds, float distance,

@@ -238,7 +238,7 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
   glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_renderbuffer);
   glGetIntegerv(GL_MAX_VIEWPORT_DIMS, max_viewport);
-  s.max_size = std::min({max_texture, max_renderbuffer, max_viewport[0], max_viewport[1], 16384});
+  s.max_size = std::min({max_texture, max_renderbuffer, max_viewport[0], max_viewport[1], kMaxTileSize});
   s.white_texture = s.makeSolidTexture(kMissingTextureTexel);
   s.flat_normal_texture = s.makeSolidTexture(kMissingNormalTexel);
   glCreateBuffers(1, &s.frame_ubo);

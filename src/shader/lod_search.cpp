@@ -184,10 +184,14 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
   std::error_code ec;
   if (fs::exists(directory, ec) && !fs::is_directory(directory, ec))
     return core::Error{directory + ": exists and is not a directory"};
-  if (fs::exists(directory, ec) && !fs::is_empty(directory, ec) && !force)
-    return core::Error{directory +
-                       ": already exists and is not empty, and writing into a folder that holds "
-                       "files was not asked for"};
+  if (fs::exists(directory, ec) && !force) {
+    auto holds = io::folderHoldsFiles(directory);
+    if (!holds) return holds.error();
+    if (*holds)
+      return core::Error{directory +
+                         ": already exists and is not empty, and writing into a folder that "
+                         "holds files was not asked for"};
+  }
   // All or nothing: written beside the folder, then moved in (a failure leaves it as it was).
   io::OutputFolder folder;
   if (auto begun = folder.begin(directory); !begun) return begun;
