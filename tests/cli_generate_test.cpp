@@ -169,6 +169,12 @@ TEST(CliGenerate, BadInputIsAClearError) {
                    (test::scratchDir("cli_generate_bad") / "lod").string()});
   EXPECT_NE(views.exit_code, 0);
   EXPECT_NE(views.err.find("--views"), std::string::npos) << views.err;
+
+  test::CommandRun both = test::runCommand(
+      DUOLOD_CLI, {"generate", "/nonexistent/asset.obj", "--verbose", "--quiet", "--out",
+                   (test::scratchDir("cli_generate_bad") / "lod").string()});
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_TRUE(test::contains(both.err, "--quiet")) << both.err;
 }
 
 // The output folder is checked before the asset is even loaded (a bad one was found after the

@@ -21,9 +21,16 @@ test::CommandRun runCli(const std::vector<std::string>& args) {
 // renders are cheap.
 std::vector<std::string> smallSearch(const std::string& asset, const std::string& out,
                                      const std::string& method) {
-  return {"shader", asset, "--shader", "noise_phong", "--distance", "30", "--search", method,
-          "--seed", "5", "--generations", "1", "--population", "4", "--steps", "2", "--candidates", "4",
-          "--no-timing", "--out", out};
+  std::vector<std::string> args = {"shader",   asset, "--shader", "noise_phong",
+                                   "--distance", "30",  "--search", method};
+  // Each search's own flags only (the other's are refused).
+  const std::vector<std::string> own =
+      method == "gp" ? std::vector<std::string>{"--seed", "5", "--generations", "1",
+                                                "--population", "4"}
+                     : std::vector<std::string>{"--steps", "2", "--candidates", "4"};
+  args.insert(args.end(), own.begin(), own.end());
+  args.insert(args.end(), {"--no-timing", "--out", out});
+  return args;
 }
 
 void expectLevelFiles(const fs::path& dir, const std::string& name) {
@@ -195,6 +202,13 @@ TEST(CliShaderTest, BadFlagsAreClearErrors) {
                                      (test::scratchDir("cli_shader_bad") / "out").string()});
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_TRUE(test::contains(missing.err, "missing.obj")) << missing.err;
+  // A flag of the other search was ignored; now it is an error.
+  test::CommandRun other_search = runCli({"shader", "missing.obj", "--distance", "3", "--steps",
+                                          "5", "--out",
+                                          (test::scratchDir("cli_shader_bad") / "out").string()});
+  EXPECT_NE(other_search.exit_code, 0);
+  EXPECT_TRUE(test::contains(other_search.err, "--steps applies to --search greedy only"))
+      << other_search.err;
   // An entry point for a GLSL pair (always main()) was ignored; now it is an error.
   test::CommandRun glsl_entry =
       runCli({"shader", "missing.obj", "--distance", "3", "--shader", "pbr", "--vert-entry", "VS",

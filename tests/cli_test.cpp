@@ -223,8 +223,8 @@ TEST(Cli, OutOfRangeFlagsNameTheFlag) {
   }
   // In range: shader's --candidates 0 means every site (the parser passes it; the missing asset
   // is what fails).
-  test::CommandRun every_site =
-      runCli({"shader", "missing.obj", "--pixels", "32", "--candidates", "0", "--out", "s"});
+  test::CommandRun every_site = runCli({"shader", "missing.obj", "--pixels", "32", "--search",
+                                        "greedy", "--candidates", "0", "--out", "s"});
   EXPECT_EQ(every_site.exit_code, 1) << every_site.err;
   EXPECT_TRUE(test::contains(every_site.err, "missing.obj")) << every_site.err;
   // Contradictory generate flags, and an unknown command, are named too.

@@ -621,6 +621,20 @@ TEST(GltfMalformed, TruncatedJson) {
   expectLoadError(path);
 }
 
+// A .glb that is not one says so (it was parsed as JSON: a parser error quoting a binary byte),
+// an empty file is "empty" once, and a texture that is not there names the file looked for.
+TEST(GltfMalformed, MessagesSayWhatIsWrong) {
+  fs::path dir = test::scratchDir("m_messages");
+  writeBytes((dir / "garbage.glb").string(), {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a, 0, 0});
+  expectLoadError((dir / "garbage.glb").string(), "not a GLB file");
+  writeBytes((dir / "empty.gltf").string(), {});
+  auto empty = io::loadAsset((dir / "empty.gltf").string());
+  ASSERT_FALSE(empty);
+  EXPECT_EQ(empty.error().message, (dir / "empty.gltf").string() + ": file is empty");
+  std::string textured = texturedTriangle(false).write(dir, "no_texture");  // no checker.png
+  expectLoadError(textured, (dir / "checker.png").string() + " does not exist");
+}
+
 // A required extension that is not read, and glTF 1.0, are refused by name; a required
 // KHR_mesh_quantization (any accessor component type is read) and an optional extension load.
 TEST(GltfMalformed, RequiredExtensionsAndVersionAreHonoured) {

@@ -931,6 +931,7 @@ struct GenerateFlags {
   std::string level_spacing = "linear";
   lod::GenerateOptions options;
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
+  CLI::Option* quiet_option = nullptr;
   bool no_sort_prefetch = false;
   int jobs = 0;
   CLI::Option *near_pixels_option = nullptr, *far_pixels_option = nullptr;
@@ -1056,7 +1057,7 @@ struct GenerateFlags {
         ->capture_default_str();
     command->add_flag("--brute-force", options.brute_force,
                       "search all mesh × shader pairs (the paper's 2D comparison)");
-    command->add_flag("--quiet", quiet, "no progress display");
+    quiet_option = command->add_flag("--quiet", quiet, "no progress display");
     command->add_flag("--move-to-parameter", move_to_parameter,
                       "also offer moving to parameter in the GP searches (a computed value "
                       "replaced by a uniform holding its average over the training domain)");
@@ -1072,8 +1073,10 @@ struct GenerateFlags {
                         "per core, its default)")
         ->check(CLI::Range(0, 64))
         ->capture_default_str();
-    command->add_flag("--verbose", verbose,
-                      "log each stage and step with its elapsed time (also when not a terminal)");
+    command
+        ->add_flag("--verbose", verbose,
+                   "log each stage and step with its elapsed time (also when not a terminal)")
+        ->excludes(quiet_option);
   }
 };
 
@@ -1245,6 +1248,17 @@ struct ShaderFlags {
   bool no_timing = false, no_compile_ahead = false;
   bool force = false;
   ShadingFlags shading;
+  // The search's own flags: each applies to one --search only.
+  std::vector<CLI::Option*> gp_options, greedy_options;
+
+  // A flag of the other search is a mistake the run would hide (it ignored them).
+  core::Status check() const {
+    for (const CLI::Option* option : search == "gp" ? greedy_options : gp_options)
+      if (option->count() > 0)
+        return core::Error{option->get_name() + " applies to --search " +
+                           (search == "gp" ? "greedy" : "gp") + " only"};
+    return core::okStatus();
+  }
 
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
@@ -1260,22 +1274,26 @@ struct ShaderFlags {
     command->add_option("--search", search, "gp (genetic programming, NSGA-II) or greedy (He et al.)")
         ->check(CLI::IsMember({"gp", "greedy"}))
         ->capture_default_str();
-    command->add_option("--seed", seed, "GP random seed")->check(atLeast(0))->capture_default_str();
-    command->add_option("--generations", generations, "GP generations")
-        ->check(atLeast(0))
-        ->capture_default_str();
-    command->add_option("--population", population, "GP population size")
-        ->check(atLeast(2))
-        ->capture_default_str();
-    command->add_option("--steps", greedy_steps, "greedy: most rules applied")
-        ->check(atLeast(1))
-        ->capture_default_str();
-    command
-        ->add_option("--candidates", greedy_candidates,
-                     "greedy: sites scored per step, spread evenly over all sites (0: every "
-                     "site; noise_phong offers ~650, each one a compile and two renders)")
-        ->check(atLeast(0))
-        ->capture_default_str();
+    gp_options.push_back(command->add_option("--seed", seed, "GP random seed")
+                             ->check(atLeast(0))
+                             ->capture_default_str());
+    gp_options.push_back(command->add_option("--generations", generations, "GP generations")
+                             ->check(atLeast(0))
+                             ->capture_default_str());
+    gp_options.push_back(command->add_option("--population", population, "GP population size")
+                             ->check(atLeast(2))
+                             ->capture_default_str());
+    greedy_options.push_back(
+        command->add_option("--steps", greedy_steps, "greedy: most rules applied")
+            ->check(atLeast(1))
+            ->capture_default_str());
+    greedy_options.push_back(
+        command
+            ->add_option("--candidates", greedy_candidates,
+                         "greedy: sites scored per step, spread evenly over all sites (0: every "
+                         "site; noise_phong offers ~650, each one a compile and two renders)")
+            ->check(atLeast(0))
+            ->capture_default_str());
     command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
     command->add_flag("--no-compile-ahead", no_compile_ahead,
                       "compile the GP's variants only when scored (default: a worker thread with "
@@ -1327,6 +1345,7 @@ std::string rulesInWords(const std::vector<shader::RuleSite>& sites, size_t widt
 int runShader(ShaderFlags& flags) {
   if (!(flags.shading.distance > 0) && !(flags.shading.pixels > 0))
     return fail("shader: give --distance D (> 0) or --pixels N");
+  if (auto ok = flags.check(); !ok) return fail(ok.error().message);
   // Refuse a bad output folder before the long work, not after.
   if (auto ok = checkOutputFolder(flags.out, flags.force,
                                   {flags.in, flags.shading.vert, flags.shading.frag}, "lod.json",

@@ -10,6 +10,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <map>
 
@@ -596,6 +597,13 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
     if (binary) {
       if (auto layout = checkGlbLayout(*head, path); !layout) return layout.error();
     }
+    if (head->empty()) return Error{path + ": file is empty"};
+    // A .glb that is not one: said so, rather than a JSON parser's complaint about a binary byte.
+    std::string extension = std::filesystem::path(path).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (!binary && extension == ".glb" && (*head)[0] != '{' && !std::isspace((*head)[0]))
+      return Error{path + ": not a GLB file (it does not start with the magic 'glTF')"};
   }
   context.model = &model;
   bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
@@ -656,7 +664,18 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   if (options.load_textures)
     for (const core::Texture& texture : asset.textures)
       if (texture.image.pixels.empty() && !texture.encoded && !texture.name.empty())
-        return Error{path + ": texture image '" + texture.name + "' could not be loaded"};
+      {
+        // Say whether the file is there at all (the common case: a texture not copied along).
+        std::error_code ec;
+        const std::filesystem::path beside =
+            std::filesystem::path(path).parent_path() / texture.name;
+        const bool missing = texture.name.find('/') == std::string::npos &&
+                             texture.name.find('.') != std::string::npos &&
+                             !std::filesystem::exists(beside, ec);
+        return Error{path + ": texture image '" + texture.name + "' could not be loaded" +
+                     (missing ? " (" + beside.string() + " does not exist)"
+                              : " (not a readable PNG or JPEG)")};
+      }
   return asset;
 }
 
