@@ -1225,8 +1225,17 @@ int runGenerate(GenerateFlags& flags) {
     std::printf("          (the shader searches took %.1f s, alongside the mesh stage until it "
                 "ended; the shader stage is what they added after it)\n",
                 t.shader_search_seconds);
-  std::printf("wrote     %s{lod.gltf, lod.json, report.html, level*.*, autolod.*}\n",
-              (fs::path(flags.out) / "").string().c_str());  // one '/', with or without "out/"
+  // What the folder holds, by name pattern: lod.gltf's buffer and images go with it.
+  bool has_bin = false, has_images = false;
+  std::error_code ec;
+  for (fs::directory_iterator it(flags.out, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    has_bin |= name == "lod.bin";
+    has_images |= name.starts_with("lod_");
+  }
+  std::printf("wrote     %s{lod.gltf%s%s, lod.json, report.html, level*.*, autolod.*}\n",
+              (fs::path(flags.out) / "").string().c_str(),  // one '/', with or without "out/"
+              has_bin ? ", lod.bin" : "", has_images ? ", lod_*" : "");
   if (violations > 0) {
     std::fprintf(stderr, "duolod: warning: %d level(s) exceed their bound on held-out views\n",
                  violations);
