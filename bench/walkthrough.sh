@@ -9,10 +9,10 @@
 # RUNS_DIR (default /work/runs) holds walk-NAME-{sep,mesh,shader,int}/ and their .log (the
 # generator's summary, where the table's generation times come from). The Dragon needs
 # scripts/fetch-bench-data.sh once. Generation uses `duolod generate`'s defaults (10 levels,
-# image-driven mesh candidates, the full GP search): about 25 minutes for all 16 folders on 2 cores
-# with llvmpipe, most of it the interleaved optimizer. The walk-through stands its objects on the
-# ground (+Y up) and walks at eye height, so the LODs are trained on `--views upright`;
-# WALK_VIEWS=sphere trains them on the paper's sphere of views instead. WALK_FAST=1 uses the fast
+# image-driven mesh candidates, the full GP search): about 21 minutes for all 16 folders on 2 cores
+# with llvmpipe (Intel Xeon, session 30), half of it the interleaved optimizer. The walk-through
+# stands its objects on the ground (+Y up) and walks at eye height, so the LODs are trained on
+# `--views upright`; WALK_VIEWS=sphere trains them on the paper's sphere of views instead. WALK_FAST=1 uses the fast
 # settings of session 4 (quadric mesh candidates, 4 levels, a small GP) for a quick look.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
