@@ -343,7 +343,7 @@ std::string formatNumber(double value);
 // and a tile (the footprint, × `supersample` for a supersampled reference) the renderer takes.
 core::Status checkViewpoint(const std::string& path, const ShadingFlags& flags,
                             const core::Sphere& sphere, float distance, int supersample,
-                            const char* supersample_note) {
+                            const std::string& supersample_note) {
   const std::string how = flags.distance > 0 ? "--distance " + formatNumber(flags.distance)
                                              : "--pixels " + std::to_string(flags.pixels);
   if (!(distance > sphere.radius))
@@ -413,7 +413,8 @@ int runRender(const std::string& path, ShadingFlags& flags, int view, int light,
   core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
   float distance = resolveDistance(flags, sphere);
   if (auto ok = checkViewpoint(path, flags, sphere, distance, supersample,
-                               ("the render (--supersample " + std::to_string(supersample) + ")").c_str()); !ok)
+                               "the render (--supersample " + std::to_string(supersample) + ")");
+      !ok)
     return fail(ok.error().message);
   auto session = openSession(flags);
   if (!session) return fail(session.error().message);
@@ -505,8 +506,8 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   const core::Sphere sphere = core::computeBoundingSphere(a->mesh);
   float distance = resolveDistance(flags, sphere);
   if (auto ok = checkViewpoint(path_a, flags, sphere, distance, supersample,
-                               ("the reference (--supersample " + std::to_string(supersample) +
-                                ")").c_str());
+                               "the reference (--supersample " + std::to_string(supersample) +
+                                   ")");
       !ok)
     return fail(ok.error().message);
   auto b = loadWithWarnings(path_b);

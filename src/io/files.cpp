@@ -67,7 +67,9 @@ std::string cannotCreateIn(const fs::path& folder) {
 }
 }  // namespace
 
-core::Status checkWritablePath(const std::string& path) {
+namespace {
+// The folder of an output file, when it exists and is a folder and the path is not a folder.
+core::Result<fs::path> outputFolderOf(const std::string& path) {
   if (path.empty()) return Error{"empty output path"};
   fs::path target(path);
   std::error_code ec;
@@ -77,8 +79,15 @@ core::Status checkWritablePath(const std::string& path) {
   if (!fs::is_directory(folder, ec))
     return Error{path + ": " + folder.string() + " is not a folder"};
   if (fs::is_directory(target, ec)) return Error{path + ": is a folder"};
-  if (std::string reason = cannotCreateIn(folder); !reason.empty())
-    return Error{path + ": cannot create files in " + folder.string() + " (" + reason + ")"};
+  return folder;
+}
+}  // namespace
+
+core::Status checkWritablePath(const std::string& path) {
+  auto folder = outputFolderOf(path);
+  if (!folder) return folder.error();
+  if (std::string reason = cannotCreateIn(*folder); !reason.empty())
+    return Error{path + ": cannot create files in " + folder->string() + " (" + reason + ")"};
   return core::okStatus();
 }
 
@@ -138,7 +147,8 @@ core::Status FileSet::add(const std::string& path, std::string_view text) {
 }
 
 core::Status FileSet::checkTarget(const std::string& path) const {
-  if (auto writable = checkWritablePath(path); !writable) return writable;
+  // (No probe file per file: writing the set's temporary names fails with the reason anyway.)
+  if (auto folder = outputFolderOf(path); !folder) return folder.error();
   std::error_code ec;
   if (!replace_existing_ && fs::exists(path, ec))
     return Error{path + ": already exists, and replacing files was not asked for"};
