@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -222,6 +223,28 @@ TEST(CliGenerate, TheOutputFolderIsCheckedBeforeAnyWork) {
   EXPECT_FALSE(*holds);
   std::ofstream(killed / "x.txt") << "x";
   EXPECT_TRUE(*io::folderHoldsFiles(killed.string()));
+}
+
+// A run that is stopped says so and leaves nothing: the CLI removes its unfinished outputs on
+// SIGINT/SIGTERM/SIGHUP (io::removeUnfinishedOutputsOnInterrupt; what is removed, staging folder
+// and all, is tested in io_files_test). Here the signal comes during the computation, before the
+// output folder or its missing parents exist. (SIGTERM: a background job of a script ignores
+// SIGINT, and the CLI leaves an ignored signal ignored.)
+TEST(CliGenerate, AStoppedRunSaysSoAndLeavesNothing) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_generate_stopped");
+  const fs::path out = dir / "made" / "lod";
+  const std::string command = "'" + std::string(DUOLOD_CLI) + "' generate '" + spot +
+                              "' --mesh-mode quadric --out '" + out.string() + "' > '" +
+                              (dir / "out.txt").string() + "' 2> '" + (dir / "err.txt").string() +
+                              "' & pid=$!; sleep 2; kill -TERM $pid; wait $pid; echo $? > '" +
+                              (dir / "code.txt").string() + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  EXPECT_EQ(test::readText(dir / "code.txt"), "143\n");
+  const std::string err = test::readText(dir / "err.txt");
+  EXPECT_TRUE(test::contains(err, "duolod: interrupted (SIGTERM); no unfinished output to remove"))
+      << err;
+  EXPECT_FALSE(fs::exists(dir / "made"));
 }
 
 // A viewpoint the renderer cannot take is refused before any work, naming the flag and the limit

@@ -2,9 +2,12 @@
 // folder of them, as `duolod generate` and `duolod shader` write). Each case checks the whole
 // folder afterwards, temporaries and kept copies included.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -201,6 +204,66 @@ TEST(OutputFolder, BadFolderNamesAreRefused) {
   EXPECT_FALSE(folder.begin("/"));
   EXPECT_FALSE(folder.commit());  // not begun
   EXPECT_EQ(treeOf(parent), std::vector<std::string>{"file"});
+}
+
+// A program that asked for it (the CLI does) removes its unfinished outputs when interrupted: the
+// staging folder, the folders OutputFolder::begin made and FileSet temporaries, and exits with
+// 128 + the signal. (Before, a killed `duolod generate` left its hidden staging folder and the
+// folders it had made for --out.) Run in a child process, which the test then interrupts.
+struct Interrupted {
+  int exit_code = -1;
+  std::string err;
+};
+Interrupted interruptChild(const fs::path& dir, int signal, bool with_outputs) {
+  int ready[2];
+  if (::pipe(ready) != 0) return {};
+  const fs::path err_path = dir / ("stderr-" + std::to_string(signal) + ".txt");
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::close(ready[0]);
+    std::FILE* err = std::freopen(err_path.c_str(), "w", stderr);
+    (void)err;
+    io::removeUnfinishedOutputsOnInterrupt();
+    io::OutputFolder folder;
+    io::FileSet single;
+    if (with_outputs) {
+      if (!folder.begin((dir / "made" / "deeper" / "out").string()).ok()) ::_exit(90);
+      writeText(fs::path(folder.stagingPath()) / "lod.json", "{}");
+      if (!single.add((dir / "single.txt").string(), std::string_view("text")).ok()) ::_exit(91);
+    }
+    const char byte = 1;
+    if (::write(ready[1], &byte, 1) != 1) ::_exit(92);
+    for (;;) ::pause();  // until the signal ends the process
+  }
+  ::close(ready[1]);
+  char byte = 0;
+  const bool started = ::read(ready[0], &byte, 1) == 1;
+  ::close(ready[0]);
+  if (started)
+    ::kill(child, signal);
+  else
+    ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1000 - WTERMSIG(status),
+          test::readText(err_path)};
+}
+
+TEST(OutputFolder, AnInterruptedProgramRemovesItsUnfinishedOutputs) {
+  const fs::path dir = test::scratchDir("io_files_interrupt");
+  writeText(dir / "keep.txt", "the user's");
+  const Interrupted terminated = interruptChild(dir, SIGTERM, true);
+  EXPECT_EQ(terminated.exit_code, 128 + SIGTERM) << terminated.err;
+  EXPECT_TRUE(
+      test::contains(terminated.err, "interrupted (SIGTERM); removed the unfinished output"))
+      << terminated.err;
+  EXPECT_TRUE(test::contains(terminated.err, "made")) << terminated.err;
+  // Only what was there before is left (and the children's stderr).
+  EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"keep.txt", "stderr-15.txt"}));
+
+  const Interrupted interrupted = interruptChild(dir, SIGINT, false);
+  EXPECT_EQ(interrupted.exit_code, 128 + SIGINT) << interrupted.err;
+  EXPECT_TRUE(test::contains(interrupted.err, "no unfinished output to remove")) << interrupted.err;
 }
 
 }  // namespace

@@ -1428,6 +1428,8 @@ int runShader(ShaderFlags& flags) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Ctrl-C or a kill takes the unfinished output away (before any thread starts: see there).
+  io::removeUnfinishedOutputsOnInterrupt("duolod");
   CLI::App app{
       "duolod " DUOLOD_VERSION
       " - automatic mesh and shader level of detail.\n"

@@ -186,6 +186,7 @@ class FileSet {
   core::Status checkTarget(const std::string& path) const;
   struct Staged {
     std::string temporary, target;
+    uint64_t token;  // in the unfinished outputs (removeUnfinishedOutputsOnInterrupt), or 0
   };
   bool replace_existing_;
   std::vector<Staged> staged_;
@@ -213,8 +214,10 @@ class OutputFolder {
 
  private:
   void abandon();
+  void forgetUnfinished();
   std::string folder_, staging_;
   std::vector<std::string> created_;  // by begin(), innermost first
+  std::vector<uint64_t> unfinished_;  // removeUnfinishedOutputsOnInterrupt's entries
 };
 
 // Checks, before any work, that files can be written at `path`: its folder exists, is a folder
@@ -226,5 +229,15 @@ core::Status checkWritableFolder(const std::string& folder);
 // Whether an existing folder holds anything but the staging folders of OutputFolders (runs that
 // were killed leave theirs; the next begin() removes them).
 core::Result<bool> folderHoldsFiles(const std::string& folder);
+
+// For programs: on SIGINT, SIGTERM or SIGHUP, removes the outputs this library has not finished
+// writing (FileSet and writeFileAtomic temporaries, OutputFolder staging folders and the folders
+// begin() made; a commit in progress is let finish first), says so on stderr (after "`program`: "
+// when given), and ends the process
+// with status 128 + the signal. Call it at the start of main, before any thread is started: the
+// signals are blocked in the calling thread (so in every thread started later) and taken by a
+// thread of its own. Without it, an interrupted run leaves those files; the next
+// OutputFolder::begin in the same folder removes a staging folder whose process is gone.
+void removeUnfinishedOutputsOnInterrupt(const std::string& program = "");
 
 }  // namespace duolod::io

@@ -13,8 +13,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <random>
+#include <thread>
 
 #include "duolod/io.hpp"
 
@@ -122,6 +125,60 @@ core::Status checkWritableFolder(const std::string& folder) {
 }
 
 namespace {
+// The outputs a run has not finished, which removeUnfinishedOutputsOnInterrupt removes: FileSet
+// temporaries, OutputFolder staging folders and the folders OutputFolder::begin made. Each is
+// listed while it exists. `commit_mutex` is held while a commit moves files into place, so an
+// interrupt waits for the commit (milliseconds) instead of leaving it half done. Never destroyed:
+// the interrupt thread may use it while static objects are being destroyed.
+class UnfinishedOutputs {
+ public:
+  enum class Kind : uint8_t { kFile, kTree, kMadeFolder };
+  static UnfinishedOutputs& get() {
+    static UnfinishedOutputs* outputs = new UnfinishedOutputs;
+    return *outputs;
+  }
+  uint64_t add(Kind kind, std::string path) {
+    std::lock_guard lock(mutex_);
+    paths_.emplace(next_, Entry{kind, std::move(path)});
+    return next_++;
+  }
+  void remove(uint64_t token) {
+    if (token == 0) return;
+    std::lock_guard lock(mutex_);
+    paths_.erase(token);
+  }
+  std::recursive_mutex& commitMutex() { return commit_mutex_; }
+  // Removes every listed output (files and staging folders, then the made folders, innermost
+  // first, if empty); returns the paths removed.
+  std::vector<std::string> removeAll() {
+    std::lock_guard commit(commit_mutex_);
+    std::lock_guard lock(mutex_);
+    std::vector<std::string> removed;
+    std::error_code ec;
+    for (const auto& [token, entry] : paths_) {
+      if (entry.kind == Kind::kMadeFolder) continue;
+      if (entry.kind == Kind::kTree ? fs::remove_all(entry.path, ec) > 0
+                                    : fs::remove(entry.path, ec))
+        removed.push_back(entry.path);
+    }
+    for (const auto& [token, entry] : paths_)
+      if (entry.kind == Kind::kMadeFolder && fs::remove(entry.path, ec))
+        removed.push_back(entry.path);
+    paths_.clear();
+    return removed;
+  }
+
+ private:
+  struct Entry {
+    Kind kind;
+    std::string path;
+  };
+  std::mutex mutex_;
+  std::recursive_mutex commit_mutex_;
+  uint64_t next_ = 1;
+  std::map<uint64_t, Entry> paths_;  // in the order they were made
+};
+
 // A name beside `path` that no other file has: PATH<tag>-<pid>-<random> (same folder, so a rename
 // between the two is atomic).
 fs::path uniqueSibling(const fs::path& path, const char* tag) {
@@ -138,7 +195,10 @@ fs::path uniqueSibling(const fs::path& path, const char* tag) {
 
 FileSet::~FileSet() {
   std::error_code ec;
-  for (const Staged& file : staged_) fs::remove(file.temporary, ec);
+  for (const Staged& file : staged_) {
+    fs::remove(file.temporary, ec);
+    UnfinishedOutputs::get().remove(file.token);
+  }
 }
 
 core::Status FileSet::add(const std::string& path, std::string_view text) {
@@ -160,17 +220,23 @@ core::Status FileSet::checkTarget(const std::string& path) const {
 core::Status FileSet::add(const std::string& path, std::span<const uint8_t> bytes) {
   if (auto target = checkTarget(path); !target) return target;
   const fs::path temp = uniqueSibling(path, ".tmp");
+  const uint64_t token =
+      UnfinishedOutputs::get().add(UnfinishedOutputs::Kind::kFile, temp.string());
   FILE* file = std::fopen(temp.c_str(), "wb");
-  if (!file) return Error{path + ": cannot create (" + std::strerror(errno) + ")"};
+  if (!file) {
+    UnfinishedOutputs::get().remove(token);
+    return Error{path + ": cannot create (" + std::strerror(errno) + ")"};
+  }
   size_t written = bytes.empty() ? 0 : std::fwrite(bytes.data(), 1, bytes.size(), file);
   bool flushed = std::fflush(file) == 0 && ::fsync(::fileno(file)) == 0;
   bool closed = std::fclose(file) == 0;
   if (written != bytes.size() || !flushed || !closed) {
     std::error_code ec;
     fs::remove(temp, ec);
+    UnfinishedOutputs::get().remove(token);
     return Error{path + ": write failed (disk full?)"};
   }
-  staged_.push_back({temp.string(), path});
+  staged_.push_back({temp.string(), path, token});
   return core::okStatus();
 }
 
@@ -182,11 +248,22 @@ core::Status FileSet::adopt(const std::string& written, const std::string& path)
     return Error{path + ": already exists, and replacing files was not asked for"};
   for (const Staged& file : staged_)
     if (file.target == path) return Error{path + ": written twice in one set"};
-  staged_.push_back({written, path});
+  staged_.push_back({written, path, 0});
   return core::okStatus();
 }
 
 core::Status FileSet::commit() {
+  // An interrupt waits until the files are in place, or put back
+  // (removeUnfinishedOutputsOnInterrupt).
+  std::lock_guard committing(UnfinishedOutputs::get().commitMutex());
+  // The temporaries are renamed or removed below, whatever happens.
+  struct Forget {
+    std::vector<uint64_t> tokens;
+    ~Forget() {
+      for (uint64_t token : tokens) UnfinishedOutputs::get().remove(token);
+    }
+  } forget;
+  for (const Staged& file : staged_) forget.tokens.push_back(file.token);
   // Each rename is atomic, the set is not: the files that earlier renames replaced are kept (a
   // hard link to each, else a copy) until the last rename is done, so that a failure part-way
   // can put every target back as it was. The last rename needs no copy: nothing follows it.
@@ -260,6 +337,12 @@ void OutputFolder::abandon() {
   // Not committed: the folders begin() made go again (fs::remove takes only empty ones).
   for (const std::string& folder : created_) fs::remove(folder, ec);
   created_.clear();
+  forgetUnfinished();
+}
+
+void OutputFolder::forgetUnfinished() {
+  for (uint64_t token : unfinished_) UnfinishedOutputs::get().remove(token);
+  unfinished_.clear();
 }
 
 core::Status OutputFolder::begin(const std::string& folder) {
@@ -282,6 +365,8 @@ core::Status OutputFolder::begin(const std::string& folder) {
        !fs::exists(fs::symlink_status(missing, ec)) && missing != missing.root_path();
        missing = missing.parent_path())
     created_.push_back(missing.string());
+  for (const std::string& made : created_)  // innermost first
+    unfinished_.push_back(UnfinishedOutputs::get().add(UnfinishedOutputs::Kind::kMadeFolder, made));
   fs::create_directories(target, ec);
   if (ec) return Error{folder + ": cannot create (" + ec.message() + ")"};
   // Staging folders of runs that were killed (their process is gone) are removed.
@@ -298,6 +383,8 @@ core::Status OutputFolder::begin(const std::string& folder) {
   // Inside the folder, hidden: on its file system even when the folder is a mount point (a
   // container's volume), so that commit() only renames.
   const fs::path staging = uniqueSibling(target / ".duolod-staging", "");
+  unfinished_.push_back(
+      UnfinishedOutputs::get().add(UnfinishedOutputs::Kind::kTree, staging.string()));
   if (!fs::create_directory(staging, ec) || ec)
     return Error{folder + ": cannot create the staging folder " + staging.string() + " (" +
                  (ec ? ec.message() : std::string("it exists")) + ")"};
@@ -308,6 +395,8 @@ core::Status OutputFolder::begin(const std::string& folder) {
 
 core::Status OutputFolder::commit(const core::Asset* asset) {
   if (staging_.empty()) return Error{"output folder: commit() before begin()"};
+  // An interrupt waits until the files are in place, or the folder is back as it was.
+  std::lock_guard committing(UnfinishedOutputs::get().commitMutex());
   // A failed commit ends the output: the folder is left as it was.
   auto failed = [this](core::Status status) {
     abandon();
@@ -364,7 +453,41 @@ core::Status OutputFolder::commit(const core::Asset* asset) {
   fs::remove_all(staging_, ec);
   staging_.clear();
   created_.clear();  // in place: kept
+  forgetUnfinished();
   return core::okStatus();
+}
+
+void removeUnfinishedOutputsOnInterrupt(const std::string& program) {
+  static std::once_flag once;
+  std::call_once(once, [program] {
+    sigset_t signals;
+    sigemptyset(&signals);
+    for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, signal);
+    // Blocked here, so in every thread started after this; taken by sigwait on a thread of its
+    // own, which may do what a signal handler may not (remove folders, take locks).
+    pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+    std::thread([signals, program] {
+      int signal = 0;
+      while (sigwait(&signals, &signal) != 0) {
+      }
+      const std::vector<std::string> removed = UnfinishedOutputs::get().removeAll();
+      std::string message = (program.empty() ? "" : program + ": ") + "interrupted (" +
+                            (signal == SIGINT    ? "SIGINT"
+                             : signal == SIGTERM ? "SIGTERM"
+                                                 : "SIGHUP") +
+                            ")";
+      message += removed.empty() ? "; no unfinished output to remove\n"
+                                 : "; removed the unfinished output:\n";
+      for (const std::string& path : removed) message += "  " + path + "\n";
+      // write(2), not stdio: another thread may hold stderr's lock.
+      for (size_t done = 0; done < message.size();) {
+        const ssize_t n = ::write(STDERR_FILENO, message.data() + done, message.size() - done);
+        if (n <= 0) break;
+        done += size_t(n);
+      }
+      ::_exit(128 + signal);
+    }).detach();
+  });
 }
 
 core::Status writeFileAtomic(const std::string& path, std::span<const uint8_t> bytes) {
