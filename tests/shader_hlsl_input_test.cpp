@@ -63,13 +63,22 @@ std::string exampleHlsl(const char* file) {
   return test::readText(test::sourcePath(std::string("shaders/hlsl/") + file));
 }
 
+// A vertex stage's options on duolod's interface: its inputs placed by semantic where the
+// renderer binds the mesh's streams (as the CLI compiles an HLSL vertex shader).
+CompileOptions onTheInterface() {
+  CompileOptions options;
+  options.vertex_input_locations = render::hlslVertexInputLocations();
+  return options;
+}
+
 TEST(HlslInput, TheExampleBecomesGlslOnTheInterface) {
-  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl");
+  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl",
+                           onTheInterface());
   ASSERT_TRUE(vertex.ok()) << vertex.error().message;
   auto fragment =
       hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
   ASSERT_TRUE(fragment.ok()) << fragment.error().message;
-  // The interface: attribute locations from [[vk::location]], block bindings from registers, the
+  // The interface: attribute locations by semantic, block bindings from registers, the
   // texture and its sampler as one sampler2D at the texture's binding.
   for (const char* expected :
        {"layout(location = 0) in vec3 input_position", "layout(location = 1) in vec3 input_normal",
@@ -96,7 +105,8 @@ TEST(HlslInput, TheExampleRendersAsItsGlslTwin) {
   auto id = renderer->uploadAsset(*asset);
   ASSERT_TRUE(id.ok()) << id.error().message;
 
-  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl");
+  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl",
+                           onTheInterface());
   auto fragment =
       hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
   ASSERT_TRUE(vertex.ok() && fragment.ok());
@@ -223,7 +233,8 @@ TEST(HlslInput, TheExampleOffersTheRulesWhatItsGlslTwinOffers) {
     for (const RuleSite& site : enumerateSites(*program, context)) ++per_rule.at(size_t(site.kind));
     return per_rule;
   };
-  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl");
+  auto vertex = hlslToGlsl(exampleHlsl("lambert.vert.hlsl"), Stage::kVertex, "lambert.vert.hlsl",
+                           onTheInterface());
   auto fragment =
       hlslToGlsl(exampleHlsl("lambert.frag.hlsl"), Stage::kFragment, "lambert.frag.hlsl");
   ASSERT_TRUE(vertex.ok() && fragment.ok());
@@ -248,7 +259,7 @@ float4 main(PixelInput input) : SV_Target {
 }
 )";
   auto pair = hlslPairToGlsl(exampleHlsl("lambert.vert.hlsl"), "lambert.vert.hlsl", fragment,
-                             "subset.frag.hlsl");
+                             "subset.frag.hlsl", onTheInterface());
   ASSERT_TRUE(pair.ok()) << pair.error().message;
   EXPECT_TRUE(test::contains(pair->vertex, "layout(location = 1) out vec3")) << pair->vertex;
   EXPECT_TRUE(test::contains(pair->vertex, "layout(location = 2) out vec2")) << pair->vertex;
@@ -263,13 +274,59 @@ float4 main(PixelInput input) : SV_Target {
   std::string unwritten = fragment;
   unwritten.replace(unwritten.find("TEXCOORD2"), 9, "COLOR");
   auto missing = hlslPairToGlsl(exampleHlsl("lambert.vert.hlsl"), "lambert.vert.hlsl", unwritten,
-                                "missing.frag.hlsl");
+                                "missing.frag.hlsl", onTheInterface());
   ASSERT_FALSE(missing.ok());
   EXPECT_TRUE(test::contains(missing.error().message, "missing.frag.hlsl: input '")) << missing.error().message;
   EXPECT_TRUE(test::contains(missing.error().message,
                              "(COLOR0) is not written by the vertex stage (its outputs: TEXCOORD0, "
                              "TEXCOORD1, TEXCOORD2)"))
       << missing.error().message;
+}
+
+// Vertex inputs take the mesh's streams by semantic, as Direct3D binds them: declared in any
+// order and without [[vk::location]] (by declaration order the uv read the position stream).
+TEST(HlslInput, VertexInputsTakeTheirStreamsBySemantic) {
+  std::string vertex = exampleHlsl("lambert.vert.hlsl");
+  const std::string declared = R"(struct VertexInput {
+  float2 uv : texcoord;
+  float3 normal : NORMAL0;
+  float3 position : POSITION;
+};)";
+  const size_t begin = vertex.find("struct VertexInput {");
+  ASSERT_NE(begin, std::string::npos);
+  vertex.replace(begin, vertex.find("};", begin) + 2 - begin, declared);
+  auto glsl = hlslToGlsl(vertex, Stage::kVertex, "reordered.vert.hlsl", onTheInterface());
+  ASSERT_TRUE(glsl.ok()) << glsl.error().message;
+  for (const char* expected :
+       {"layout(location = 3) in vec2 input_uv", "layout(location = 1) in vec3 input_normal",
+        "layout(location = 0) in vec3 input_position"})
+    EXPECT_TRUE(test::contains(*glsl, expected)) << expected << "\n" << *glsl;
+  // Where a bindings file puts a stream, its semantic follows.
+  render::Bindings moved;
+  moved.uv0 = 7;
+  CompileOptions options;
+  options.vertex_input_locations = render::hlslVertexInputLocations(moved);
+  auto rebound = hlslToGlsl(vertex, Stage::kVertex, "reordered.vert.hlsl", options);
+  ASSERT_TRUE(rebound.ok()) << rebound.error().message;
+  EXPECT_TRUE(test::contains(*rebound, "layout(location = 7) in vec2 input_uv")) << *rebound;
+
+  // A semantic the mesh has no stream for, and two inputs of one stream, are errors naming them.
+  std::string blend = vertex;
+  blend.replace(blend.find("texcoord"), 8, "BLENDWEIGHT");
+  auto unknown = hlslToGlsl(blend, Stage::kVertex, "blend.vert.hlsl", onTheInterface());
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_TRUE(
+      test::contains(unknown.error().message,
+                     "blend.vert.hlsl: vertex input 'input.uv' (BLENDWEIGHT0) is not a stream "
+                     "the mesh provides (it provides COLOR0, NORMAL0, POSITION0, "
+                     "TANGENT0, TEXCOORD0, TEXCOORD1)"))
+      << unknown.error().message;
+  std::string twice = vertex;
+  twice.replace(twice.find("NORMAL0"), 7, "POSITION");
+  auto same = hlslToGlsl(twice, Stage::kVertex, "twice.vert.hlsl", onTheInterface());
+  ASSERT_FALSE(same.ok());
+  EXPECT_TRUE(test::contains(same.error().message, "have the same semantic POSITION0"))
+      << same.error().message;
 }
 
 TEST(HlslInput, TextureLoadNeedsNoSamplerState) {

@@ -162,9 +162,14 @@ struct ShadingFlags {
                                           : *file + " is GLSL, whose entry point is main()")};
     if (!vert.empty()) {
       // GLSL as it is; HLSL translated to GLSL 450 first (shader::hlslToGlsl), which is what
-      // every later stage takes.
-      auto read = [](const std::string& path, shader::Stage stage,
-                     const std::string& entry) -> core::Result<std::string> {
+      // every later stage takes. HLSL vertex inputs are placed by semantic where the bindings
+      // put the mesh's streams.
+      auto bound = parsedBindings();
+      if (!bound) return bound.error();
+      const std::map<std::string, uint32_t> input_locations =
+          render::hlslVertexInputLocations(*bound);
+      auto read = [&](const std::string& path, shader::Stage stage,
+                      const std::string& entry) -> core::Result<std::string> {
         auto bytes = io::readFileBytes(path);  // names a missing file or a folder
         if (!bytes) return bytes.error();
         std::string text(bytes->begin(), bytes->end());
@@ -172,6 +177,7 @@ struct ShadingFlags {
         shader::CompileOptions options;
         options.entry_point = entry;
         options.include_dirs = {fs::path(path).parent_path().string()};
+        if (stage == shader::Stage::kVertex) options.vertex_input_locations = input_locations;
         return shader::hlslToGlsl(text, stage, path, options);
       };
       auto name = [](const std::string& path) {
@@ -186,6 +192,7 @@ struct ShadingFlags {
         shader::CompileOptions vertex_options, fragment_options;
         vertex_options.entry_point = vert_entry;
         vertex_options.include_dirs = {fs::path(vert).parent_path().string()};
+        vertex_options.vertex_input_locations = input_locations;
         fragment_options.entry_point = frag_entry;
         fragment_options.include_dirs = {fs::path(frag).parent_path().string()};
         auto pair = shader::hlslPairToGlsl(
@@ -202,6 +209,14 @@ struct ShadingFlags {
       return render::GlslSource{*v, *f, name(vert), name(frag)};
     }
     return render::loadShaderPair(shader);
+  }
+
+  // The --bindings file's, else the interface's (shaders/INTERFACE.md).
+  core::Result<render::Bindings> parsedBindings() const {
+    if (bindings.empty()) return render::Bindings{};
+    auto bytes = io::readFileBytes(bindings);
+    if (!bytes) return bytes.error();
+    return render::parseBindings(std::string(bytes->begin(), bytes->end()), bindings);
   }
 
   render::Display display() const { return {fov_y_deg, screen_height}; }
@@ -221,9 +236,7 @@ core::Result<Session> openSession(const ShadingFlags& flags) {
   auto renderer = render::Renderer::create({.device = flags.device});
   if (!renderer) return renderer.error();
   if (!flags.bindings.empty()) {
-    auto bytes = io::readFileBytes(flags.bindings);
-    if (!bytes) return bytes.error();
-    auto bindings = render::parseBindings(std::string(bytes->begin(), bytes->end()), flags.bindings);
+    auto bindings = flags.parsedBindings();
     if (!bindings) return bindings.error();
     (*renderer)->setBindings(*bindings);
   }

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -137,6 +138,10 @@ inline constexpr std::array<uint8_t, 4> kMissingNormalTexel = {128, 128, 255, 25
 // Parses a bindings JSON file ({"attributes": {"position": 0, ...}, "blocks": {"frame": 0,
 // "material": 1}, "textures": {"baseColor": 0, ...}}); unknown keys are errors naming the key.
 core::Result<Bindings> parseBindings(const std::string& json_text, const std::string& file_name);
+// The locations of an HLSL vertex shader's inputs by semantic (shader::CompileOptions::
+// vertex_input_locations) for these bindings: POSITION0, NORMAL0, TANGENT0, TEXCOORD0 (uv0),
+// TEXCOORD1 (uv1) and COLOR0, each where its stream is bound; streams bound nowhere are left out.
+std::map<std::string, uint32_t> hlslVertexInputLocations(const Bindings& bindings = {});
 
 struct GlslSource {
   std::string vertex, fragment;

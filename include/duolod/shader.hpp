@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,12 @@ struct CompileOptions {
   // outputs are always assigned so; its resources are bound by register(), and without this
   // option a live resource without one (or a global outside a cbuffer) is an error naming it.
   bool auto_map_locations = false;
+  // HLSL vertex stage: each vertex input's location by its semantic, as Direct3D binds vertex
+  // streams by semantic. Keys are canonical semantics: upper case with the index ("POSITION0",
+  // "TEXCOORD1"). An input whose semantic is not listed is an error naming it and the ones that
+  // are; a listed semantic wins over [[vk::location(N)]]. Empty: [[vk::location(N)]], else
+  // declaration order. render::hlslVertexInputLocations gives duolod's interface.
+  std::map<std::string, uint32_t> vertex_input_locations;
 };
 
 // Compiles one stage to SPIR-V for OpenGL 4.5 (ARB_gl_spirv), with debug names kept and no
@@ -56,8 +63,9 @@ core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Targe
 // by SPIRV-Tools (every function inlined into the entry point), then emitted by SPIRV-Cross. Each
 // texture sampled with a SamplerState becomes one sampler2D named and bound as the texture
 // (`Texture2D uBaseColorTexture : register(t0)` → `sampler2D uBaseColorTexture` at binding 0);
-// cbuffers keep their register's binding (b0 → 0), vertex inputs their [[vk::location(N)]]. A
-// resource without a register() is an error. One stage alone cannot match varyings by semantic:
+// cbuffers keep their register's binding (b0 → 0); vertex inputs take their locations by semantic
+// from CompileOptions::vertex_input_locations, else their [[vk::location(N)]]. A resource without
+// a register() is an error. One stage alone cannot match varyings by semantic:
 // use hlslPairToGlsl for a vertex + pixel pair.
 core::Result<std::string> hlslToGlsl(const std::string& source, Stage stage,
                                      const std::string& file_name,

@@ -1,7 +1,7 @@
 // duolod example shader "lambert" in HLSL (vertex stage): what an HLSL author writes for duolod's
-// interface (shaders/INTERFACE.md). Inputs take the interface's attribute locations through
-// [[vk::location(N)]], cbuffers its block bindings through register(bN); the varyings are the
-// members of VertexOutput, matched to the pixel shader's inputs by semantic.
+// interface (shaders/INTERFACE.md). Inputs take the mesh's streams by semantic (POSITION, NORMAL,
+// TANGENT, TEXCOORD0/1, COLOR), cbuffers the interface's block bindings through register(bN); the
+// varyings are the members of VertexOutput, matched to the pixel shader's inputs by semantic.
 // Use it as `--vert shaders/hlsl/lambert.vert.hlsl --frag shaders/hlsl/lambert.frag.hlsl`.
 
 cbuffer Frame : register(b0) {
@@ -17,9 +17,9 @@ cbuffer Frame : register(b0) {
 };
 
 struct VertexInput {
-  [[vk::location(0)]] float3 position : POSITION;
-  [[vk::location(1)]] float3 normal : NORMAL;
-  [[vk::location(3)]] float2 uv : TEXCOORD0;
+  float3 position : POSITION;
+  float3 normal : NORMAL;
+  float2 uv : TEXCOORD0;
 };
 
 struct VertexOutput {

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string_view>
@@ -11,6 +12,18 @@
 
 namespace duolod::render {
 using core::Error;
+
+std::map<std::string, uint32_t> hlslVertexInputLocations(const Bindings& bindings) {
+  std::map<std::string, uint32_t> locations;
+  for (auto [semantic, location] : {std::pair{"POSITION0", bindings.position},
+                                    {"NORMAL0", bindings.normal},
+                                    {"TANGENT0", bindings.tangent},
+                                    {"TEXCOORD0", bindings.uv0},
+                                    {"TEXCOORD1", bindings.uv1},
+                                    {"COLOR0", bindings.color}})
+    if (location >= 0) locations[semantic] = uint32_t(location);
+  return locations;
+}
 
 core::Result<Bindings> parseBindings(const std::string& json_text, const std::string& file_name) {
   nlohmann::json document;

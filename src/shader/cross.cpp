@@ -224,6 +224,25 @@ core::Result<std::string> hlslStageToGlsl(const std::string& source, Stage stage
       name[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(name[0])));
       if (name != compiler.get_name(block.base_type_id)) compiler.set_name(block.id, name);
     }
+    // Vertex inputs by semantic, when asked: Direct3D binds vertex streams by semantic, so an
+    // HLSL author declares them in any order and without [[vk::location]].
+    if (stage == Stage::kVertex && !options.vertex_input_locations.empty()) {
+      std::map<std::string, std::string> taken;  // semantic -> input
+      for (const Varying& input : varyingsOf(compiler, resources.stage_inputs)) {
+        const auto location = options.vertex_input_locations.find(input.semantic);
+        if (location == options.vertex_input_locations.end()) {
+          std::string list;
+          for (const auto& [semantic, unused] : options.vertex_input_locations)
+            list += (list.empty() ? "" : ", ") + semantic;
+          return Error{file_name + ": vertex input '" + input.name + "' (" + input.semantic +
+                       ") is not a stream the mesh provides (it provides " + list + ")"};
+        }
+        if (auto [other, inserted] = taken.emplace(input.semantic, input.name); !inserted)
+          return Error{file_name + ": vertex inputs '" + other->second + "' and '" + input.name +
+                       "' have the same semantic " + input.semantic};
+        compiler.set_decoration(input.id, spv::DecorationLocation, location->second);
+      }
+    }
     // Varyings by semantic: the vertex stage's outputs keep the locations glslang gave them
     // (declaration order) and are reported; the fragment stage's inputs take the location of the
     // output with the same semantic, whatever order either stage declares them in, and one that
