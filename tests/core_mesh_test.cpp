@@ -556,6 +556,37 @@ TEST(BoundingSphere, HugeCoordinates) {
   }
 }
 
+// Float squared distances underflow below ~1e-19: a mesh 1e-30 wide had radius 0 (found by
+// fuzzing), and every camera is placed by the radius.
+TEST(BoundingSphere, TinyCoordinates) {
+  for (float scale : {1e-20f, 1e-30f, 1e-40f}) {
+    Mesh mesh;
+    for (int i = 0; i < 8; ++i)
+      mesh.positions.push_back(Vec3{float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)} *
+                               scale);
+    core::Sphere sphere = core::computeBoundingSphere(mesh);
+    EXPECT_NEAR(sphere.radius / scale, std::sqrt(3.0f) / 2, 0.01f) << scale;
+    EXPECT_NEAR(sphere.center.x / scale, 0.5f, 0.01f) << scale;
+  }
+}
+
+// normalize() keeps the direction of a vector whose squared length overflows or underflows a
+// float (a normal of 1e20 in an OBJ became NaN tangents and a failed write, found by fuzzing);
+// normalizeNormals makes every normal unit and counts those that were far from it.
+TEST(Math, NormalizeBeyondFloatSquares) {
+  for (float scale : {1e20f, 5e37f, 1e-25f, 1e-40f}) {
+    const Vec3 n = core::normalize(Vec3{3, 0, -4} * scale);
+    EXPECT_NEAR(n.x, 0.6f, 1e-6f) << scale;
+    EXPECT_NEAR(n.z, -0.8f, 1e-6f) << scale;
+  }
+  EXPECT_EQ(core::normalize(Vec3{0, 0, 0}), (Vec3{0, 0, 0}));
+  Mesh mesh;
+  mesh.normals = {{0, 0, 1}, {0, 0, 1.001f}, {1e20f, 0, 0}, {0, 2, 0}, {0, 0, 0}};
+  EXPECT_EQ(core::normalizeNormals(mesh), 2u);  // 1e20 and 2; 1.001 is within 1%
+  for (size_t i = 0; i < 4; ++i) EXPECT_NEAR(core::length(mesh.normals[i]), 1.0f, 1e-6f) << i;
+  EXPECT_EQ(mesh.normals[4], (Vec3{0, 0, 0}));
+}
+
 TEST(BoundingSphere, EmptyMeshHasZeroRadius) {
   EXPECT_EQ(core::computeBoundingSphere(Mesh{}).radius, 0.0f);
 }

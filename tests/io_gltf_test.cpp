@@ -635,6 +635,73 @@ TEST(GltfMalformed, MessagesSayWhatIsWrong) {
   expectLoadError(textured, (dir / "checker.png").string() + " does not exist");
 }
 
+// Found by fuzzing. JSON nested past what tinygltf's recursive copy of `extras` survives (a stack
+// overflow at 20,000 levels) is refused; values outside the spec are refused when nothing can be
+// made of them (an infinite factor was written out as `inf`, which no reader takes; a 32-bit
+// integer position was read as coordinates of 1e9) and repaired with a warning otherwise (a
+// rotation of length 100 stretched the mesh 19,999 times; factors out of range were passed on).
+TEST(GltfMalformed, ValuesOutsideTheSpecAreRefusedOrRepaired) {
+  const fs::path dir = test::scratchDir("m_spec");
+  {
+    std::ofstream deep(dir / "deep.gltf");
+    deep << R"({"asset": {"version": "2.0"}, "extras": )" << std::string(20000, '[')
+         << std::string(20000, ']') << "}";
+  }
+  expectLoadError((dir / "deep.gltf").string(), "the JSON nests 20001 levels deep (at most 256");
+  HandGltf nested = oneTriangle();
+  json value = 1;
+  for (int i = 0; i < 200; ++i) value = json::array({value});
+  nested.doc["extras"] = value;
+  auto loaded = io::loadAsset(nested.write(dir, "nested"));
+  EXPECT_TRUE(loaded) << loaded.error().message;
+
+  HandGltf infinite = oneTriangle();
+  infinite.doc["materials"] = {{{"pbrMetallicRoughness", {{"roughnessFactor", 1e39}}}}};
+  infinite.doc["meshes"][0]["primitives"][0]["material"] = 0;
+  expectLoadError(infinite.write(dir, "infinite"),
+                  "material 0: roughnessFactor is not a finite number");
+  HandGltf out_of_range = infinite;
+  out_of_range.doc["materials"] = {
+      {{"pbrMetallicRoughness", {{"baseColorFactor", {7, -5, 2, 1}}, {"metallicFactor", -3}}}}};
+  auto clamped = io::loadAsset(out_of_range.write(dir, "out_of_range"));
+  ASSERT_TRUE(clamped) << clamped.error().message;
+  const core::Material& material = clamped->materials[0];
+  EXPECT_EQ(material.base_color_factor.x, 1.0f);
+  EXPECT_EQ(material.base_color_factor.y, 0.0f);
+  EXPECT_EQ(material.metallic_factor, 0.0f);
+  EXPECT_TRUE(hasWarningContaining(
+      *clamped, "material 0: baseColorFactor, metallicFactor out of the glTF range, clamped"));
+
+  HandGltf integer_positions = oneTriangle();
+  integer_positions.doc["accessors"][0]["componentType"] = kUnsignedInt;
+  expectLoadError(integer_positions.write(dir, "integer_positions"),
+                  "componentType 5125 (unsigned int) is not allowed for a vertex attribute");
+
+  HandGltf rotated = oneTriangle();
+  rotated.doc["nodes"][0]["rotation"] = {0, 100, 0, 0};  // 180° about y, 100 times too long
+  auto normalized = io::loadAsset(rotated.write(dir, "rotated"));
+  ASSERT_TRUE(normalized) << normalized.error().message;
+  EXPECT_TRUE(
+      hasWarningContaining(*normalized, "node 0: rotation has length 100, not 1; normalized"));
+  for (const Vec3& p : normalized->mesh.positions) EXPECT_LE(core::length(p), 1.0001f);
+  EXPECT_NEAR(normalized->mesh.positions[1].x, -1.0f, 1e-6f);
+  HandGltf zero = oneTriangle();
+  zero.doc["nodes"][0]["rotation"] = {0, 0, 0, 0};
+  expectLoadError(zero.write(dir, "zero_rotation"),
+                  "node 0: rotation (0, 0, 0, 0) is not a quaternion");
+  HandGltf short_matrix = oneTriangle();
+  short_matrix.doc["nodes"][0]["matrix"] = {1, 0, 0};
+  expectLoadError(short_matrix.write(dir, "short_matrix"),
+                  "node 0: matrix has 3 numbers (16 needed)");
+
+  // Without indices, the count is of vertices.
+  HandGltf four = oneTriangle();
+  four.doc["accessors"][0]["count"] = 2;
+  four.doc["meshes"][0]["primitives"][0].erase("indices");
+  expectLoadError(four.write(dir, "two_vertices"),
+                  "2 vertices (it has no indices) is not a whole number of triangles");
+}
+
 // A required extension that is not read, and glTF 1.0, are refused by name; a required
 // KHR_mesh_quantization (any accessor component type is read) and an optional extension load.
 TEST(GltfMalformed, RequiredExtensionsAndVersionAreHonoured) {

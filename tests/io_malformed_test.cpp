@@ -300,6 +300,24 @@ TEST(MalformedObj, EmptyFileReadsEmptyAndLoadAssetRejectsIt) {
   EXPECT_NE(loaded.error().message.find("empty.obj"), std::string::npos);
 }
 
+// Normals need not be unit in an OBJ; one of 1e20 overflowed the tangent frame into NaNs, and the
+// run failed at its write, blaming the output (found by fuzzing). They are normalized on loading.
+TEST(MalformedObj, HugeNormalsAreNormalized) {
+  const std::string path =
+      writeScratchFile("huge_normal.obj",
+                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1e20\nvn 0 0 1\n"
+                       "f 1/1/1 2/2/2 3/3/2\n");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  ASSERT_EQ(asset->mesh.tangents.size(), asset->mesh.vertexCount());
+  for (const core::Vec3& n : asset->mesh.normals) EXPECT_NEAR(core::length(n), 1.0f, 1e-6f);
+  EXPECT_TRUE(core::validateMesh(asset->mesh).ok());
+  bool warned = false;
+  for (const std::string& warning : asset->warnings)
+    warned |= warning.find("1 normals were not of unit length; normalized") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
 TEST(MalformedFiles, MissingFileNamesThePath) {
   for (const char* name : {"nowhere.obj", "nowhere.ply", "nowhere.off"}) {
     std::string path = (test::scratchDir("missing") / name).string();

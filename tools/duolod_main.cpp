@@ -898,9 +898,11 @@ int runSimplify(SimplifyFlags& flags) {
   start = std::chrono::steady_clock::now();
   mesh::SurfaceDistance distances = mesh::surfaceDistance(input, output.mesh);
   // (In double: float's squares vanish for an asset ~1e-20 wide, and the diagonal read 0.)
-  const core::Vec3 size = core::computeBounds(input).size();
-  const double diagonal =
-      std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
+  // (Its sides in double as well: a float side of an asset spanning ±3e38 is infinite.)
+  const core::Bounds bounds = core::computeBounds(input);
+  const double side[3] = {double(bounds.max.x) - bounds.min.x, double(bounds.max.y) - bounds.min.y,
+                          double(bounds.max.z) - bounds.min.z};
+  const double diagonal = std::sqrt(side[0] * side[0] + side[1] * side[1] + side[2] * side[2]);
   const double percent = diagonal > 0 ? 100.0 / diagonal : 0.0;
   // Where the Hausdorff distance is attained: on the input (detail lost) or on the output (it
   // left the surface).

@@ -85,7 +85,15 @@ inline Vec3 cross(Vec3 a, Vec3 b) {
 inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(Vec3 a) {
   float len = length(a);
-  return len > 0 ? a / len : Vec3{0, 0, 0};
+  if (!(len > 0 && len < HUGE_VALF)) {
+    // |a|² overflowed (components above ~1.8e19) or underflowed (below ~1e-19): scaled by the
+    // largest component first, a finite non-zero vector still has a direction.
+    const float largest = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z)});
+    if (!(largest > 0 && largest < HUGE_VALF)) return Vec3{0, 0, 0};
+    a = a / largest;
+    len = length(a);
+  }
+  return a / len;
 }
 inline bool isFinite(Vec3 a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
@@ -163,6 +171,10 @@ Sphere computeBoundingSphere(const Mesh& mesh);
 // does not depend on how a polygon was triangulated. Vertices at the same position (split by a
 // UV or colour seam) get the same normal.
 void computeNormals(Mesh& mesh);
+// Scales every normal to unit length (a zero one stays zero); returns how many were more than 1%
+// off it. Loaders call it: an OBJ's or PLY's normals need not be unit, and the simplifier's
+// attribute quadrics and tangent generation assume they are.
+size_t normalizeNormals(Mesh& mesh);
 // Per-vertex tangents from UV derivatives in the MikkTSpace convention (tangent along +u, w the
 // handedness so that bitangent = w * cross(normal, tangent)), angle-weighted, Gram-Schmidt
 // orthogonalized against the normal. Requires normals and uv0 (otherwise does nothing). As

@@ -221,9 +221,26 @@ Sphere computeBoundingSphere(const Mesh& mesh) {
   if (mesh.positions.empty()) return {};
   const Bounds box = computeBounds(mesh);
   const Sphere sphere = ritterSphere<float>(mesh.positions, box);
-  if (std::isfinite(sphere.radius) && isFinite(sphere.center)) return sphere;
+  // A bounding sphere is at least as wide as the box's longest side; one that is not lost its
+  // squared distances to underflow (coordinates below ~1e-19: a mesh 1e-30 wide had radius 0).
+  const Vec3 size = box.max - box.min;
+  const float longest = std::max({size.x, size.y, size.z});
+  if (std::isfinite(sphere.radius) && isFinite(sphere.center) &&
+      2 * sphere.radius >= longest * (1 - 1e-5f))
+    return sphere;
   // (Found by fuzzing: a mesh 1e20 wide had an infinite radius, which every camera is placed by.)
   return ritterSphere<double>(mesh.positions, box);
+}
+
+size_t normalizeNormals(Mesh& mesh) {
+  size_t off = 0;
+  for (Vec3& n : mesh.normals) {
+    const float length_squared = dot(n, n);
+    if (length_squared == 1.0f) continue;
+    if (!(std::abs(length_squared - 1.0f) <= 0.02f) && length_squared != 0.0f) ++off;
+    n = normalize(n);
+  }
+  return off;
 }
 
 void computeNormals(Mesh& mesh) {

@@ -826,6 +826,8 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
     return Error{path + (degenerate > 0 ? ": all " + std::to_string(degenerate) +
                                               " triangles are degenerate (zero area)"
                                         : std::string(": the file contains no triangles"))};
+  if (size_t off = core::normalizeNormals(mesh); off > 0)
+    asset.warnings.push_back(std::to_string(off) + " normals were not of unit length; normalized");
   if (options.weld) core::weldVertices(mesh);
   if (options.generate_normals && mesh.normals.empty()) core::computeNormals(mesh);
   if (options.generate_tangents && mesh.tangents.empty() && !mesh.normals.empty() &&

@@ -11,8 +11,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
+#include <tuple>
 
 #include "duolod/io.hpp"
 
@@ -191,12 +195,12 @@ core::Result<std::vector<float>> readFloats(const tinygltf::Model& model, int in
           value = a.normalized ? std::max(v / 32767.0f, -1.0f) : v;
           break;
         }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
-          uint32_t v;
-          std::memcpy(&v, p, 4);
-          value = static_cast<float>(v);
-          break;
-        }
+        // (glTF 2.0 allows no 32-bit integer vertex attribute: its raw values, 1e9 for a
+        // float's bits, would be taken as coordinates.)
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+          return Error{what +
+                       ": componentType 5125 (unsigned int) is not allowed for a vertex "
+                       "attribute"};
         default: return Error{what + ": unsupported componentType"};
       }
       if (!std::isfinite(value))
@@ -230,10 +234,29 @@ core::Result<std::vector<uint32_t>> readIndices(const tinygltf::Model& model, in
   return out;
 }
 
-Mat4 nodeMatrix(const tinygltf::Node& node) {
+// A node's local transform. `what` names the node in messages; a rotation that is not a unit
+// quaternion is normalized (warned: the spec requires unit ones), a projective matrix's last row is
+// ignored (warned).
+core::Result<Mat4> nodeMatrix(const tinygltf::Node& node, const std::string& what,
+                              std::vector<std::string>& warnings) {
+  for (auto [values, size, name] : {std::tuple{&node.matrix, size_t(16), "matrix"},
+                                    {&node.translation, size_t(3), "translation"},
+                                    {&node.rotation, size_t(4), "rotation"},
+                                    {&node.scale, size_t(3), "scale"}}) {
+    if (!values->empty() && values->size() != size)
+      return Error{what + ": " + name + " has " + std::to_string(values->size()) + " numbers (" +
+                   std::to_string(size) + " needed)"};
+    for (double value : *values)
+      if (!std::isfinite(value) || !std::isfinite(float(value)))
+        return Error{what + ": " + name + " holds a non-finite number"};
+  }
   if (node.matrix.size() == 16) {
     Mat4 m;
     for (int i = 0; i < 16; ++i) m.m[i] = static_cast<float>(node.matrix[i]);
+    if (node.matrix[3] != 0 || node.matrix[7] != 0 || node.matrix[11] != 0 || node.matrix[15] != 1)
+      warnings.push_back(what +
+                         ": matrix is not affine (its last row is not 0 0 0 1); the "
+                         "projective part is ignored");
     return m;
   }
   Mat4 t = Mat4::identity(), r = Mat4::identity(), s = Mat4::identity();
@@ -241,6 +264,15 @@ Mat4 nodeMatrix(const tinygltf::Node& node) {
     for (int i = 0; i < 3; ++i) t.at(i, 3) = static_cast<float>(node.translation[i]);
   if (node.rotation.size() == 4) {
     double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
+    const double length = std::sqrt(x * x + y * y + z * z + w * w);
+    if (!(length > 0) || !std::isfinite(length))
+      return Error{what + ": rotation (0, 0, 0, 0) is not a quaternion"};
+    if (std::abs(length - 1) > 1e-3) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%.6g", length);
+      warnings.push_back(what + ": rotation has length " + text + ", not 1; normalized");
+      x /= length, y /= length, z /= length, w /= length;
+    }
     r.at(0, 0) = float(1 - 2 * (y * y + z * z)), r.at(0, 1) = float(2 * (x * y - z * w)),
     r.at(0, 2) = float(2 * (x * z + y * w));
     r.at(1, 0) = float(2 * (x * y + z * w)), r.at(1, 1) = float(1 - 2 * (x * x + z * z)),
@@ -250,7 +282,7 @@ Mat4 nodeMatrix(const tinygltf::Node& node) {
   }
   if (node.scale.size() == 3)
     for (int i = 0; i < 3; ++i) s.at(i, i) = static_cast<float>(node.scale[i]);
-  return t * r * s;
+  return Mat4(t * r * s);
 }
 
 float determinant3(const Mat4& m) {
@@ -276,7 +308,9 @@ class GltfFlattener {
                    " is reached twice (a cycle, or a node with two parents)"};
     visited_[node_index] = true;
     const tinygltf::Node& node = model_.nodes[node_index];
-    Mat4 world = parent * nodeMatrix(node);
+    auto local = nodeMatrix(node, path_ + ": node " + std::to_string(node_index), asset_.warnings);
+    if (!local) return local.error();
+    Mat4 world = parent * *local;
     if (node.mesh >= 0) {
       if (node.mesh >= static_cast<int>(model_.meshes.size()))
         return Error{path_ + ": node " + std::to_string(node_index) + " refers to missing mesh " +
@@ -350,7 +384,8 @@ class GltfFlattener {
     }
     if (indices.size() % 3 != 0)
       return Error{what + ": " + std::to_string(indices.size()) +
-                   " indices is not a whole number of triangles"};
+                   (prim.indices >= 0 ? " indices" : " vertices (it has no indices)") +
+                   " is not a whole number of triangles"};
     for (size_t i = 0; i < indices.size(); ++i)
       if (indices[i] >= count)
         return Error{what + ": index " + std::to_string(i) + " = " + std::to_string(indices[i]) +
@@ -473,6 +508,40 @@ core::Status readMaterials(const tinygltf::Model& model, const std::string& path
                      : gm.alphaMode == "BLEND" ? core::AlphaMode::kBlend
                                                : core::AlphaMode::kOpaque;
     mat.double_sided = gm.doubleSided;
+    // Factors: finite (an infinite one was written out as `inf`, which nothing reads back), and
+    // within the spec's ranges (clamped, with a warning).
+    struct Factor {
+      float* value;
+      const char* name;
+      float low, high;
+    };
+    const float kUnbounded = std::numeric_limits<float>::max();
+    const std::vector<Factor> factors = {
+        {&mat.base_color_factor.x, "baseColorFactor", 0, 1},
+        {&mat.base_color_factor.y, "baseColorFactor", 0, 1},
+        {&mat.base_color_factor.z, "baseColorFactor", 0, 1},
+        {&mat.base_color_factor.w, "baseColorFactor", 0, 1},
+        {&mat.metallic_factor, "metallicFactor", 0, 1},
+        {&mat.roughness_factor, "roughnessFactor", 0, 1},
+        {&mat.emissive_factor.x, "emissiveFactor", 0, kUnbounded},
+        {&mat.emissive_factor.y, "emissiveFactor", 0, kUnbounded},
+        {&mat.emissive_factor.z, "emissiveFactor", 0, kUnbounded},
+        {&mat.normal_scale, "normalTexture.scale", -kUnbounded, kUnbounded},
+        {&mat.occlusion_strength, "occlusionTexture.strength", 0, 1},
+        {&mat.alpha_cutoff, "alphaCutoff", 0, kUnbounded}};
+    std::string clamped;
+    for (const Factor& factor : factors) {
+      if (!std::isfinite(*factor.value))
+        return Error{path + ": " + what + ": " + factor.name + " is not a finite number"};
+      if (*factor.value < factor.low || *factor.value > factor.high) {
+        *factor.value = std::clamp(*factor.value, factor.low, factor.high);
+        if (clamped.find(factor.name) == std::string::npos)
+          clamped += (clamped.empty() ? "" : ", ") + std::string(factor.name);
+      }
+    }
+    if (!clamped.empty())
+      asset.warnings.push_back(path + ": " + what + ": " + clamped +
+                               " out of the glTF range, clamped");
     struct Slot {
       int* target;
       int texture, tex_coord;
@@ -551,6 +620,32 @@ core::Status checkGlbLayout(const std::vector<uint8_t>& bytes, const std::string
   return core::okStatus();
 }
 
+// How deeply a JSON text nests arrays and objects (strings skipped, escapes included).
+size_t jsonNestingDepth(const uint8_t* text, size_t size) {
+  size_t depth = 0, deepest = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < size; ++i) {
+    const uint8_t c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return deepest;
+}
+// tinygltf copies `extras` and extensions into its Value one recursive call per level: a
+// document nested 20,000 deep overflowed the stack (a crash, not an error). Real documents nest a
+// dozen levels.
+constexpr size_t kMaxJsonNesting = 256;
+
 }  // namespace
 
 namespace {
@@ -604,6 +699,13 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (!binary && extension == ".glb" && (*head)[0] != '{' && !std::isspace((*head)[0]))
       return Error{path + ": not a GLB file (it does not start with the magic 'glTF')"};
+    uint32_t json_size = 0;
+    if (binary) std::memcpy(&json_size, head->data() + 12, 4);  // checkGlbLayout: in the file
+    const size_t depth = binary ? jsonNestingDepth(head->data() + 20, json_size)
+                                : jsonNestingDepth(head->data(), head->size());
+    if (depth > kMaxJsonNesting)
+      return Error{path + ": the JSON nests " + std::to_string(depth) + " levels deep (at most " +
+                   std::to_string(kMaxJsonNesting) + " are read)"};
   }
   context.model = &model;
   bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)

@@ -5,8 +5,11 @@
 // bounding-volume hierarchy and the closest-point-on-triangle routine of Ericson, "Real-Time
 // Collision Detection" (2005) §5.1.5.
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -56,16 +59,54 @@ class TriangleBvh {
  public:
   explicit TriangleBvh(const core::Mesh& mesh) {
     const size_t n = mesh.indices.size() / 3;
+    // Triangles that cover the same points as one before them (the same three positions, in any
+    // order) add nothing to the surface, and a pile of them, which no box can split, made every
+    // query test all of them (4,000 copies of one triangle: 11 s). An open-addressing table of
+    // the kept triangles, by a hash of their sorted positions.
+    std::vector<uint32_t> table(std::bit_ceil(std::max<size_t>(2 * n, 16)), kEmpty);
+    const size_t mask = table.size() - 1;
     for (size_t t = 0; t < n; ++t) {
-      P3 v[3];
+      core::Vec3 v[3];
       bool ok = true;
       for (int k = 0; k < 3; ++k) {
         uint32_t i = mesh.indices[t * 3 + k];
         ok &= i < mesh.positions.size() && core::isFinite(mesh.positions[i]);
-        if (ok) v[k] = toP3(mesh.positions[i]);
+        if (ok) v[k] = mesh.positions[i];
       }
       if (!ok) continue;
-      vertices_.insert(vertices_.end(), v, v + 3);
+      std::array<core::Vec3, 3> sorted = {v[0], v[1], v[2]};
+      std::sort(sorted.begin(), sorted.end(), [](core::Vec3 a, core::Vec3 b) {
+        return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+      });
+      uint64_t hash = 0x9e3779b97f4a7c15ull;
+      for (const core::Vec3& p : sorted)
+        for (float c : {p.x, p.y, p.z}) {
+          uint32_t bits;
+          std::memcpy(&bits, &c, 4);
+          hash = (hash ^ (c == 0 ? 0u : bits)) * 0xff51afd7ed558ccdull;  // ±0 alike
+          hash ^= hash >> 29;
+        }
+      const uint32_t kept = uint32_t(vertices_.size() / 3);
+      bool duplicate = false;
+      for (size_t slot = hash & mask;; slot = (slot + 1) & mask) {
+        if (table[slot] == kEmpty) {
+          table[slot] = kept;
+          break;
+        }
+        const P3* other = &vertices_[size_t(table[slot]) * 3];
+        std::array<core::Vec3, 3> other_sorted;
+        for (int k = 0; k < 3; ++k)
+          other_sorted[k] = {float(other[k].x), float(other[k].y), float(other[k].z)};
+        std::sort(other_sorted.begin(), other_sorted.end(), [](core::Vec3 a, core::Vec3 b) {
+          return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+        });
+        if (other_sorted == sorted) {
+          duplicate = true;
+          break;
+        }
+      }
+      if (duplicate) continue;
+      for (int k = 0; k < 3; ++k) vertices_.push_back(toP3(v[k]));
     }
     const size_t count = vertices_.size() / 3;
     order_.resize(count);
@@ -182,7 +223,8 @@ class TriangleBvh {
     }
   }
 
-  std::vector<P3> vertices_;  // 3 per (finite) triangle
+  static constexpr uint32_t kEmpty = ~0u;
+  std::vector<P3> vertices_;  // 3 per (finite, distinct) triangle
   std::vector<P3> centroid_;
   std::vector<uint32_t> order_;
   std::vector<Node> nodes_;
