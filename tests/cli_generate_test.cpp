@@ -256,6 +256,19 @@ TEST(CliGenerate, ViewpointsBeyondTheRendererAreRefusedFirst) {
   EXPECT_EQ(big.exit_code, 1);
   EXPECT_TRUE(test::contains(big.err, "with --pixels 5000 the object spans")) << big.err;
   EXPECT_TRUE(test::contains(big.err, "give at most --pixels 4095")) << big.err;
+  // generate's nearest level: its flags are named, before the run starts (the library found it
+  // in its references stage).
+  test::CommandRun near = test::runCommand(
+      DUOLOD_CLI, {"generate", spot, "--near-pixels", "5000", "--out", (dir / "lod").string()});
+  EXPECT_EQ(near.exit_code, 1);
+  EXPECT_TRUE(test::contains(near.err, "give at most --near-pixels 4095")) << near.err;
+  EXPECT_FALSE(test::contains(near.out, "generate  ")) << "the run started:\n" << near.out;
+  test::CommandRun near_inside = test::runCommand(
+      DUOLOD_CLI, {"generate", spot, "--d-near", "0.001", "--out", (dir / "lod").string()});
+  EXPECT_EQ(near_inside.exit_code, 1);
+  EXPECT_TRUE(test::contains(near_inside.err, "--d-near 0.001 puts the camera inside"))
+      << near_inside.err;
+  EXPECT_FALSE(fs::exists(dir / "lod"));
   test::CommandRun inside = test::runCommand(
       DUOLOD_CLI, {"simplify", spot, (dir / "out.obj").string(), "--ratio", "0.5", "--distance",
                    "0.001"});

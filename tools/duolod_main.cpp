@@ -1146,6 +1146,40 @@ class ProgressLine {
   Clock::time_point start_, stage_start_;
 };
 
+// The nearest level's reference is rendered supersampled at d_near: a viewpoint the renderer
+// cannot take (a tile beyond its limit, a camera inside the object) is refused before any work.
+// (The library found it only when its references stage started, after the asset's set-up.)
+core::Status checkNearestLevel(const GenerateFlags& flags, const core::Asset& asset) {
+  const core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
+  const double d_near = flags.options.levels.bound.d_near;
+  const int supersample = flags.options.supersample;
+  const int limit_px = render::kMaxTileSize / supersample - 1;
+  if (d_near > 0) {
+    if (!(d_near > sphere.radius))
+      return core::Error{flags.in + ": --d-near " + formatNumber(d_near) +
+                         " puts the camera inside the asset's bounding sphere (radius " +
+                         formatNumber(sphere.radius) + "); the nearest level is seen from outside"};
+    const double across =
+        render::projectedDiameterPixels(sphere, float(d_near), flags.shading.display());
+    if (std::ceil(across) * supersample > render::kMaxTileSize)
+      return core::Error{flags.in + ": at --d-near " + formatNumber(d_near) + " the object spans " +
+                         formatNumber(std::ceil(across)) + " px, and its reference, rendered " +
+                         std::to_string(supersample) + "×" + std::to_string(supersample) +
+                         " supersampled, would be above the renderer's " +
+                         std::to_string(render::kMaxTileSize) +
+                         " px: give a larger --d-near (where it spans at most " +
+                         std::to_string(limit_px) + " px)"};
+  } else if (flags.options.near_footprint_px > limit_px) {
+    return core::Error{flags.in + ": --near-pixels " +
+                       std::to_string(flags.options.near_footprint_px) +
+                       ": the nearest level's reference, rendered " + std::to_string(supersample) +
+                       "×" + std::to_string(supersample) + " supersampled, would be above the " +
+                       "renderer's " + std::to_string(render::kMaxTileSize) +
+                       " px: give at most --near-pixels " + std::to_string(limit_px)};
+  }
+  return core::okStatus();
+}
+
 int runGenerate(GenerateFlags& flags) {
   auto start = std::chrono::steady_clock::now();
   if (auto valid = flags.check(); !valid) return fail(valid.error().message);
@@ -1157,6 +1191,7 @@ int runGenerate(GenerateFlags& flags) {
     return fail(ok.error().message);
   auto asset = loadWithWarnings(flags.in);
   if (!asset) return fail(asset.error().message);
+  if (auto ok = checkNearestLevel(flags, *asset); !ok) return fail(ok.error().message);
   auto source = flags.shading.source();
   if (!source) return fail(source.error().message);
   lod::GenerateOptions options = flags.options;

@@ -171,7 +171,8 @@ Sphere computeBoundingSphere(const Mesh& mesh);
 // does not depend on how a polygon was triangulated. Vertices at the same position (split by a
 // UV or colour seam) get the same normal.
 void computeNormals(Mesh& mesh);
-// Scales every normal to unit length (a zero one stays zero); returns how many were more than 1%
+// Scales every normal to unit length (a zero one stays zero; one within float rounding of it is
+// left as it is); returns how many were more than 1%
 // off it. Loaders call it: an OBJ's or PLY's normals need not be unit, and the simplifier's
 // attribute quadrics and tangent generation assume they are.
 size_t normalizeNormals(Mesh& mesh);

@@ -236,7 +236,8 @@ size_t normalizeNormals(Mesh& mesh) {
   size_t off = 0;
   for (Vec3& n : mesh.normals) {
     const float length_squared = dot(n, n);
-    if (length_squared == 1.0f) continue;
+    // Unit up to float rounding: left bit for bit as it is.
+    if (std::abs(length_squared - 1.0f) <= 1e-5f) continue;
     if (!(std::abs(length_squared - 1.0f) <= 0.02f) && length_squared != 0.0f) ++off;
     n = normalize(n);
   }
