@@ -932,6 +932,13 @@ TEST(GltfMalformed, GlbBadHeader) {
 
   writeBytes(dir / "short.glb", {'g', 'l', 'T', 'F', 2, 0, 0, 0});
   expectLoadError((dir / "short.glb").string());
+
+  // glTF 1.0's binary layout (version 1) was read as if it were 2 (found by fuzzing).
+  bytes = good;
+  write32(bytes, 4, 1);
+  writeBytes(dir / "version1.glb", bytes);
+  expectLoadError((dir / "version1.glb").string(),
+                  "GLB version 1 is not supported (glTF 2.0's GLB is version 2)");
 }
 
 TEST(GltfMalformed, GlbTruncatedChunk) {

@@ -607,6 +607,10 @@ core::Status checkGlbLayout(const std::vector<uint8_t>& bytes, const std::string
     return uint64_t(v);
   };
   if (bytes.size() < 20) return Error{path + ": GLB file too short for its header"};
+  // (Version 1 is glTF 1.0's binary extension, another layout; it was read as if it were 2.)
+  if (read32(4) != 2)
+    return Error{path + ": GLB version " + std::to_string(read32(4)) +
+                 " is not supported (glTF 2.0's GLB is version 2)"};
   const uint64_t length = read32(8);
   if (length > bytes.size())
     return Error{path + ": GLB header claims " + std::to_string(length) + " bytes, the file has " +
