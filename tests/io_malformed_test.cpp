@@ -159,6 +159,17 @@ std::vector<MalformedCase> malformedCases() {
            "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
            "0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n",
        "out of range"},
+      // (Found by fuzzing: the first was read with either column as x, the second said only
+      // "the file contains no triangles".)
+      {"duplicate_property.ply",
+       ply_ascii + "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                   "property float x\nend_header\n0 0 0 5\n1 0 0 5\n0 1 0 5\n",
+       "property 'x' declared twice in element 'vertex'"},
+      {"tristrips.ply",
+       ply_ascii + ascii_triangle_vertices +
+           "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "its triangles are in a 'tristrips' element, which is not read"},
       {"two_vertex_face.ply",
        ply_ascii + ascii_triangle_vertices +
            "element face 1\nproperty list uchar int vertex_indices\nend_header\n"

@@ -230,6 +230,12 @@ core::Result<Header> parseHeader(const std::string& path, std::string_view conte
       }
       if (!tokens.next(name)) return errorAt(path, line_number, "property without a name");
       property.name = std::string(name);
+      // (Which of two 'x' columns is the position is anyone's guess.)
+      for (const Property& other : header.elements.back().properties)
+        if (other.name == property.name)
+          return errorAt(path, line_number,
+                         "property '" + property.name + "' declared twice in element '" +
+                             header.elements.back().name + "'");
       header.elements.back().properties.push_back(std::move(property));
     } else {
       for (char c : keyword) {
@@ -403,9 +409,19 @@ class PlyParser {
   core::Status parse(std::string_view content) {
     auto header = parseHeader(path_, content, asset_.warnings);
     if (!header) return header.error();
+    bool faces = false;
     for (const Element& element : header->elements) {
       if (element.name == "vertex") vertex_count_ = element.count;
+      faces |= element.name == "face" && element.count > 0;
     }
+    // Triangle strips (an element some scanners' tools write) are not read: said so, rather than
+    // "the file contains no triangles".
+    if (!faces)
+      for (const Element& element : header->elements)
+        if (element.name == "tristrips" && element.count > 0)
+          return Error{path_ +
+                       ": its triangles are in a 'tristrips' element, which is not read "
+                       "(only 'face' lists are); convert the strips to faces"};
     BodyReader body(path_, *header, content);
     for (Element& element : header->elements) {
       if (auto status = readElement(element, body); !status) return status;
