@@ -329,6 +329,18 @@ TEST(MalformedObj, HugeNormalsAreNormalized) {
   EXPECT_TRUE(warned);
 }
 
+// Faces past the declared count are not read, and a warning says so (found by fuzzing: they
+// were dropped in silence).
+TEST(MalformedFiles, OffDataPastTheDeclaredFacesIsWarnedAbout) {
+  const std::string path = writeScratchFile(
+      "extra_faces.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n\n3 1 3 2\n");
+  auto asset = io::readOff(path, noTextures());
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  EXPECT_EQ(asset->mesh.triangleCount(), 1u);
+  ASSERT_EQ(asset->warnings.size(), 1u);
+  EXPECT_EQ(asset->warnings[0], path + ":9: 1 data line after the 1 declared faces, not read");
+}
+
 TEST(MalformedFiles, MissingFileNamesThePath) {
   for (const char* name : {"nowhere.obj", "nowhere.ply", "nowhere.off"}) {
     std::string path = (test::scratchDir("missing") / name).string();

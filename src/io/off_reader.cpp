@@ -71,6 +71,15 @@ class OffParser {
 
     if (auto status = readVertices(lines, vertex_count); !status) return status;
     if (auto status = readFaces(lines, face_count, vertex_count); !status) return status;
+    // Data past the declared faces is not read: said so (a count one short drops a face).
+    size_t extra = 0, first_extra = 0;
+    for (std::string_view rest; nextDataLine(lines, rest);)
+      if (extra++ == 0) first_extra = line_;
+    if (extra > 0)
+      asset_.warnings.push_back(path_ + ":" + std::to_string(first_extra) + ": " +
+                                std::to_string(extra) + " data line" + (extra > 1 ? "s" : "") +
+                                " after the " + std::to_string(face_count) +
+                                " declared faces, not read");
     text::finishSingleMaterialAsset(asset_);
     return core::okStatus();
   }
