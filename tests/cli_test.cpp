@@ -51,6 +51,9 @@ TEST(Cli, VersionAndHelp) {
   test::CommandRun version = runCli({"--version"});
   EXPECT_EQ(version.exit_code, 0) << version.err;
   EXPECT_TRUE(test::contains(version.out, "duolod 0.1.0")) << version.out;
+  test::CommandRun short_version = runCli({"-v"});  // was "A subcommand is required"
+  EXPECT_EQ(short_version.exit_code, 0) << short_version.err;
+  EXPECT_EQ(short_version.out, version.out);
 
   test::CommandRun help = runCli({"--help"});
   EXPECT_EQ(help.exit_code, 0) << help.err;

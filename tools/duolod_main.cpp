@@ -1485,7 +1485,7 @@ int main(int argc, char** argv) {
       " - automatic mesh and shader level of detail.\n"
       "Simplifies a 3D asset's mesh and shader together and picks, for every viewing distance,\n"
       "the cheapest pair whose rendered image stays within an error bound (Liang et al.)."};
-  app.set_version_flag("--version", std::string("duolod ") + DUOLOD_VERSION);
+  app.set_version_flag("-v,--version", std::string("duolod ") + DUOLOD_VERSION);
   app.require_subcommand(1);
 
   std::string info_path;
