@@ -180,6 +180,13 @@ TEST_F(RendererTest, HugeCoordinatesAreRefusedWithAReason) {
         << "scale " << scale;
     EXPECT_NE(message.find("scale the asset down"), std::string::npos) << message;
   }
+  // ... and tiny ones: a sphere 1e-30 across rendered blank (found by fuzzing).
+  for (float scale : {1e-19f, 1e-30f}) {
+    message.clear();
+    EXPECT_EQ(scaledSquareCoverage(*renderer_, constant_program_, scale, message), -1)
+        << "scale " << scale;
+    EXPECT_NE(message.find("scale the asset up"), std::string::npos) << message;
+  }
   // A small asset seen from too far away: the camera is named.
   core::Asset square = squareAsset({1, 1, 1, 1});
   auto id = renderer_->uploadAsset(square);

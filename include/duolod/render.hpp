@@ -61,6 +61,10 @@ struct Display {
 // the shaders square distances in 32-bit floats, which overflow above ~1.8e19. Larger requests
 // fail with a message instead of an empty image.
 constexpr float kLargestRenderableCoordinate = 4e18f;
+// The smallest bounding-sphere radius a render accepts: the same squares vanish below ~1e-19 (a
+// sphere 1e-20 across still rendered right with pbr, one 3e-21 across came out wrong, 1e-30
+// blank). Smaller assets fail with a message instead.
+constexpr float kSmallestRenderableRadius = 1e-18f;
 
 // One camera × light configuration.
 struct Sample {

@@ -636,6 +636,14 @@ core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
   const core::Vec3 sphere_reach{std::fabs(bounds.center.x) + r, std::fabs(bounds.center.y) + r,
                                 std::fabs(bounds.center.z) + r};
   if (auto refused = refusal("the asset's bounding sphere", sphere_reach)) return *refused;
+  if (!(r >= kSmallestRenderableRadius)) {
+    char figures[96];
+    std::snprintf(figures, sizeof figures, "has radius %.3g; renders need at least %.3g", double(r),
+                  double(kSmallestRenderableRadius));
+    return Error{std::string("render: the asset's bounding sphere ") + figures +
+                 " (the GPU's 32-bit shading squares distances, which vanish below ~1e-19): "
+                 "scale the asset up"};
+  }
   for (size_t i = 0; i < samples.size(); ++i) {
     const Sample& sample = samples[i];
     const std::string name = "sample " + std::to_string(i) + "'s ";
