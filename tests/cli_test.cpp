@@ -275,8 +275,9 @@ TEST(Cli, RenderWithAShaderThatFailsToCompile) {
 // same plain render, so ε is exactly 0.
 TEST(Cli, ErrorOfAnAssetAgainstItself) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
-  test::CommandRun run = runCli({"error", path, path, "--distance", "1"});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // --check: exit code 3 when outside the bound, which at d_near (1, the default) is 0.
+  test::CommandRun run = runCli({"error", path, path, "--distance", "1", "--check"});
+  ASSERT_EQ(run.exit_code, 3) << run.err;
   double epsilon = printedValue(run.out, "epsilon (eq. 6)");
   EXPECT_TRUE(std::isfinite(epsilon));
   EXPECT_GT(epsilon, 0.0);
@@ -286,9 +287,13 @@ TEST(Cli, ErrorOfAnAssetAgainstItself) {
     if (line.rfind("within bound", 0) == 0)
       verdict = test::contains(line, " yes") || test::contains(line, " no");
   EXPECT_TRUE(verdict) << "no 'within bound yes|no' line in:\n" << run.out;
+  EXPECT_TRUE(test::contains(run.out, "within bound         no")) << run.out;
 
-  test::CommandRun plain = runCli({"error", path, path, "--distance", "1", "--supersample", "1"});
+  // ε = 0 is within any bound above 0 (d_near below the distance): --check exits 0.
+  test::CommandRun plain = runCli(
+      {"error", path, path, "--distance", "1", "--supersample", "1", "--d-near", "0.5", "--check"});
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_TRUE(test::contains(plain.out, "within bound         yes")) << plain.out;
   EXPECT_EQ(printedValue(plain.out, "epsilon (eq. 6)"), 0.0) << plain.out;
 }
 

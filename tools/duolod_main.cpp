@@ -507,8 +507,12 @@ core::Result<ImageComparison> compareRendered(Session& session, const core::Asse
   return comparison;
 }
 
+// Exit code of `error --check` when the approximation is not within the bound: 1 and 2 are
+// taken by failures and by the parser.
+constexpr int kOutsideBoundExitCode = 3;
+
 int runError(const std::string& path_a, const std::string& path_b, ShadingFlags& flags,
-             int supersample, const metric::BoundConfig& bound) {
+             int supersample, const metric::BoundConfig& bound, bool check) {
   if ((flags.distance > 0) == (flags.pixels > 0))
     return fail("give exactly one of --distance D or --pixels N");
   if (!(bound.d_near < bound.d_far))
@@ -555,7 +559,7 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   std::printf("bound e_a(d)*s_d     %.6g  (e_a = %.4g: e_max %.3g, Q %.3g, d %g..%g)\n",
               e_a * error.coverage_px, e_a, bound.e_max, bound.q, bound.d_near, bound.d_far);
   std::printf("within bound         %s\n", ok ? "yes" : "no");
-  return 0;
+  return check && !ok ? kOutsideBoundExitCode : 0;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1549,6 +1553,9 @@ int main(int argc, char** argv) {
   error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")
       ->check(positive())
       ->capture_default_str();
+  bool error_check = false;
+  error_cmd->add_flag("--check", error_check,
+                      "exit with code 3 when ASSET_B is not within the bound (for scripts)");
 
   SimplifyFlags simplify_flags;
   CLI::App* simplify_cmd = app.add_subcommand(
@@ -1591,7 +1598,8 @@ int main(int argc, char** argv) {
   if (*render_cmd)
     return runRender(render_path, render_flags, render_view, render_light, render_supersample,
                      render_out, render_force);
-  if (*error_cmd) return runError(error_a, error_b, error_flags, error_supersample, bound);
+  if (*error_cmd)
+    return runError(error_a, error_b, error_flags, error_supersample, bound, error_check);
   if (*simplify_cmd) return runSimplify(simplify_flags);
   if (*generate_cmd) return runGenerate(generate_flags);
   if (*shader_cmd) return runShader(shader_flags);
