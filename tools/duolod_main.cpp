@@ -352,30 +352,44 @@ float resolveDistance(const ShadingFlags& flags, const core::Sphere& sphere) {
 std::string lowerExtension(const std::string& path);
 std::string formatNumber(double value);
 
+// The largest footprint a `supersample`×`supersample` reference can have (--pixels N spans a
+// hair over N: its footprint rounds up to N + 1).
+int largestSupersampledPixels(int supersample) {
+  return render::kMaxTileSize / supersample - 1;
+}
+
 // A render's viewpoint, checked before any work: the camera outside the asset's bounding sphere,
 // and a tile (the footprint, × `supersample` for a supersampled reference) the renderer takes.
+// `how` is the flag that placed the camera ("--distance 2"), `fix` what to give instead.
+core::Status checkViewpointAt(const std::string& path, const std::string& how,
+                              const core::Sphere& sphere, float distance,
+                              const render::Display& display, int supersample,
+                              const std::string& supersample_note, const std::string& fix) {
+  if (!(distance > sphere.radius))
+    return core::Error{path + ": " + how + " puts the camera inside the asset's bounding sphere "
+                       "(radius " + formatNumber(sphere.radius) + ", distance " +
+                       formatNumber(distance) + "); the domain's views look at it from outside"};
+  const double across = render::projectedDiameterPixels(sphere, distance, display);
+  const double tile = std::ceil(across) * supersample;
+  if (supersample > 1 && tile > render::kMaxTileSize)
+    return core::Error{
+        path + ": with " + how + " the object spans " + formatNumber(std::ceil(across)) +
+        " px, and " + supersample_note + ", rendered " + std::to_string(supersample) + "×" +
+        std::to_string(supersample) + " supersampled, would be " + formatNumber(tile) +
+        " px across, above the renderer's " + std::to_string(render::kMaxTileSize) + " px: " + fix};
+  return core::okStatus();
+}
+
+// The same for the render flags (--distance or --pixels).
 core::Status checkViewpoint(const std::string& path, const ShadingFlags& flags,
                             const core::Sphere& sphere, float distance, int supersample,
                             const std::string& supersample_note) {
   const std::string how = flags.distance > 0 ? "--distance " + formatNumber(flags.distance)
                                              : "--pixels " + std::to_string(flags.pixels);
-  if (!(distance > sphere.radius))
-    return core::Error{path + ": " + how + " puts the camera inside the asset's bounding sphere "
-                       "(radius " + formatNumber(sphere.radius) + ", distance " +
-                       formatNumber(distance) + "); the domain's views look at it from outside"};
-  const double across = render::projectedDiameterPixels(sphere, distance, flags.display());
-  const double tile = std::ceil(across) * supersample;
-  if (supersample > 1 && tile > render::kMaxTileSize)
-    return core::Error{path + ": with " + how + " the object spans " +
-                       formatNumber(std::ceil(across)) + " px, and " + supersample_note +
-                       ", rendered " + std::to_string(supersample) + "×" +
-                       std::to_string(supersample) + " supersampled, would be " +
-                       formatNumber(tile) + " px across, above the renderer's " +
-                       std::to_string(render::kMaxTileSize) + " px: give at most --pixels " +
-                       // (--pixels N spans a hair over N: its footprint rounds up to N + 1.)
-                       std::to_string(render::kMaxTileSize / supersample - 1) +
-                       " (or a larger --distance)"};
-  return core::okStatus();
+  return checkViewpointAt(
+      path, how, sphere, distance, flags.display(), supersample, supersample_note,
+      "give at most --pixels " + std::to_string(largestSupersampledPixels(supersample)) +
+          " (or a larger --distance)");
 }
 
 // An output folder (generate, shader), checked before any work: a folder or not there yet, where
@@ -1154,33 +1168,22 @@ class ProgressLine {
 // cannot take (a tile beyond its limit, a camera inside the object) is refused before any work.
 // (The library found it only when its references stage started, after the asset's set-up.)
 core::Status checkNearestLevel(const GenerateFlags& flags, const core::Asset& asset) {
-  const core::Sphere sphere = core::computeBoundingSphere(asset.mesh);
   const double d_near = flags.options.levels.bound.d_near;
   const int supersample = flags.options.supersample;
-  const int limit_px = render::kMaxTileSize / supersample - 1;
+  const int limit_px = largestSupersampledPixels(supersample);
   if (d_near > 0) {
-    if (!(d_near > sphere.radius))
-      return core::Error{flags.in + ": --d-near " + formatNumber(d_near) +
-                         " puts the camera inside the asset's bounding sphere (radius " +
-                         formatNumber(sphere.radius) + "); the nearest level is seen from outside"};
-    const double across =
-        render::projectedDiameterPixels(sphere, float(d_near), flags.shading.display());
-    if (std::ceil(across) * supersample > render::kMaxTileSize)
-      return core::Error{flags.in + ": at --d-near " + formatNumber(d_near) + " the object spans " +
-                         formatNumber(std::ceil(across)) + " px, and its reference, rendered " +
-                         std::to_string(supersample) + "×" + std::to_string(supersample) +
-                         " supersampled, would be above the renderer's " +
-                         std::to_string(render::kMaxTileSize) +
-                         " px: give a larger --d-near (where it spans at most " +
-                         std::to_string(limit_px) + " px)"};
-  } else if (flags.options.near_footprint_px > limit_px) {
+    return checkViewpointAt(
+        flags.in, "--d-near " + formatNumber(d_near), core::computeBoundingSphere(asset.mesh),
+        float(d_near), flags.shading.display(), supersample, "the nearest level's reference",
+        "give a larger --d-near (where it spans at most " + std::to_string(limit_px) + " px)");
+  }
+  if (flags.options.near_footprint_px > limit_px)
     return core::Error{flags.in + ": --near-pixels " +
                        std::to_string(flags.options.near_footprint_px) +
                        ": the nearest level's reference, rendered " + std::to_string(supersample) +
                        "×" + std::to_string(supersample) + " supersampled, would be above the " +
                        "renderer's " + std::to_string(render::kMaxTileSize) +
                        " px: give at most --near-pixels " + std::to_string(limit_px)};
-  }
   return core::okStatus();
 }
 

@@ -235,10 +235,9 @@ Sphere computeBoundingSphere(const Mesh& mesh) {
 size_t normalizeNormals(Mesh& mesh) {
   size_t off = 0;
   for (Vec3& n : mesh.normals) {
-    const float length_squared = dot(n, n);
-    // Unit up to float rounding: left bit for bit as it is.
-    if (std::abs(length_squared - 1.0f) <= 1e-5f) continue;
-    if (!(std::abs(length_squared - 1.0f) <= 0.02f) && length_squared != 0.0f) ++off;
+    const float length_squared = dot(n, n), from_unit = std::abs(length_squared - 1.0f);
+    if (from_unit <= 1e-5f) continue;  // unit up to float rounding: left bit for bit as it is
+    if (from_unit > 0.02f && length_squared != 0.0f) ++off;
     n = normalize(n);
   }
   return off;
