@@ -764,6 +764,62 @@ TEST(GltfMalformed, OffsetsNearTwoToThe64DoNotWrapAround) {
   expectLoadError(g.write(dir, "accessor_wrap"), "do not fit");
 }
 
+// Offsets, lengths, strides and counts are non-negative integers (glTF 2.0's schema). tinygltf
+// read a negative byteOffset as 0, so the data came from the wrong bytes without a word; a
+// fraction was truncated the same way. Each is refused, naming the object and the field.
+TEST(GltfMalformed, NegativeOrFractionalSizesAreRefused) {
+  const fs::path dir = test::scratchDir("m_sizes");
+  struct Case {
+    const char* array;
+    int index;
+    const char* field;
+    json value;
+    const char* expected;
+  };
+  const Case cases[] = {
+      {"accessors", 0, "byteOffset", -4, "accessor 0: byteOffset is -4"},
+      {"accessors", 0, "count", -3, "accessor 0: count is -3"},
+      {"accessors", 1, "byteOffset", 4.5, "accessor 1: byteOffset is 4.5"},
+      {"bufferViews", 1, "byteOffset", -12, "bufferView 1: byteOffset is -12"},
+      {"bufferViews", 0, "byteLength", -36, "bufferView 0: byteLength is -36"},
+      {"bufferViews", 0, "byteStride", -12, "bufferView 0: byteStride is -12"},
+      {"bufferViews", 0, "byteOffset", "0", "bufferView 0: byteOffset is \"0\""},
+  };
+  int n = 0;
+  for (const Case& c : cases) {
+    HandGltf g = oneTriangle();
+    g.doc[c.array][c.index][c.field] = c.value;
+    expectLoadError(g.write(dir, "sizes" + std::to_string(n++)),
+                    std::string(c.expected) + ", not a non-negative integer");
+  }
+  HandGltf buffer = oneTriangle();
+  buffer.doc["buffers"] = {{{"byteLength", -1}, {"uri", "buffer_length.bin"}}};
+  expectLoadError(buffer.write(dir, "buffer_length"),
+                  "buffer 0: byteLength is -1, not a non-negative integer");
+  // Zero and large exact values are integers (a double holding one, as some writers write 36.0).
+  HandGltf whole = oneTriangle();
+  whole.doc["accessors"][0]["byteOffset"] = 0.0;
+  auto loaded = io::loadAsset(whole.write(dir, "whole"));
+  EXPECT_TRUE(loaded) << loaded.error().message;
+}
+
+// A '%' in a buffer or image uri starts an escape of two hex digits (RFC 3986). tinygltf cut the
+// name at a bad one ("File not found : m"); the message names the uri and the escape.
+TEST(GltfMalformed, BadPercentEscapeInAUriIsNamed) {
+  const fs::path dir = test::scratchDir("m_escape");
+  HandGltf g = oneTriangle();
+  g.doc["buffers"] = {{{"byteLength", g.bin.size()}, {"uri", "m%zzb.bin"}}};
+  expectLoadError(g.write(dir, "escape"),
+                  "buffer 0: uri 'm%zzb.bin' has a '%' not followed by two hex digits");
+  HandGltf cut = oneTriangle();
+  cut.doc["buffers"] = {{{"byteLength", cut.bin.size()}, {"uri", "cut.bin%2"}}};
+  expectLoadError(cut.write(dir, "cut"), "buffer 0: uri 'cut.bin%2' has a '%'");
+  HandGltf image = texturedTriangle(false);
+  image.doc["images"][0]["uri"] = "checker%.png";
+  expectLoadError(image.write(dir, "image_escape"),
+                  "image 0: uri 'checker%.png' has a '%' not followed by two hex digits");
+}
+
 // An accessor without a bufferView (zeros, by the specification) cannot be read: its count is
 // bounded by nothing in the file, and 2^40 elements must not be allocated.
 TEST(GltfMalformed, AccessorWithoutBufferView) {

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "duolod/io.hpp"
@@ -650,6 +651,74 @@ size_t jsonNestingDepth(const uint8_t* text, size_t size) {
 // dozen levels.
 constexpr size_t kMaxJsonNesting = 256;
 
+// Whether a URI's '%' signs each start an escape of two hex digits (RFC 3986).
+bool wellEscaped(const std::string& uri) {
+  for (size_t i = 0; i < uri.size(); ++i)
+    if (uri[i] == '%' &&
+        (i + 2 >= uri.size() || !std::isxdigit(static_cast<unsigned char>(uri[i + 1])) ||
+         !std::isxdigit(static_cast<unsigned char>(uri[i + 2]))))
+      return false;
+  return true;
+}
+
+// What tinygltf lets through and then reads wrongly, checked on the document itself:
+//   - offsets, lengths, strides and counts are non-negative integers (glTF 2.0's schema): a
+//     negative or fractional byteOffset was read as 0, so the data came from the wrong bytes
+//     without a word;
+//   - a buffer's or image's uri escapes with '%' and two hex digits: a bad escape cut the file
+//     name short ("File not found : m").
+// A document that does not parse is left to tinygltf, whose message says where.
+core::Status checkDocumentValues(const uint8_t* text, size_t size, const std::string& path) {
+  const nlohmann::json doc = nlohmann::json::parse(text, text + size, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return core::okStatus();
+  auto each = [&](const char* array, auto&& check) -> core::Status {
+    const auto found = doc.find(array);
+    if (found == doc.end() || !found->is_array()) return core::okStatus();
+    for (size_t i = 0; i < found->size(); ++i)
+      if ((*found)[i].is_object())
+        if (auto checked = check(i, (*found)[i]); !checked) return checked;
+    return core::okStatus();
+  };
+  struct Sizes {
+    const char* array;
+    const char* object;
+    std::initializer_list<const char*> fields;
+  };
+  for (const Sizes& sizes :
+       {Sizes{"accessors", "accessor", {"byteOffset", "count"}},
+        Sizes{"bufferViews", "bufferView", {"byteOffset", "byteLength", "byteStride"}},
+        Sizes{"buffers", "buffer", {"byteLength"}}}) {
+    auto status = each(sizes.array, [&](size_t i, const nlohmann::json& object) -> core::Status {
+      for (const char* field : sizes.fields) {
+        const auto value = object.find(field);
+        if (value == object.end()) continue;
+        const bool whole = value->is_number_unsigned() ||
+                           (value->is_number_integer() && value->get<int64_t>() >= 0) ||
+                           (value->is_number_float() && value->get<double>() >= 0 &&
+                            std::floor(value->get<double>()) == value->get<double>());
+        if (!whole)
+          return Error{path + ": " + sizes.object + " " + std::to_string(i) + ": " + field +
+                       " is " + value->dump() + ", not a non-negative integer"};
+      }
+      return core::okStatus();
+    });
+    if (!status) return status;
+  }
+  for (const auto& [array, object] : {std::pair{"buffers", "buffer"}, {"images", "image"}}) {
+    auto status = each(array, [&](size_t i, const nlohmann::json& element) -> core::Status {
+      const auto uri = element.find("uri");
+      if (uri == element.end() || !uri->is_string()) return core::okStatus();
+      const std::string& text = uri->get_ref<const std::string&>();
+      if (text.starts_with("data:") || wellEscaped(text)) return core::okStatus();
+      return Error{path + ": " + object + " " + std::to_string(i) + ": uri '" + text +
+                   "' has a '%' not followed by two hex digits (a file name's '%' is written "
+                   "%25)"};
+    });
+    if (!status) return status;
+  }
+  return core::okStatus();
+}
+
 }  // namespace
 
 namespace {
@@ -710,6 +779,9 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
     if (depth > kMaxJsonNesting)
       return Error{path + ": the JSON nests " + std::to_string(depth) + " levels deep (at most " +
                    std::to_string(kMaxJsonNesting) + " are read)"};
+    const auto values = binary ? checkDocumentValues(head->data() + 20, json_size, path)
+                               : checkDocumentValues(head->data(), head->size(), path);
+    if (!values) return values.error();
   }
   context.model = &model;
   bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
