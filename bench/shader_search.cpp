@@ -19,13 +19,6 @@ using namespace duolod;
 
 namespace {
 
-// The distance at which the bounding sphere spans `footprint_px` of the display's height.
-float distanceForFootprint(const core::Sphere& sphere, int footprint_px, const render::Display& display) {
-  float screen_half = std::tan(display.fov_y_deg * 3.14159265f / 360.0f);
-  float half_angle = std::atan(float(footprint_px) / float(display.height_px) * screen_half);
-  return sphere.radius / std::sin(half_angle);
-}
-
 // What shader simplification can gain at each footprint: the measured draw time of the shader
 // against the `constant` shader (the floor every variant's time approaches: the vertex and
 // rasterisation work that no fragment rule removes), with the vertex and fragment invocations per
@@ -57,7 +50,7 @@ int sweepFootprints(const core::Asset& asset, const render::GlslSource& source,
   std::printf("| footprint px | vertex inv./view | fragment inv./view | shader ms/view | constant ms/view | best ratio |\n");
   std::printf("|---:|---:|---:|---:|---:|---:|\n");
   for (int footprint : footprints) {
-    float distance = distanceForFootprint(sphere, footprint, render::Display{});
+    float distance = render::distanceForDiameterPixels(sphere, footprint, render::Display{});
     std::vector<render::Sample> samples = render::domainSamples(sphere, distance);
     render::RenderStats stats;
     render::RenderOptions options{.resolution = footprint, .count_work = true};
@@ -124,8 +117,8 @@ int main(int argc, char** argv) {
   if (!sweep.empty()) return sweepFootprints(*asset, *source, sweep, repeats);
 
   shader::ShaderLodOptions options;
-  options.distance =
-      distanceForFootprint(core::computeBoundingSphere(asset->mesh), footprint_px, options.display);
+  options.distance = render::distanceForDiameterPixels(core::computeBoundingSphere(asset->mesh),
+                                                       footprint_px, options.display);
   options.timing.repeats = repeats;
   options.method = method == "greedy" ? shader::SearchMethod::kGreedy : shader::SearchMethod::kGenetic;
   options.genetic.generations = generations;

@@ -11,7 +11,9 @@
 #include <iterator>
 #include <sstream>
 
+#include "duolod/core.hpp"
 #include "duolod/io.hpp"
+#include "duolod/render.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -275,7 +277,8 @@ TEST(Cli, RenderWithAShaderThatFailsToCompile) {
 // same plain render, so ε is exactly 0.
 TEST(Cli, ErrorOfAnAssetAgainstItself) {
   DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
-  // --check: exit code 3 when outside the bound, which at d_near (1, the default) is 0.
+  // --check: exit code 3 when outside the bound, which below d_near is 0. d_near defaults to
+  // where the bottle (radius 0.14) spans 256 px, as `generate` places it: ~1.43.
   test::CommandRun run = runCli({"error", path, path, "--distance", "1", "--check"});
   ASSERT_EQ(run.exit_code, 3) << run.err;
   double epsilon = printedValue(run.out, "epsilon (eq. 6)");
@@ -295,6 +298,46 @@ TEST(Cli, ErrorOfAnAssetAgainstItself) {
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_TRUE(test::contains(plain.out, "within bound         yes")) << plain.out;
   EXPECT_EQ(printedValue(plain.out, "epsilon (eq. 6)"), 0.0) << plain.out;
+}
+
+// The bound's distances default to generate's (where the object spans --near-pixels 256 and
+// --far-pixels 16), not to 1 and 10 asset units, which gave a bound of 0 at every distance for
+// an asset larger than a few units; --d-near and --near-pixels together are refused as generate
+// refuses them.
+TEST(Cli, ErrorBoundDistancesFollowGenerate) {
+  DUOLOD_REQUIRE_ASSET(path, "gltf/WaterBottle/WaterBottle.gltf");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset) << asset.error().message;
+  const core::Sphere sphere = core::computeBoundingSphere(asset->mesh);
+  const render::Display display;
+  const float d_near = render::distanceForFootprint(sphere, 256, display);
+  const float d_far = render::distanceForFootprint(sphere, 16, display);
+  EXPECT_EQ(render::footprintPixels(sphere, d_near, display), 256);
+  EXPECT_EQ(render::footprintPixels(sphere, d_far, display), 16);
+  char range[64];
+  std::snprintf(range, sizeof range, "d %.4g..%.4g)", d_near, d_far);
+  test::CommandRun run =
+      runCli({"error", path, path, "--pixels", "24", "--supersample", "1", "--check"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(test::contains(run.out, range)) << "expected '" << range << "' in:\n" << run.out;
+  EXPECT_GT(printedValue(run.out, "bound e_a(d)*s_d"), 0.0) << run.out;
+
+  test::CommandRun custom = runCli({"error", path, path, "--pixels", "24", "--supersample", "1",
+                                    "--near-pixels", "100", "--far-pixels", "10"});
+  ASSERT_EQ(custom.exit_code, 0) << custom.err;
+  std::snprintf(range, sizeof range, "d %.4g..%.4g)",
+                render::distanceForFootprint(sphere, 100, display),
+                render::distanceForFootprint(sphere, 10, display));
+  EXPECT_TRUE(test::contains(custom.out, range)) << "expected '" << range << "' in:\n"
+                                                 << custom.out;
+
+  test::CommandRun both =
+      runCli({"error", path, path, "--pixels", "24", "--d-near", "2", "--near-pixels", "100"});
+  EXPECT_EQ(both.exit_code, 1) << both.err;
+  EXPECT_TRUE(test::contains(both.err, "give --d-near or --near-pixels, not both")) << both.err;
+  test::CommandRun crossed = runCli({"error", path, path, "--pixels", "24", "--d-near", "50"});
+  EXPECT_EQ(crossed.exit_code, 1) << crossed.err;
+  EXPECT_TRUE(test::contains(crossed.err, "from --far-pixels 16")) << crossed.err;
 }
 
 }  // namespace

@@ -49,14 +49,6 @@ constexpr int kSheetViews[] = {0, 4, 8, 12, 16};
 // 256 px; interpolating across a seam (u jumping from one island to another) does.
 constexpr double kTornUvSquared = 0.05;
 
-// The camera distance at which the bounding sphere spans `pixels` on `display` (the inverse of
-// render::footprintPixels).
-float distanceForFootprint(const core::Sphere& sphere, int pixels, const render::Display& display) {
-  float screen_half = std::tan(display.fov_y_deg * 3.14159265f / 360.0f);
-  float half_angle = std::atan(float(pixels) / float(display.height_px) * screen_half);
-  return sphere.radius / std::sin(half_angle);
-}
-
 // Every wedge of a position takes the attributes of the position's first wedge (the indices are
 // redirected to it): no attribute seams are left, and the UVs and normals jump across the old ones.
 core::Mesh weldByPositionOnly(const core::Mesh& input) {
@@ -219,7 +211,7 @@ class AttributesRenderTest : public ::testing::Test {
     ASSERT_FALSE(input.normals.empty());
     const core::Sphere sphere = core::computeBoundingSphere(input);
     const render::Display display;
-    const float distance = distanceForFootprint(sphere, kFootprintPx, display);
+    const float distance = render::distanceForDiameterPixels(sphere, kFootprintPx, display);
     ASSERT_NEAR(render::footprintPixels(sphere, distance, display), kFootprintPx, 1);
     const std::vector<render::Sample> samples = render::domainSamples(sphere, distance);
     const int lights_per_view = int(samples.size()) / kViews;

@@ -343,10 +343,7 @@ int runInfo(const std::string& path) {
 float resolveDistance(const ShadingFlags& flags, const core::Sphere& sphere) {
   if (flags.distance > 0) return flags.distance;
   // --pixels N: the distance at which the object spans N pixels on the display.
-  float screen_half = std::tan(flags.fov_y_deg * 3.14159265f / 360.0f);
-  float tan_half = flags.pixels / float(flags.screen_height) * screen_half;
-  float half_angle = std::atan(tan_half);
-  return sphere.radius / std::sin(half_angle);
+  return render::distanceForDiameterPixels(sphere, flags.pixels, flags.display());
 }
 
 std::string lowerExtension(const std::string& path);
@@ -525,16 +522,49 @@ core::Result<ImageComparison> compareRendered(Session& session, const core::Asse
 // taken by failures and by the parser.
 constexpr int kOutsideBoundExitCode = 3;
 
+// The bound's distances as `generate` places them: given in asset units, or (0) where the object
+// spans --near-pixels / --far-pixels on the display, so that `error` checks a level against the
+// bound `generate` chose it by.
+struct BoundFlags {
+  metric::BoundConfig bound{.d_near = 0, .d_far = 0};
+  int near_pixels = lod::GenerateOptions{}.near_footprint_px;
+  int far_pixels = lod::GenerateOptions{}.far_footprint_px;
+  CLI::Option* near_pixels_option = nullptr;
+  CLI::Option* far_pixels_option = nullptr;
+};
+
 int runError(const std::string& path_a, const std::string& path_b, ShadingFlags& flags,
-             int supersample, const metric::BoundConfig& bound, bool check) {
+             int supersample, const BoundFlags& bound_flags, bool check) {
   if ((flags.distance > 0) == (flags.pixels > 0))
     return fail("give exactly one of --distance D or --pixels N");
-  if (!(bound.d_near < bound.d_far))
+  metric::BoundConfig bound = bound_flags.bound;
+  if (bound.d_near > 0 && bound_flags.near_pixels_option->count() > 0)
+    return fail("give --d-near or --near-pixels, not both (--near-pixels places d_near)");
+  if (bound.d_far > 0 && bound_flags.far_pixels_option->count() > 0)
+    return fail("give --d-far or --far-pixels, not both (--far-pixels places d_far)");
+  if (bound.d_near > 0 && bound.d_far > 0 && !(bound.d_near < bound.d_far))
     return fail("--d-near (" + formatNumber(bound.d_near) + ") must be less than --d-far (" +
                 formatNumber(bound.d_far) + ")");
+  if (bound.d_near == 0 && bound.d_far == 0 && !(bound_flags.near_pixels > bound_flags.far_pixels))
+    return fail("--near-pixels (" + std::to_string(bound_flags.near_pixels) +
+                ") must be more than --far-pixels (" + std::to_string(bound_flags.far_pixels) +
+                "): the object is larger on screen at d_near");
   auto a = loadWithWarnings(path_a);
   if (!a) return fail(a.error().message);
   const core::Sphere sphere = core::computeBoundingSphere(a->mesh);
+  std::string d_near_source = "--d-near", d_far_source = "--d-far";
+  if (bound.d_near == 0) {
+    bound.d_near = render::distanceForFootprint(sphere, bound_flags.near_pixels, flags.display());
+    d_near_source = "--near-pixels " + std::to_string(bound_flags.near_pixels);
+  }
+  if (bound.d_far == 0) {
+    bound.d_far = render::distanceForFootprint(sphere, bound_flags.far_pixels, flags.display());
+    d_far_source = "--far-pixels " + std::to_string(bound_flags.far_pixels);
+  }
+  if (!(bound.d_near < bound.d_far))
+    return fail(path_a + ": d_near (" + formatNumber(bound.d_near) + ", from " + d_near_source +
+                ") must be less than d_far (" + formatNumber(bound.d_far) + ", from " +
+                d_far_source + ")");
   float distance = resolveDistance(flags, sphere);
   if (auto ok = checkViewpoint(path_a, flags, sphere, distance, supersample,
                                "the reference (--supersample " + std::to_string(supersample) +
@@ -556,13 +586,12 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   if (!comparison) return fail(comparison.error().message);
   const metric::ImageError& error = comparison->errors[0];
   double e_a = metric::perPixelBound(bound, distance);
-  // d_near and d_far are in asset units and default to 1 and 10: a distance outside them gets the
-  // bound of the nearer end (0 below d_near), which is rarely what was meant.
+  // A distance outside [d_near, d_far] gets the bound of the nearer end (0 below d_near).
   if (distance < bound.d_near || distance > bound.d_far)
     std::fprintf(stderr,
-                 "duolod: warning: distance %g is outside [--d-near, --d-far] = [%g, %g] (asset "
-                 "units): the bound is that of %s\n",
-                 distance, bound.d_near, bound.d_far,
+                 "duolod: warning: distance %g is outside [d_near, d_far] = [%g, %g] (%s, %s): "
+                 "the bound is that of %s\n",
+                 distance, bound.d_near, bound.d_far, d_near_source.c_str(), d_far_source.c_str(),
                  distance < bound.d_near ? "d_near, 0" : "d_far");
   bool ok = metric::withinBound(error, bound, distance);
   std::printf("distance %g  footprint %d px  samples %d (20 views x 5 lights)\n", distance,
@@ -570,7 +599,7 @@ int runError(const std::string& path_a, const std::string& path_b, ShadingFlags&
   std::printf("epsilon (eq. 6)      %.6g\n", error.epsilon);
   std::printf("coverage s_d         %.1f px\n", error.coverage_px);
   std::printf("per-pixel error      %.6g\n", error.per_pixel);
-  std::printf("bound e_a(d)*s_d     %.6g  (e_a = %.4g: e_max %.3g, Q %.3g, d %g..%g)\n",
+  std::printf("bound e_a(d)*s_d     %.6g  (e_a = %.4g: e_max %.3g, Q %.3g, d %.4g..%.4g)\n",
               e_a * error.coverage_px, e_a, bound.e_max, bound.q, bound.d_near, bound.d_far);
   std::printf("within bound         %s\n", ok ? "yes" : "no");
   return check && !ok ? kOutsideBoundExitCode : 0;
@@ -1531,7 +1560,8 @@ int main(int argc, char** argv) {
   ShadingFlags error_flags;
   std::string error_a, error_b;
   int error_supersample = 4;
-  metric::BoundConfig bound;
+  BoundFlags error_bound;
+  metric::BoundConfig& bound = error_bound.bound;
   CLI::App* error_cmd = app.add_subcommand(
       "error", "Image error (eq. 6) of ASSET_B against the supersampled reference of ASSET_A");
   error_cmd->add_option("asset_a", error_a, "the original (reference) asset")->required();
@@ -1550,12 +1580,30 @@ int main(int argc, char** argv) {
   error_cmd->add_option("--q", bound.q, "quality falloff Q (eq. 4)")
       ->check(between(0, 1))
       ->capture_default_str();
-  error_cmd->add_option("--d-near", bound.d_near, "nearest LOD distance (eq. 4)")
-      ->check(positive())
+  error_cmd
+      ->add_option("--d-near", bound.d_near,
+                   "nearest LOD distance (eq. 4), asset units (0: where the object spans "
+                   "--near-pixels, as generate places it)")
+      ->check(atLeast(0))
       ->capture_default_str();
-  error_cmd->add_option("--d-far", bound.d_far, "farthest LOD distance (eq. 4)")
-      ->check(positive())
+  error_cmd
+      ->add_option("--d-far", bound.d_far,
+                   "farthest LOD distance (eq. 4), asset units (0: where the object spans "
+                   "--far-pixels)")
+      ->check(atLeast(0))
       ->capture_default_str();
+  error_bound.near_pixels_option =
+      error_cmd
+          ->add_option("--near-pixels", error_bound.near_pixels,
+                       "with --d-near 0: d_near is where the object spans this many pixels")
+          ->check(between(1, 16384))
+          ->capture_default_str();
+  error_bound.far_pixels_option =
+      error_cmd
+          ->add_option("--far-pixels", error_bound.far_pixels,
+                       "with --d-far 0: d_far is where the object spans this many pixels")
+          ->check(between(1, 16384))
+          ->capture_default_str();
   bool error_check = false;
   error_cmd->add_flag("--check", error_check,
                       "exit with code 3 when ASSET_B is not within the bound (for scripts)");
@@ -1602,7 +1650,7 @@ int main(int argc, char** argv) {
     return runRender(render_path, render_flags, render_view, render_light, render_supersample,
                      render_out, render_force);
   if (*error_cmd)
-    return runError(error_a, error_b, error_flags, error_supersample, bound, error_check);
+    return runError(error_a, error_b, error_flags, error_supersample, error_bound, error_check);
   if (*simplify_cmd) return runSimplify(simplify_flags);
   if (*generate_cmd) return runGenerate(generate_flags);
   if (*shader_cmd) return runShader(shader_flags);

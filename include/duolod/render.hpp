@@ -98,6 +98,13 @@ int footprintPixels(const core::Sphere& bounds, float distance, const Display& d
 // What screen coverage is computed from (lod::screenCoverage), so that coverage and distance
 // give the same switch.
 double projectedDiameterPixels(const core::Sphere& bounds, float distance, const Display& display);
+// The camera distance at which the bounding sphere's projected diameter is `pixels` on `display`
+// (the inverse of projectedDiameterPixels): what a `--pixels N` flag means.
+float distanceForDiameterPixels(const core::Sphere& bounds, int pixels, const Display& display);
+// The nearest distance (to float precision, by bisection) at which footprintPixels is at most
+// `pixels`: where `generate --near-pixels` / `--far-pixels` put d_near and d_far, and `error`'s
+// defaults, so that both bound the same distances.
+float distanceForFootprint(const core::Sphere& bounds, int pixels, const Display& display);
 
 // Cameras at `distance` from the sphere centre, each framing exactly the bounding sphere (the
 // image is the footprint's crop of the display), with its lights. View-major order:

@@ -61,19 +61,6 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// The distance at which the object's footprint is `pixels` (footprint falls with distance).
-float distanceForFootprint(const core::Sphere& bounds, int pixels, const render::Display& display) {
-  float near = bounds.radius * 1.01f, far = bounds.radius * 1e4f;
-  for (int i = 0; i < 60; ++i) {
-    float middle = 0.5f * (near + far);
-    if (render::footprintPixels(bounds, middle, display) > pixels)
-      near = middle;
-    else
-      far = middle;
-  }
-  return far;
-}
-
 // How a GP configuration scores variants: at `distance`, on the run's display and supersampling.
 shader::EvaluationConfig evaluationConfig(const GenerateOptions& options, float distance) {
   shader::EvaluationConfig config;
@@ -417,9 +404,11 @@ core::Status Generator::makeLevels() {
   LevelOptions level_options = options_.levels;
   metric::BoundConfig& bound = level_options.bound;
   if (bound.d_near <= 0)
-    bound.d_near = distanceForFootprint(bounds_, options_.near_footprint_px, level_options.display);
+    bound.d_near =
+        render::distanceForFootprint(bounds_, options_.near_footprint_px, level_options.display);
   if (bound.d_far <= 0)
-    bound.d_far = distanceForFootprint(bounds_, options_.far_footprint_px, level_options.display);
+    bound.d_far =
+        render::distanceForFootprint(bounds_, options_.far_footprint_px, level_options.display);
   options_.levels = level_options;
   auto levels = distanceLevels(bounds_, level_options);
   if (!levels) return levels.error();

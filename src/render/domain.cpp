@@ -121,6 +121,24 @@ int footprintPixels(const core::Sphere& bounds, float distance, const Display& d
   return pixels >= kMaxTileSize ? kMaxTileSize : static_cast<int>(std::ceil(pixels));
 }
 
+float distanceForDiameterPixels(const core::Sphere& bounds, int pixels, const Display& display) {
+  const float screen_half = std::tan(display.fov_y_deg * kPi / 360.0f);
+  const float half_angle = std::atan(float(pixels) / float(display.height_px) * screen_half);
+  return bounds.radius / std::sin(half_angle);
+}
+
+float distanceForFootprint(const core::Sphere& bounds, int pixels, const Display& display) {
+  float near = bounds.radius * 1.01f, far = bounds.radius * 1e4f;
+  for (int i = 0; i < 60; ++i) {
+    const float middle = 0.5f * (near + far);
+    if (footprintPixels(bounds, middle, display) > pixels)
+      near = middle;
+    else
+      far = middle;
+  }
+  return far;
+}
+
 std::vector<Sample> domainSamples(const core::Sphere& bounds, float distance,
                                   const DomainOptions& options) {
   float d = clampedDistance(bounds, distance);
