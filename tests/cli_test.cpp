@@ -315,7 +315,7 @@ TEST(Cli, ErrorBoundDistancesFollowGenerate) {
   EXPECT_EQ(render::footprintPixels(sphere, d_near, display), 256);
   EXPECT_EQ(render::footprintPixels(sphere, d_far, display), 16);
   char range[64];
-  std::snprintf(range, sizeof range, "d %.4g..%.4g)", d_near, d_far);
+  std::snprintf(range, sizeof range, "d %g..%g)", d_near, d_far);
   test::CommandRun run =
       runCli({"error", path, path, "--pixels", "24", "--supersample", "1", "--check"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -325,7 +325,7 @@ TEST(Cli, ErrorBoundDistancesFollowGenerate) {
   test::CommandRun custom = runCli({"error", path, path, "--pixels", "24", "--supersample", "1",
                                     "--near-pixels", "100", "--far-pixels", "10"});
   ASSERT_EQ(custom.exit_code, 0) << custom.err;
-  std::snprintf(range, sizeof range, "d %.4g..%.4g)",
+  std::snprintf(range, sizeof range, "d %g..%g)",
                 render::distanceForFootprint(sphere, 100, display),
                 render::distanceForFootprint(sphere, 10, display));
   EXPECT_TRUE(test::contains(custom.out, range)) << "expected '" << range << "' in:\n"

@@ -796,7 +796,8 @@ TEST(GltfMalformed, NegativeOrFractionalSizesAreRefused) {
   buffer.doc["buffers"] = {{{"byteLength", -1}, {"uri", "buffer_length.bin"}}};
   expectLoadError(buffer.write(dir, "buffer_length"),
                   "buffer 0: byteLength is -1, not a non-negative integer");
-  // Zero and large exact values are integers (a double holding one, as some writers write 36.0).
+  // A whole number written as a float is an integer
+  // (GltfReader.WholeFloatsAndPlusSignsAreReadAsMeant).
   HandGltf whole = oneTriangle();
   whole.doc["accessors"][0]["byteOffset"] = 0.0;
   auto loaded = io::loadAsset(whole.write(dir, "whole"));
@@ -1117,6 +1118,65 @@ TEST(GltfWriter, InconsistentAssetsAreRefused) {
   ASSERT_FALSE(nothing);
   EXPECT_TRUE(test::contains(nothing.error().message, "no triangles")) << nothing.error().message;
   EXPECT_EQ(namesIn(dir), std::vector<std::string>{});
+}
+
+// glTF 2.0's integers may be written as whole floats (36.0, 3.6e1), and a uri's '+' is a plus sign
+// (RFC 3986). tinygltf took such integers as absent (a byteOffset of 36.0 read the first triangle
+// instead of the second; a count of 3.0 was "not a positive integer") and looked for a+b.bin as
+// "a b.bin"; both are read as meant, in .gltf and .glb files.
+TEST(GltfReader, WholeFloatsAndPlusSignsAreReadAsMeant) {
+  const fs::path dir = test::scratchDir("whole_floats");
+  HandGltf g;
+  const int view =
+      g.addView(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 100, 0, 0, 101, 0, 0, 100, 1, 0});
+  const int positions = g.addAccessor(view, kFloat, 3, "VEC3", {{"byteOffset", 36.0}});
+  const int indices = g.addIndices(std::vector<uint32_t>{0, 1, 2}, kUnsignedInt);
+  g.addNode({{"mesh", g.addMesh({primitive(positions, indices)})}});
+  g.setScene({0});
+  g.doc["accessors"][positions]["count"] = 3.0;
+  g.doc["accessors"][positions]["componentType"] = 5126.0;
+  g.doc["accessors"][indices]["bufferView"] = 1.0;
+  g.doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 0.0;
+  g.doc["meshes"][0]["primitives"][0]["indices"] = 1.0;
+  g.doc["nodes"][0]["mesh"] = 0.0;
+  g.doc["nodes"][0]["translation"] = {0.0, 2.0, 0.0};  // a float field: whole values read as before
+  g.doc["scenes"][0]["nodes"] = {0.0};
+  g.doc["scene"] = 0.0;
+  g.doc["buffers"] = {{{"byteLength", g.bin.size()}, {"uri", "a+b.bin"}}};
+  writeBytes(dir / "a+b.bin", g.bin);
+  const std::string path = g.write(dir, "whole");
+  auto asset = io::loadAsset(path);
+  ASSERT_TRUE(asset) << asset.error().message;
+  ASSERT_EQ(asset->mesh.positions.size(), 3u);
+  EXPECT_EQ(asset->mesh.positions[0].x, 100.0f);  // the second triangle, from byte 36
+  EXPECT_EQ(asset->mesh.positions[1].x, 101.0f);
+  EXPECT_EQ(asset->mesh.positions[2].y, 3.0f);  // 1 + the node's translation
+  const auto& sources = asset->source_files;
+  EXPECT_NE(std::find(sources.begin(), sources.end(), path), sources.end());
+  EXPECT_NE(std::find(sources.begin(), sources.end(), (dir / "a+b.bin").string()), sources.end());
+
+  // The same edits in a .glb: its JSON chunk is rewritten, its BIN chunk kept.
+  const std::vector<uint8_t> glb = rebuildGlb(quadGlb(dir), [](json& doc) {
+    for (json& accessor : doc["accessors"]) {
+      accessor["count"] = double(accessor["count"]);
+      accessor["componentType"] = double(accessor["componentType"]);
+      accessor["bufferView"] = double(accessor["bufferView"]);
+    }
+    for (json& view : doc["bufferViews"]) view["byteOffset"] = double(view.value("byteOffset", 0));
+  });
+  writeBytes(dir / "whole.glb", glb);
+  auto quad = io::loadAsset((dir / "whole.glb").string());
+  ASSERT_TRUE(quad) << quad.error().message;
+  EXPECT_EQ(quad->mesh.positions.size(), quadAsset().mesh.positions.size());
+  EXPECT_EQ(quad->mesh.triangleCount(), 2u);
+  for (size_t v = 0; v < quad->mesh.positions.size(); ++v)
+    EXPECT_TRUE(std::find_if(quadAsset().mesh.positions.begin(), quadAsset().mesh.positions.end(),
+                             [&](const Vec3& p) {
+                               return p.x == quad->mesh.positions[v].x &&
+                                      p.y == quad->mesh.positions[v].y &&
+                                      p.z == quad->mesh.positions[v].z;
+                             }) != quadAsset().mesh.positions.end())
+        << "vertex " << v;
 }
 
 }  // namespace

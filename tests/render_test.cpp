@@ -366,6 +366,23 @@ TEST(Domain, FootprintMatchesTheProjectedSphere) {
   EXPECT_EQ(render::footprintPixels({{0, 0, 0}, 1.0f}, 20.0f, {90.0f, 1000}), 51);
 }
 
+// The inverses of the footprint: distanceForDiameterPixels (what --pixels means) and
+// distanceForFootprint (where generate and error put d_near and d_far), also where the object is
+// wider than the asked footprint at 1e4 radii (a 1° field of view on a 4000-pixel display: the
+// search stopped there and returned 1e4 radii, where spot spanned ~46 px instead of 16).
+TEST(Domain, DistanceForAFootprintIsItsInverse) {
+  const core::Sphere sphere{{1, 2, 3}, 0.5f};
+  for (const render::Display display : {render::Display{}, render::Display{1.0f, 4000}}) {
+    for (int pixels : {16, 256, 4000}) {
+      const float d = render::distanceForFootprint(sphere, pixels, display);
+      EXPECT_LE(render::footprintPixels(sphere, d, display), pixels) << pixels;
+      EXPECT_GT(render::footprintPixels(sphere, d * 0.999f, display), pixels) << pixels;
+      const float exact = render::distanceForDiameterPixels(sphere, pixels, display);
+      EXPECT_NEAR(render::projectedDiameterPixels(sphere, exact, display), pixels, 1e-3 * pixels);
+    }
+  }
+}
+
 TEST(Metric, BoundFollowsEquationFour) {
   metric::BoundConfig config{.d_near = 1, .d_far = 5, .q = 0.5f, .e_max = 0.2f};
   EXPECT_DOUBLE_EQ(metric::perPixelBound(config, 1.0), 0.0);

@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <tuple>
 
 #include "duolod/io.hpp"
@@ -661,22 +662,79 @@ bool wellEscaped(const std::string& uri) {
   return true;
 }
 
-// What tinygltf lets through and then reads wrongly, checked on the document itself:
+// Keys whose numbers glTF 2.0 defines as integers (indices, enums, sizes), below the document's
+// top level (where "nodes" and "samplers" are arrays of objects): everything under them is an
+// integer too (a primitive's attributes and targets, a scene's nodes, a sparse accessor's indices).
+bool holdsIntegers(const std::string& key) {
+  static const std::set<std::string> kIntegerKeys = {"attributes",    "buffer",
+                                                     "bufferView",    "byteLength",
+                                                     "byteOffset",    "byteStride",
+                                                     "camera",        "children",
+                                                     "componentType", "count",
+                                                     "index",         "indices",
+                                                     "input",         "inverseBindMatrices",
+                                                     "joints",        "magFilter",
+                                                     "material",      "mesh",
+                                                     "minFilter",     "mode",
+                                                     "node",          "nodes",
+                                                     "output",        "sampler",
+                                                     "scene",         "skeleton",
+                                                     "skin",          "source",
+                                                     "targets",       "texCoord",
+                                                     "wrapS",         "wrapT"};
+  return kIntegerKeys.count(key) > 0;
+}
+
+// Integer fields written as whole floats (36.0, 3.6e1: integers by the schema) rewritten as
+// integer literals: tinygltf reads only integer literals there, and took such a byteOffset as
+// absent (0), so the data came from the wrong bytes without a word. Extensions and extras are
+// left as written. Returns how many values were rewritten.
+size_t wholeNumbersAsIntegers(nlohmann::json& value, bool integers, int depth) {
+  size_t rewritten = 0;
+  if (value.is_object()) {
+    for (auto& [key, member] : value.items())
+      if (key != "extensions" && key != "extras")
+        rewritten += wholeNumbersAsIntegers(
+            member, integers || (depth > 0 ? holdsIntegers(key) : key == "scene"), depth + 1);
+  } else if (value.is_array()) {
+    for (nlohmann::json& element : value)
+      rewritten += wholeNumbersAsIntegers(element, integers, depth + 1);
+  } else if (integers && value.is_number_float()) {
+    const double number = value.get<double>();
+    constexpr double kExactIntegers = 9007199254740992.0;  // 2^53
+    if (std::floor(number) == number && std::fabs(number) <= kExactIntegers) {
+      if (number >= 0)
+        value = static_cast<uint64_t>(number);
+      else
+        value = static_cast<int64_t>(number);
+      ++rewritten;
+    }
+  }
+  return rewritten;
+}
+
+// The document as tinygltf is to read it, parsed here first for what tinygltf lets through and
+// then reads wrongly:
+//   - integer fields written as whole floats are rewritten as integers (wholeNumbersAsIntegers);
+//   - a '+' in a buffer's or image's uri is a plus sign (RFC 3986), which tinygltf decoded as a
+//     space (a+b.bin was looked for as "a b.bin"): it is rewritten as %2B;
 //   - offsets, lengths, strides and counts are non-negative integers (glTF 2.0's schema): a
-//     negative or fractional byteOffset was read as 0, so the data came from the wrong bytes
-//     without a word;
-//   - a buffer's or image's uri escapes with '%' and two hex digits: a bad escape cut the file
-//     name short ("File not found : m").
-// A document that does not parse is left to tinygltf, whose message says where.
-core::Status checkDocumentValues(const uint8_t* text, size_t size, const std::string& path) {
-  const nlohmann::json doc = nlohmann::json::parse(text, text + size, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return core::okStatus();
-  auto each = [&](const char* array, auto&& check) -> core::Status {
+//     negative or fractional byteOffset was read as 0; refused, naming the object and field;
+//   - a '%' in a uri escapes two hex digits: a bad escape cut the file name short ("File not
+//     found : m"); refused, naming the uri.
+// Returns the rewritten JSON text, or an empty string when nothing needed rewriting. A document
+// that does not parse is left to tinygltf, whose message says where.
+core::Result<std::string> normalizedDocument(const uint8_t* text, size_t size,
+                                             const std::string& path) {
+  nlohmann::json doc = nlohmann::json::parse(text, text + size, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return std::string();
+  size_t rewritten = wholeNumbersAsIntegers(doc, false, 0);
+  auto each = [&](const char* array, auto&& visit) -> core::Status {
     const auto found = doc.find(array);
     if (found == doc.end() || !found->is_array()) return core::okStatus();
     for (size_t i = 0; i < found->size(); ++i)
       if ((*found)[i].is_object())
-        if (auto checked = check(i, (*found)[i]); !checked) return checked;
+        if (auto visited = visit(i, (*found)[i]); !visited) return visited;
     return core::okStatus();
   };
   struct Sizes {
@@ -693,30 +751,51 @@ core::Status checkDocumentValues(const uint8_t* text, size_t size, const std::st
         const auto value = object.find(field);
         if (value == object.end()) continue;
         const bool whole = value->is_number_unsigned() ||
-                           (value->is_number_integer() && value->get<int64_t>() >= 0) ||
-                           (value->is_number_float() && value->get<double>() >= 0 &&
-                            std::floor(value->get<double>()) == value->get<double>());
+                           (value->is_number_integer() && value->get<int64_t>() >= 0);
         if (!whole)
           return Error{path + ": " + sizes.object + " " + std::to_string(i) + ": " + field +
                        " is " + value->dump() + ", not a non-negative integer"};
       }
       return core::okStatus();
     });
-    if (!status) return status;
+    if (!status) return status.error();
   }
   for (const auto& [array, object] : {std::pair{"buffers", "buffer"}, {"images", "image"}}) {
-    auto status = each(array, [&](size_t i, const nlohmann::json& element) -> core::Status {
+    auto status = each(array, [&](size_t i, nlohmann::json& element) -> core::Status {
       const auto uri = element.find("uri");
       if (uri == element.end() || !uri->is_string()) return core::okStatus();
-      const std::string& text = uri->get_ref<const std::string&>();
-      if (text.starts_with("data:") || wellEscaped(text)) return core::okStatus();
-      return Error{path + ": " + object + " " + std::to_string(i) + ": uri '" + text +
-                   "' has a '%' not followed by two hex digits (a file name's '%' is written "
-                   "%25)"};
+      std::string& text = uri->get_ref<std::string&>();
+      if (text.starts_with("data:")) return core::okStatus();
+      if (!wellEscaped(text))
+        return Error{path + ": " + object + " " + std::to_string(i) + ": uri '" + text +
+                     "' has a '%' not followed by two hex digits (a file name's '%' is written "
+                     "%25)"};
+      for (size_t at = text.find('+'); at != std::string::npos; at = text.find('+', at + 3)) {
+        text.replace(at, 1, "%2B");
+        ++rewritten;
+      }
+      return core::okStatus();
     });
-    if (!status) return status;
+    if (!status) return status.error();
   }
-  return core::okStatus();
+  if (rewritten == 0) return std::string();
+  return doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+// A GLB file with its JSON chunk replaced by `json` (padded with spaces to 4 bytes, as the
+// specification asks); the chunks after it are kept as they are. `glb` passed checkGlbLayout.
+std::vector<uint8_t> glbWithJson(const std::vector<uint8_t>& glb, uint32_t json_size,
+                                 const std::string& json) {
+  std::string padded = json;
+  while (padded.size() % 4) padded += ' ';
+  std::vector<uint8_t> out(glb.begin(), glb.begin() + 20);  // header and JSON chunk header
+  out.insert(out.end(), padded.begin(), padded.end());
+  out.insert(out.end(), glb.begin() + 20 + json_size, glb.end());
+  const uint32_t total = static_cast<uint32_t>(out.size());
+  const uint32_t chunk = static_cast<uint32_t>(padded.size());
+  std::memcpy(out.data() + 8, &total, 4);
+  std::memcpy(out.data() + 12, &chunk, 4);
+  return out;
 }
 
 }  // namespace
@@ -758,6 +837,7 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   tinygltf::Model model;
   std::string error, warning;
   bool binary = false;
+  std::vector<uint8_t> document;  // the file, or the file with its JSON rewritten
   {
     auto head = readFileBytes(path);
     if (!head) return head.error();
@@ -779,13 +859,29 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
     if (depth > kMaxJsonNesting)
       return Error{path + ": the JSON nests " + std::to_string(depth) + " levels deep (at most " +
                    std::to_string(kMaxJsonNesting) + " are read)"};
-    const auto values = binary ? checkDocumentValues(head->data() + 20, json_size, path)
-                               : checkDocumentValues(head->data(), head->size(), path);
-    if (!values) return values.error();
+    auto rewritten = binary ? normalizedDocument(head->data() + 20, json_size, path)
+                            : normalizedDocument(head->data(), head->size(), path);
+    if (!rewritten) return rewritten.error();
+    if (!rewritten->empty())
+      document = binary ? glbWithJson(*head, json_size, *rewritten)
+                        : std::vector<uint8_t>(rewritten->begin(), rewritten->end());
+    else
+      document = std::move(*head);
   }
+  if (document.size() > std::numeric_limits<unsigned>::max())
+    return Error{path + ": " + std::to_string(document.size()) +
+                 " bytes: larger than the 4 GiB a glTF file may hold"};
   context.model = &model;
-  bool ok = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
-                   : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  // From the bytes read above (tinygltf's *FromFile read the file again), with the base folder
+  // tinygltf's *FromFile would take.
+  files_read.push_back(path);
+  const std::string base_dir = tinygltf::GetBaseDir(path);
+  const unsigned size = static_cast<unsigned>(document.size());
+  bool ok = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, document.data(), size,
+                                                 base_dir)
+                   : loader.LoadASCIIFromString(&model, &error, &warning,
+                                                reinterpret_cast<const char*>(document.data()),
+                                                size, base_dir);
   if (!ok) {
     while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
     if (error.empty()) error = "not a valid glTF file";

@@ -129,6 +129,11 @@ float distanceForDiameterPixels(const core::Sphere& bounds, int pixels, const Di
 
 float distanceForFootprint(const core::Sphere& bounds, int pixels, const Display& display) {
   float near = bounds.radius * 1.01f, far = bounds.radius * 1e4f;
+  // A narrow field of view or a tall display can leave the object larger than `pixels` beyond
+  // 1e4 radii: the bracket grows until it is not (before, the search returned 1e4 radii).
+  for (int i = 0;
+       i < 64 && footprintPixels(bounds, far, display) > pixels && std::isfinite(far * 2.0f); ++i)
+    near = far, far *= 2.0f;
   for (int i = 0; i < 60; ++i) {
     const float middle = 0.5f * (near + far);
     if (footprintPixels(bounds, middle, display) > pixels)
