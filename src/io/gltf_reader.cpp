@@ -666,22 +666,14 @@ bool wellEscaped(const std::string& uri) {
 // top level (where "nodes" and "samplers" are arrays of objects): everything under them is an
 // integer too (a primitive's attributes and targets, a scene's nodes, a sparse accessor's indices).
 bool holdsIntegers(const std::string& key) {
-  static const std::set<std::string> kIntegerKeys = {"attributes",    "buffer",
-                                                     "bufferView",    "byteLength",
-                                                     "byteOffset",    "byteStride",
-                                                     "camera",        "children",
-                                                     "componentType", "count",
-                                                     "index",         "indices",
-                                                     "input",         "inverseBindMatrices",
-                                                     "joints",        "magFilter",
-                                                     "material",      "mesh",
-                                                     "minFilter",     "mode",
-                                                     "node",          "nodes",
-                                                     "output",        "sampler",
-                                                     "scene",         "skeleton",
-                                                     "skin",          "source",
-                                                     "targets",       "texCoord",
-                                                     "wrapS",         "wrapT"};
+  // clang-format off
+  static const std::set<std::string> kIntegerKeys = {
+      "attributes", "buffer", "bufferView", "byteLength", "byteOffset", "byteStride", "camera",
+      "children", "componentType", "count", "index", "indices", "input", "inverseBindMatrices",
+      "joints", "magFilter", "material", "mesh", "minFilter", "mode", "node", "nodes", "output",
+      "sampler", "scene", "skeleton", "skin", "source", "target", "targets", "texCoord", "wrapS",
+      "wrapT"};
+  // clang-format on
   return kIntegerKeys.count(key) > 0;
 }
 
