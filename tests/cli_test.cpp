@@ -300,6 +300,22 @@ TEST(Cli, ErrorOfAnAssetAgainstItself) {
   EXPECT_EQ(printedValue(plain.out, "epsilon (eq. 6)"), 0.0) << plain.out;
 }
 
+// A request larger than memory ends as an error (exit 1), not an abort ("terminate called ...
+// std::bad_alloc", exit 134, as `error --pixels 4095` did): with the address space limited to
+// 4 GB, 100 float images of 2001² pixels (6.4 GB) cannot be allocated.
+TEST(Cli, OutOfMemoryIsAnError) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: no ulimit -v under it";
+#else
+  const std::string quad = writeQuad(test::scratchDir("cli_memory"));
+  test::CommandRun run =
+      test::runCommand("sh", {"-c", "ulimit -v 4000000 && exec \"$0\" \"$@\"", DUOLOD_CLI, "error",
+                              quad, quad, "--pixels", "2000", "--supersample", "1"});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(test::contains(run.err, "duolod: error: out of memory")) << run.err;
+#endif
+}
+
 // The bound's distances default to generate's (where the object spans --near-pixels 256 and
 // --far-pixels 16), not to 1 and 10 asset units, which gave a bound of 0 at every distance for
 // an asset larger than a few units; --d-near and --near-pixels together are refused as generate

@@ -1,6 +1,9 @@
 // Renderer tests with analytically known answers: coverage of a quad, a constant colour, ε of an
 // image with itself, ε growing with a vertex displacement, supersampled coverage, GLSL vs SPIR-V.
+#include "duolod/render.hpp"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -8,7 +11,6 @@
 
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
-#include "duolod/render.hpp"
 #include "duolod/shader.hpp"
 #include "mesh_test_meshes.hpp"
 #include "test_support.hpp"
@@ -305,6 +307,36 @@ TEST_F(RendererTest, AVertexStageThatNeverWritesThePositionIsRefused) {
       renderer_->compileProgram(render::GlslSource{vertex, fragment, "ok.vert", "red.frag"});
   ASSERT_TRUE(good) << good.error().message;
   renderer_->releaseProgram(*good);
+}
+
+// A batch whose images do not fit in the machine's memory is refused with the figures before
+// anything is drawn (`error --pixels 4095`: 100 float images of 4095² pixels, 27 GB, aborted with
+// std::bad_alloc). 100 samples of 16384² pixels are 107 GB as 8-bit, 429 GB as floats.
+TEST_F(RendererTest, BatchesLargerThanMemoryAreRefusedWithTheFigures) {
+  const double memory = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  if (memory >= 107e9) GTEST_SKIP() << "this machine has " << memory / 1e9 << " GB of memory";
+  core::Asset square = squareAsset({1, 1, 1, 1});
+  auto id = renderer_->uploadAsset(square);
+  ASSERT_TRUE(id);
+  const std::vector<render::Sample> samples(100, frontSample(3.0f));
+  const render::RenderOptions huge{.resolution = 16384};
+  auto plain = renderer_->render(*id, constant_program_, samples, huge);
+  ASSERT_FALSE(plain);
+  EXPECT_NE(plain.error().message.find("100 images of 16384 x 16384 pixels take 107.4 GB as 8-bit"),
+            std::string::npos)
+      << plain.error().message;
+  EXPECT_NE(plain.error().message.find("of memory: render fewer pixels or samples"),
+            std::string::npos)
+      << plain.error().message;
+  auto reference = renderer_->renderReference(*id, constant_program_, samples, huge);
+  ASSERT_FALSE(reference);
+  EXPECT_NE(reference.error().message.find("take 429.5 GB as float"), std::string::npos)
+      << reference.error().message;
+  // One sample of 4096² pixels (67 MB) is drawn.
+  auto one =
+      renderer_->render(*id, constant_program_, std::span(samples.data(), 1), {.resolution = 4096});
+  EXPECT_TRUE(one) << one.error().message;
+  renderer_->releaseAsset(*id);
 }
 
 TEST(Domain, DodecahedronHasTwentyUnitViewsAndFiveLightsEach) {

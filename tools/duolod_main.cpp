@@ -1645,14 +1645,23 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  if (*info) return runInfo(info_path);
-  if (*render_cmd)
-    return runRender(render_path, render_flags, render_view, render_light, render_supersample,
-                     render_out, render_force);
-  if (*error_cmd)
-    return runError(error_a, error_b, error_flags, error_supersample, error_bound, error_check);
-  if (*simplify_cmd) return runSimplify(simplify_flags);
-  if (*generate_cmd) return runGenerate(generate_flags);
-  if (*shader_cmd) return runShader(shader_flags);
+  // A request larger than memory ends as an error, not an abort: the commands' unfinished
+  // outputs are removed as the stack unwinds (`error --pixels 4095` asked for 100 float images
+  // of 4095² pixels, 27 GB, and ended in "terminate called ... std::bad_alloc", exit 134).
+  try {
+    if (*info) return runInfo(info_path);
+    if (*render_cmd)
+      return runRender(render_path, render_flags, render_view, render_light, render_supersample,
+                       render_out, render_force);
+    if (*error_cmd)
+      return runError(error_a, error_b, error_flags, error_supersample, error_bound, error_check);
+    if (*simplify_cmd) return runSimplify(simplify_flags);
+    if (*generate_cmd) return runGenerate(generate_flags);
+    if (*shader_cmd) return runShader(shader_flags);
+  } catch (const std::bad_alloc&) {
+    return fail(
+        "out of memory: the request needs more than this machine has (fewer pixels, "
+        "samples, candidates or triangles need less)");
+  }
   return 0;
 }

@@ -2,6 +2,8 @@
 // atlas framebuffer (its own viewport and scissor), all per-sample uniforms live in one buffer
 // bound by range, and the atlas is read back once: on llvmpipe a readback per view would cost more
 // than the drawing. References (f̄, eq. 1) are drawn k× larger and box-filtered on the GPU.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -597,6 +599,23 @@ AtlasLayout planAtlas(int count, int tile, int max_size, int samples) {
 
 namespace internal {
 
+// The images a batch returns are held at once: 100 samples of 4095² pixels as floats are 27 GB.
+// A batch larger than the machine's memory is refused with the figures instead of failing to
+// allocate (an abort, before).
+core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as) {
+  const long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || page_size <= 0) return core::okStatus();  // unknown: let allocation decide
+  const double memory = double(pages) * double(page_size);
+  const double needed = double(count) * double(tile) * double(tile) * double(bytes_per_pixel);
+  if (needed <= memory) return core::okStatus();
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "render: %zu images of %d x %d pixels take %.1f GB %s, more than this machine's "
+                "%.1f GB of memory: render fewer pixels or samples",
+                count, tile, tile, needed / 1e9, as, memory / 1e9);
+  return Error{text};
+}
+
 core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
                           Renderer::ProgramId program, std::span<const Sample> samples,
                           const RenderOptions& options) {
@@ -682,6 +701,8 @@ core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_i
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
   if (options.supersample != 1)
     return Error{"render: use renderReference() for supersampled images"};
+  if (auto fits = checkBatchMemory(samples.size(), options.resolution, 4, "as 8-bit RGBA"); !fits)
+    return fits.error();
   auto start = std::chrono::steady_clock::now();
   const GpuAsset& asset = *s.assets[asset_id];
   int tile = options.resolution;
@@ -738,6 +759,10 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
   if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
+  if (auto fits =
+          checkBatchMemory(samples.size(), options.resolution, 4 * sizeof(float), "as float RGBA");
+      !fits)
+    return fits.error();
   auto start = std::chrono::steady_clock::now();
   const GpuAsset& asset = *s.assets[asset_id];
   int k = options.supersample;
