@@ -522,44 +522,95 @@ core::Result<ImageComparison> compareRendered(Session& session, const core::Asse
 // taken by failures and by the parser.
 constexpr int kOutsideBoundExitCode = 3;
 
-// The bound's distances as `generate` places them: given in asset units, or (0) where the object
-// spans --near-pixels / --far-pixels on the display, so that `error` checks a level against the
-// bound `generate` chose it by.
+// The error bound's flags (eq. 4), the same for `generate` and `error`, so that `error` checks a
+// level against the bound `generate` chose it by: --e-max, --q, and d_near / d_far given in asset
+// units or (0) placed where the object spans --near-pixels / --far-pixels on the display.
 struct BoundFlags {
+  metric::BoundConfig* bound = nullptr;  // the flags' values (add)
+  int* near_pixels = nullptr;
+  int* far_pixels = nullptr;
+  CLI::Option* near_pixels_option = nullptr;
+  CLI::Option* far_pixels_option = nullptr;
+
+  void add(CLI::App* command, metric::BoundConfig& bound_values, int& near_pixels_value,
+           int& far_pixels_value) {
+    bound = &bound_values;
+    near_pixels = &near_pixels_value;
+    far_pixels = &far_pixels_value;
+    command->add_option("--e-max", bound->e_max, "maximum per-pixel error (eq. 4)")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    command->add_option("--q", bound->q, "quality falloff Q (eq. 4)")
+        ->check(between(0, 1))
+        ->capture_default_str();
+    command
+        ->add_option("--d-near", bound->d_near,
+                     "nearest level's distance, asset units (0: where the object spans "
+                     "--near-pixels)")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    command
+        ->add_option("--d-far", bound->d_far,
+                     "farthest level's distance, asset units (0: where the object spans "
+                     "--far-pixels)")
+        ->check(atLeast(0))
+        ->capture_default_str();
+    near_pixels_option =
+        command
+            ->add_option("--near-pixels", *near_pixels,
+                         "with --d-near 0: d_near is where the object spans this many pixels")
+            ->check(atLeast(1))
+            ->capture_default_str();
+    far_pixels_option =
+        command
+            ->add_option("--far-pixels", *far_pixels,
+                         "with --d-far 0: d_far is where the object spans this many pixels")
+            ->check(atLeast(1))
+            ->capture_default_str();
+  }
+
+  // Flag combinations, checked before any file is read.
+  core::Status check() const {
+    if (bound->d_near > 0 && near_pixels_option->count() > 0)
+      return core::Error{"give --d-near or --near-pixels, not both (--near-pixels places d_near)"};
+    if (bound->d_far > 0 && far_pixels_option->count() > 0)
+      return core::Error{"give --d-far or --far-pixels, not both (--far-pixels places d_far)"};
+    if (bound->d_near > 0 && bound->d_far > 0 && !(bound->d_near < bound->d_far))
+      return core::Error{"--d-near (" + formatNumber(bound->d_near) +
+                         ") must be less than --d-far (" + formatNumber(bound->d_far) + ")"};
+    if (bound->d_near == 0 && bound->d_far == 0 && !(*near_pixels > *far_pixels))
+      return core::Error{"--near-pixels (" + std::to_string(*near_pixels) +
+                         ") must be more than --far-pixels (" + std::to_string(*far_pixels) +
+                         "): the object looks smaller farther away"};
+    return core::okStatus();
+  }
+};
+
+// `error`'s bound, defaulting to generate's placement of d_near and d_far.
+struct ErrorBound {
   metric::BoundConfig bound{.d_near = 0, .d_far = 0};
   int near_pixels = lod::GenerateOptions{}.near_footprint_px;
   int far_pixels = lod::GenerateOptions{}.far_footprint_px;
-  CLI::Option* near_pixels_option = nullptr;
-  CLI::Option* far_pixels_option = nullptr;
+  BoundFlags flags;
 };
 
 int runError(const std::string& path_a, const std::string& path_b, ShadingFlags& flags,
-             int supersample, const BoundFlags& bound_flags, bool check) {
+             int supersample, const ErrorBound& error_bound, bool check) {
   if ((flags.distance > 0) == (flags.pixels > 0))
     return fail("give exactly one of --distance D or --pixels N");
-  metric::BoundConfig bound = bound_flags.bound;
-  if (bound.d_near > 0 && bound_flags.near_pixels_option->count() > 0)
-    return fail("give --d-near or --near-pixels, not both (--near-pixels places d_near)");
-  if (bound.d_far > 0 && bound_flags.far_pixels_option->count() > 0)
-    return fail("give --d-far or --far-pixels, not both (--far-pixels places d_far)");
-  if (bound.d_near > 0 && bound.d_far > 0 && !(bound.d_near < bound.d_far))
-    return fail("--d-near (" + formatNumber(bound.d_near) + ") must be less than --d-far (" +
-                formatNumber(bound.d_far) + ")");
-  if (bound.d_near == 0 && bound.d_far == 0 && !(bound_flags.near_pixels > bound_flags.far_pixels))
-    return fail("--near-pixels (" + std::to_string(bound_flags.near_pixels) +
-                ") must be more than --far-pixels (" + std::to_string(bound_flags.far_pixels) +
-                "): the object looks smaller farther away");
+  if (auto ok = error_bound.flags.check(); !ok) return fail(ok.error().message);
+  metric::BoundConfig bound = error_bound.bound;
   auto a = loadWithWarnings(path_a);
   if (!a) return fail(a.error().message);
   const core::Sphere sphere = core::computeBoundingSphere(a->mesh);
   std::string d_near_source = "--d-near", d_far_source = "--d-far";
   if (bound.d_near == 0) {
-    bound.d_near = render::distanceForFootprint(sphere, bound_flags.near_pixels, flags.display());
-    d_near_source = "--near-pixels " + std::to_string(bound_flags.near_pixels);
+    bound.d_near = render::distanceForFootprint(sphere, error_bound.near_pixels, flags.display());
+    d_near_source = "--near-pixels " + std::to_string(error_bound.near_pixels);
   }
   if (bound.d_far == 0) {
-    bound.d_far = render::distanceForFootprint(sphere, bound_flags.far_pixels, flags.display());
-    d_far_source = "--far-pixels " + std::to_string(bound_flags.far_pixels);
+    bound.d_far = render::distanceForFootprint(sphere, error_bound.far_pixels, flags.display());
+    d_far_source = "--far-pixels " + std::to_string(error_bound.far_pixels);
   }
   if (!(bound.d_near < bound.d_far))
     return fail(path_a + ": d_near (" + formatNumber(bound.d_near) + ", from " + d_near_source +
@@ -997,26 +1048,10 @@ struct GenerateFlags {
   CLI::Option* quiet_option = nullptr;
   bool no_sort_prefetch = false;
   int jobs = 0;
-  CLI::Option *near_pixels_option = nullptr, *far_pixels_option = nullptr;
+  BoundFlags bound_flags;
 
   // Flag combinations, checked before any file is read.
-  core::Status check() const {
-    const metric::BoundConfig& bound = options.levels.bound;
-    if (bound.d_near > 0 && near_pixels_option->count() > 0)
-      return core::Error{"give --d-near or --near-pixels, not both (--near-pixels places d_near)"};
-    if (bound.d_far > 0 && far_pixels_option->count() > 0)
-      return core::Error{"give --d-far or --far-pixels, not both (--far-pixels places d_far)"};
-    if (bound.d_near > 0 && bound.d_far > 0 && !(bound.d_near < bound.d_far))
-      return core::Error{"--d-near (" + formatNumber(bound.d_near) +
-                         ") must be less than --d-far (" + formatNumber(bound.d_far) + ")"};
-    if (bound.d_near == 0 && bound.d_far == 0 &&
-        !(options.near_footprint_px > options.far_footprint_px))
-      return core::Error{"--near-pixels (" + std::to_string(options.near_footprint_px) +
-                         ") must be more than --far-pixels (" +
-                         std::to_string(options.far_footprint_px) +
-                         "): the object looks smaller farther away"};
-    return core::okStatus();
-  }
+  core::Status check() const { return bound_flags.check(); }
 
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
@@ -1050,34 +1085,8 @@ struct GenerateFlags {
                      "ratios of projected size, so level 1 begins nearer")
         ->check(CLI::IsMember({"linear", "geometric"}))
         ->capture_default_str();
-    command->add_option("--e-max", options.levels.bound.e_max, "maximum per-pixel error (eq. 4)")
-        ->check(atLeast(0))
-        ->capture_default_str();
-    command->add_option("--q", options.levels.bound.q, "quality falloff Q (eq. 4)")
-        ->check(between(0, 1))
-        ->capture_default_str();
-    command
-        ->add_option("--d-near", options.levels.bound.d_near,
-                     "nearest level's distance (0: where the object spans --near-pixels)")
-        ->capture_default_str()
-        ->check(atLeast(0));
-    command
-        ->add_option("--d-far", options.levels.bound.d_far,
-                     "farthest level's distance (0: where the object spans --far-pixels)")
-        ->capture_default_str()
-        ->check(atLeast(0));
-    near_pixels_option =
-        command
-            ->add_option("--near-pixels", options.near_footprint_px,
-                         "with --d-near 0: d_near is where the object spans this many pixels")
-            ->check(atLeast(1))
-            ->capture_default_str();
-    far_pixels_option =
-        command
-            ->add_option("--far-pixels", options.far_footprint_px,
-                         "with --d-far 0: d_far is where the object spans this many pixels")
-            ->check(atLeast(1))
-            ->capture_default_str();
+    bound_flags.add(command, options.levels.bound, options.near_footprint_px,
+                    options.far_footprint_px);
     command->add_option("--candidates", options.mesh_candidates, "mesh candidates K per level")
         ->check(between(1, 1000000))
         ->capture_default_str();
@@ -1560,8 +1569,7 @@ int main(int argc, char** argv) {
   ShadingFlags error_flags;
   std::string error_a, error_b;
   int error_supersample = 4;
-  BoundFlags error_bound;
-  metric::BoundConfig& bound = error_bound.bound;
+  ErrorBound error_bound;
   CLI::App* error_cmd = app.add_subcommand(
       "error", "Image error (eq. 6) of ASSET_B against the supersampled reference of ASSET_A");
   error_cmd->add_option("asset_a", error_a, "the original (reference) asset")->required();
@@ -1574,36 +1582,8 @@ int main(int argc, char** argv) {
   error_cmd->add_option("--supersample", error_supersample, "reference supersampling k")
       ->check(between(1, 16))
       ->capture_default_str();
-  error_cmd->add_option("--e-max", bound.e_max, "maximum per-pixel error (eq. 4)")
-      ->check(atLeast(0))
-      ->capture_default_str();
-  error_cmd->add_option("--q", bound.q, "quality falloff Q (eq. 4)")
-      ->check(between(0, 1))
-      ->capture_default_str();
-  error_cmd
-      ->add_option("--d-near", bound.d_near,
-                   "nearest LOD distance (eq. 4), asset units (0: where the object spans "
-                   "--near-pixels, as generate places it)")
-      ->check(atLeast(0))
-      ->capture_default_str();
-  error_cmd
-      ->add_option("--d-far", bound.d_far,
-                   "farthest LOD distance (eq. 4), asset units (0: where the object spans "
-                   "--far-pixels)")
-      ->check(atLeast(0))
-      ->capture_default_str();
-  error_bound.near_pixels_option =
-      error_cmd
-          ->add_option("--near-pixels", error_bound.near_pixels,
-                       "with --d-near 0: d_near is where the object spans this many pixels")
-          ->check(atLeast(1))
-          ->capture_default_str();
-  error_bound.far_pixels_option =
-      error_cmd
-          ->add_option("--far-pixels", error_bound.far_pixels,
-                       "with --d-far 0: d_far is where the object spans this many pixels")
-          ->check(atLeast(1))
-          ->capture_default_str();
+  error_bound.flags.add(error_cmd, error_bound.bound, error_bound.near_pixels,
+                        error_bound.far_pixels);
   bool error_check = false;
   error_cmd->add_flag("--check", error_check,
                       "exit with code 3 when ASSET_B is not within the bound (for scripts)");

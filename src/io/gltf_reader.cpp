@@ -681,16 +681,16 @@ bool holdsIntegers(const std::string& key) {
 // integer literals: tinygltf reads only integer literals there, and took such a byteOffset as
 // absent (0), so the data came from the wrong bytes without a word. Extensions and extras are
 // left as written. Returns how many values were rewritten.
-size_t wholeNumbersAsIntegers(nlohmann::json& value, bool integers, int depth) {
+size_t wholeNumbersAsIntegers(nlohmann::json& value, bool integers, bool top_level) {
   size_t rewritten = 0;
   if (value.is_object()) {
     for (auto& [key, member] : value.items())
       if (key != "extensions" && key != "extras")
         rewritten += wholeNumbersAsIntegers(
-            member, integers || (depth > 0 ? holdsIntegers(key) : key == "scene"), depth + 1);
+            member, integers || (top_level ? key == "scene" : holdsIntegers(key)), false);
   } else if (value.is_array()) {
     for (nlohmann::json& element : value)
-      rewritten += wholeNumbersAsIntegers(element, integers, depth + 1);
+      rewritten += wholeNumbersAsIntegers(element, integers, false);
   } else if (integers && value.is_number_float()) {
     const double number = value.get<double>();
     constexpr double kExactIntegers = 9007199254740992.0;  // 2^53
@@ -720,7 +720,7 @@ core::Result<std::string> normalizedDocument(const uint8_t* text, size_t size,
                                              const std::string& path) {
   nlohmann::json doc = nlohmann::json::parse(text, text + size, nullptr, false);
   if (doc.is_discarded() || !doc.is_object()) return std::string();
-  size_t rewritten = wholeNumbersAsIntegers(doc, false, 0);
+  size_t rewritten = wholeNumbersAsIntegers(doc, false, true);
   auto each = [&](const char* array, auto&& visit) -> core::Status {
     const auto found = doc.find(array);
     if (found == doc.end() || !found->is_array()) return core::okStatus();
