@@ -19,6 +19,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -38,9 +39,9 @@
 #include "shader/cost_model.hpp"
 #include "shader/evaluate.hpp"
 #include "shader/instrument.hpp"
-#include "shader/scoring.hpp"
 #include "shader/nsga2.hpp"
 #include "shader/rules.hpp"
+#include "shader/scoring.hpp"
 #include "shader/search.hpp"
 #include "shader/summary.hpp"
 
@@ -166,8 +167,10 @@ class ShaderSearchThread {
     return event;
   }
   // After waitEvent() returned nothing: every configuration's front, by configuration index.
+  // An exception the thread ended with (std::bad_alloc) is rethrown here, on the caller's thread.
   core::Result<std::vector<std::vector<shader::SearchVariant>>> results() {
     std::lock_guard lock(mutex_);
+    if (thrown_) std::rethrow_exception(std::exchange(thrown_, nullptr));
     if (!failure_.empty()) return core::Error{failure_};
     return std::move(fronts_);
   }
@@ -177,7 +180,19 @@ class ShaderSearchThread {
   }
 
  private:
+  // An exception must not leave the thread (std::terminate: a search that runs out of memory
+  // aborted the process): it ends the searches and goes to the caller through results().
   void run() {
+    try {
+      searchConfigurations();
+    } catch (...) {
+      std::lock_guard lock(mutex_);
+      thrown_ = std::current_exception();
+      done_ = true;
+      changed_.notify_all();
+    }
+  }
+  void searchConfigurations() {
     auto failed = [&](const std::string& message) {
       std::lock_guard lock(mutex_);
       failure_ = message;
@@ -269,6 +284,7 @@ class ShaderSearchThread {
   std::vector<Event> events_;
   std::vector<std::vector<shader::SearchVariant>> fronts_;
   std::string failure_;
+  std::exception_ptr thrown_;
   int added_ = 0, finished_ = 0;
   double busy_seconds_ = 0;
   bool closed_ = false, cancelled_ = false, done_ = false;

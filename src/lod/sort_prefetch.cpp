@@ -1,6 +1,9 @@
 // SortByError's renders made ahead on their own thread: see sort_prefetch.hpp for why.
 #include "lod/sort_prefetch.hpp"
 
+#include <exception>
+#include <new>
+
 namespace duolod::lod {
 
 SortByErrorPrefetch::SortByErrorPrefetch(const core::Asset& asset,
@@ -53,7 +56,31 @@ std::string SortByErrorPrefetch::failure() const {
   return failure_;
 }
 
+// An exception must not leave the thread (std::terminate: a render that ran out of memory
+// aborted the process). Like any failure here it stops this thread, and the caller renders the
+// rest itself.
 void SortByErrorPrefetch::run() {
+  try {
+    renderAhead();
+  } catch (const std::bad_alloc&) {
+    stopAfterException("out of memory");
+  } catch (const std::exception& e) {
+    stopAfterException(e.what());
+  } catch (...) {
+    stopAfterException("an unknown exception");
+  }
+}
+
+void SortByErrorPrefetch::stopAfterException(const std::string& what) {
+  {
+    std::lock_guard lock(mutex_);
+    failure_ = "SortByError prefetch: " + what;
+    stopped_ = true;
+  }
+  changed_.notify_all();
+}
+
+void SortByErrorPrefetch::renderAhead() {
   auto stop = [&](std::string failure) {
     {
       std::lock_guard lock(mutex_);

@@ -60,6 +60,8 @@ class SortByErrorPrefetch {
  private:
   enum class State { kQueued, kRunning, kDone, kTaken };
   void run();
+  void renderAhead();
+  void stopAfterException(const std::string& what);
 
   const core::Asset& asset_;
   const std::vector<shader::Variant> shaders_;

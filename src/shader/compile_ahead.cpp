@@ -15,6 +15,8 @@ CompileAhead::CompileAhead(core::Asset asset, render::Sample sample, int resolut
     : sample_(sample), resolution_(resolution) {
   // The workers share one copy of the asset until each has uploaded it to its own context.
   auto shared = std::make_shared<const core::Asset>(std::move(asset));
+  // Taking a program never allocates on a worker (run() keeps what may throw inside its try).
+  in_progress_.reserve(size_t(std::max(1, workers)));
   for (int i = 0; i < std::max(1, workers); ++i)
     workers_.emplace_back([this, shared, context]() mutable { run(std::move(shared), context); });
 }
@@ -80,9 +82,13 @@ void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::Context
   // evaluation forms (the scorer then compiles cold, as without a worker).
   std::unique_ptr<render::Renderer> renderer;
   render::Renderer::AssetId asset_id = -1;
-  if (auto created = render::Renderer::create(context); created) {
-    renderer = std::move(*created);
-    if (auto uploaded = renderer->uploadAsset(*asset); uploaded) asset_id = *uploaded;
+  try {
+    if (auto created = render::Renderer::create(context); created) {
+      renderer = std::move(*created);
+      if (auto uploaded = renderer->uploadAsset(*asset); uploaded) asset_id = *uploaded;
+    }
+  } catch (...) {  // (out of memory) as if the context had failed
+    asset_id = -1;
   }
   asset.reset();
   for (;;) {
@@ -95,26 +101,36 @@ void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::Context
       std::tie(hash, program) = queue_.front();
       queue_.pop_front();
       in_progress_.push_back(hash);
+      ++counters_.started;
     }
-    core::Result<Variant> variant = evaluationVariant(*program);
-    bool drawn = false;
-    if (variant && renderer && asset_id >= 0) {
-      auto vertex = ir::parseModule(variant->spirv.vertex);
-      auto fragment = ir::parseModule(variant->spirv.fragment);
-      // The scorer's own profile draw (profileBlockCounts), on one sample: what it draws is
-      // what gets compiled. Its result is not needed.
-      if (vertex && fragment)
-        drawn = profileBlockCounts(*renderer, asset_id, *vertex, *fragment, {&sample_, 1},
-                                   resolution_, variant->uniforms)
-                    .ok();
+    // An exception must not leave the thread (std::terminate: a worker that ran out of memory
+    // aborted the process). The worker then stops and hands over nothing for this program: the
+    // scorer makes it itself, as it does a program no worker started.
+    bool handed_over = false, drawn = false;
+    try {
+      core::Result<Variant> variant = evaluationVariant(*program);
+      if (variant && renderer && asset_id >= 0) {
+        auto vertex = ir::parseModule(variant->spirv.vertex);
+        auto fragment = ir::parseModule(variant->spirv.fragment);
+        // The scorer's own profile draw (profileBlockCounts), on one sample: what it draws is
+        // what gets compiled. Its result is not needed.
+        if (vertex && fragment)
+          drawn = profileBlockCounts(*renderer, asset_id, *vertex, *fragment, {&sample_, 1},
+                                     resolution_, variant->uniforms)
+                      .ok();
+      }
+      std::lock_guard lock(mutex_);
+      done_.insert_or_assign(hash, std::move(variant));
+      handed_over = true;
+    } catch (...) {
     }
     {
       std::lock_guard lock(mutex_);
-      done_.insert_or_assign(hash, std::move(variant));
-      if (drawn) ++counters_.compiled;
+      if (handed_over && drawn) ++counters_.compiled;
       std::erase(in_progress_, hash);
     }
     changed_.notify_all();
+    if (!handed_over) return;
   }
 }
 

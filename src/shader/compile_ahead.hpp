@@ -50,6 +50,7 @@ class CompileAhead {
   std::optional<core::Result<Variant>> take(uint64_t program_hash);
 
   struct Counters {
+    int started = 0;   // programs the workers took off the queue
     int compiled = 0;  // programs the worker drew
     int taken = 0;     // evaluation forms handed to the scorer
   };
