@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
@@ -217,6 +218,125 @@ TEST(CliShaderTest, BadFlagsAreClearErrors) {
   EXPECT_TRUE(
       test::contains(glsl_entry.err, "--vert-entry names the entry point of an HLSL --vert"))
       << glsl_entry.err;
+}
+
+// A Lambert pair reading the normal at location 4 and uv0 at 1 (not INTERFACE.md's 1 and 3), and
+// the bindings file that says so.
+constexpr const char* kMovedVertex = R"(#version 450 core
+layout(location = 0) in vec3 inPosition;
+layout(location = 4) in vec3 inNormal;
+layout(location = 1) in vec2 inUV0;
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(location = 0) out vec3 vWorldPos;
+layout(location = 1) out vec3 vNormal;
+layout(location = 2) out vec2 vUV;
+void main() {
+  vec4 w = uModel * vec4(inPosition, 1.0);
+  vWorldPos = w.xyz;
+  vNormal = mat3(uNormalMatrix) * inNormal;
+  vUV = inUV0;
+  gl_Position = uProjection * (uView * w);
+}
+)";
+constexpr const char* kLambertFragment = R"(#version 450 core
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+layout(std140, binding = 1) uniform Material {
+  vec4 uBaseColorFactor; vec4 uEmissiveFactor; vec4 uMaterialParams; vec4 uTextureFlags; vec4 uTextureFlags2;
+};
+layout(binding = 0) uniform sampler2D uBaseColorTexture;
+layout(location = 0) in vec3 vWorldPos;
+layout(location = 1) in vec3 vNormal;
+layout(location = 2) in vec2 vUV;
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 n = normalize(vNormal);
+  vec3 l = normalize(uLightPosition.xyz - vWorldPos);
+  vec3 albedo = uBaseColorFactor.rgb * texture(uBaseColorTexture, vUV).rgb;
+  vec3 lit = albedo * (uAmbientColor.rgb + uLightColor.rgb * max(dot(n, l), 0.0));
+  outColor = vec4(pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+}
+)";
+
+double originalError(const fs::path& out) {
+  nlohmann::json summary = nlohmann::json::parse(test::readText(out / "summary.json"));
+  return summary["levels"][0]["rendered_error"].get<double>();
+}
+
+// --bindings reaches the search's renderers: the original's error is the one `error` measures
+// with the same bindings. Before, `shader` and `generate` checked the file and then drew with
+// INTERFACE.md's locations (the normal read from the uv0 stream): 0.0038 instead of 0.0246.
+// A bindings file inside --out (which this run would write over) is refused, --force or not.
+TEST(CliShaderTest, BindingsReachTheSearch) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_shader_bindings");
+  const std::string vert = (dir / "moved.vert").string(), frag = (dir / "lambert.frag").string();
+  const std::string bindings = (dir / "moved.json").string();
+  std::ofstream(vert) << kMovedVertex;
+  std::ofstream(frag) << kLambertFragment;
+  std::ofstream(bindings) << R"({"attributes": {"normal": 4, "uv0": 1}})";
+  const std::vector<std::string> cheap = {
+      "--pixels", "64", "--search", "greedy", "--steps", "2", "--candidates", "4", "--no-timing"};
+  auto search = [&](const std::string& out, bool bound) {
+    std::vector<std::string> args = {"shader", spot, "--vert", vert, "--frag", frag};
+    args.insert(args.end(), cheap.begin(), cheap.end());
+    if (bound) args.insert(args.end(), {"--bindings", bindings});
+    args.insert(args.end(), {"--out", (dir / out).string()});
+    return runCli(args);
+  };
+  test::CommandRun with = search("with", true), without = search("without", false);
+  ASSERT_EQ(with.exit_code, 0) << with.err;
+  ASSERT_EQ(without.exit_code, 0) << without.err;
+  test::CommandRun measured = runCli({"error", spot, spot, "--vert", vert, "--frag", frag,
+                                      "--pixels", "64", "--bindings", bindings});
+  ASSERT_EQ(measured.exit_code, 0) << measured.err;
+  const std::string label = "per-pixel error";
+  const size_t at = measured.out.find(label);
+  ASSERT_NE(at, std::string::npos) << measured.out;
+  const double expected = std::stod(measured.out.substr(at + label.size()));
+  EXPECT_NEAR(originalError(dir / "with"), expected, 1e-4 * expected);
+  EXPECT_GT(std::abs(originalError(dir / "without") - expected), 0.1 * expected)
+      << "the bindings change nothing here: the test shows nothing";
+
+  const fs::path out = dir / "into";
+  fs::create_directories(out);
+  const std::string inside = (out / "summary.json").string();
+  std::ofstream(inside) << R"({"attributes": {"normal": 4, "uv0": 1}})";
+  std::vector<std::string> args = {"shader", spot, "--vert", vert, "--frag", frag};
+  args.insert(args.end(), cheap.begin(), cheap.end());
+  args.insert(args.end(), {"--bindings", inside, "--force", "--out", out.string()});
+  test::CommandRun refused = runCli(args);
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_TRUE(test::contains(refused.err, "is the folder of the input " + inside)) << refused.err;
+  EXPECT_EQ(test::readText(inside), R"({"attributes": {"normal": 4, "uv0": 1}})");
+}
+
+// A UTF-8 byte-order mark (Visual Studio saves HLSL with one) is not a token: the files compile
+// as without it. It was "'<bad token>' : unexpected token" at line 1.
+TEST(CliShaderTest, AByteOrderMarkIsNotAToken) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_shader_bom");
+  const std::string vert = test::sourcePath("shaders/hlsl/lambert.vert.hlsl");
+  const std::string frag = (dir / "lambert.frag.hlsl").string();
+  const std::string glsl = (dir / "lambert.frag").string();
+  std::ofstream(frag) << "\xEF\xBB\xBF"
+                      << test::readText(test::sourcePath("shaders/hlsl/lambert.frag.hlsl"));
+  std::ofstream(glsl) << "\xEF\xBB\xBF" << kLambertFragment;
+  test::CommandRun hlsl = runCli({"error", spot, spot, "--vert", vert, "--frag", frag, "--pixels",
+                                  "32", "--supersample", "1"});
+  EXPECT_EQ(hlsl.exit_code, 0) << hlsl.err;
+  const std::string moved_vert = (dir / "moved.vert").string();
+  std::ofstream(moved_vert) << "\xEF\xBB\xBF" << kMovedVertex;
+  std::ofstream(dir / "moved.json") << R"({"attributes": {"normal": 4, "uv0": 1}})";
+  test::CommandRun run = runCli({"render", spot, "--vert", moved_vert, "--frag", glsl, "--bindings",
+                                 (dir / "moved.json").string(), "--pixels", "32", "--view", "0",
+                                 "--force", "--out", (dir / "r.png").string()});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
 }
 
 TEST(CliShaderTest, RefusesToWriteIntoTheAssetsFolderEvenWithForce) {

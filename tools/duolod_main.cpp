@@ -172,7 +172,8 @@ struct ShadingFlags {
                       const std::string& entry) -> core::Result<std::string> {
         auto bytes = io::readFileBytes(path);  // names a missing file or a folder
         if (!bytes) return bytes.error();
-        std::string text(bytes->begin(), bytes->end());
+        std::string text(core::withoutByteOrderMark(
+            {reinterpret_cast<const char*>(bytes->data()), bytes->size()}));
         if (!isHlslFile(path)) return text;
         shader::CompileOptions options;
         options.entry_point = entry;
@@ -195,10 +196,12 @@ struct ShadingFlags {
         vertex_options.vertex_input_locations = input_locations;
         fragment_options.entry_point = frag_entry;
         fragment_options.include_dirs = {fs::path(frag).parent_path().string()};
-        auto pair = shader::hlslPairToGlsl(
-            std::string(vertex_text->begin(), vertex_text->end()), vert,
-            std::string(fragment_text->begin(), fragment_text->end()), frag, vertex_options,
-            fragment_options);
+        auto text = [](const std::vector<uint8_t>& bytes) {
+          return std::string(core::withoutByteOrderMark(
+              {reinterpret_cast<const char*>(bytes.data()), bytes.size()}));
+        };
+        auto pair = shader::hlslPairToGlsl(text(*vertex_text), vert, text(*fragment_text), frag,
+                                           vertex_options, fragment_options);
         if (!pair) return pair.error();
         return render::GlslSource{pair->vertex, pair->fragment, name(vert), name(frag)};
       }
@@ -233,13 +236,10 @@ struct Session {
 core::Result<Session> openSession(const ShadingFlags& flags) {
   auto source = flags.source();
   if (!source) return source.error();
-  auto renderer = render::Renderer::create({.device = flags.device});
+  auto bindings = flags.parsedBindings();
+  if (!bindings) return bindings.error();
+  auto renderer = render::Renderer::create({.device = flags.device, .bindings = *bindings});
   if (!renderer) return renderer.error();
-  if (!flags.bindings.empty()) {
-    auto bindings = flags.parsedBindings();
-    if (!bindings) return bindings.error();
-    (*renderer)->setBindings(*bindings);
-  }
   auto program = (*renderer)->compileProgram(*source);
   if (!program) return program.error();
   return Session{std::move(renderer.value()), *program};
@@ -1229,9 +1229,10 @@ int runGenerate(GenerateFlags& flags) {
   auto start = std::chrono::steady_clock::now();
   if (auto valid = flags.check(); !valid) return fail(valid.error().message);
   // Refuse a bad output folder before the long work, not after.
-  if (auto ok = checkOutputFolder(flags.out, flags.force,
-                                  {flags.in, flags.shading.vert, flags.shading.frag},
-                                  "summary.json", "shader");
+  if (auto ok = checkOutputFolder(
+          flags.out, flags.force,
+          {flags.in, flags.shading.vert, flags.shading.frag, flags.shading.bindings},
+          "summary.json", "shader");
       !ok)
     return fail(ok.error().message);
   auto asset = loadWithWarnings(flags.in);
@@ -1242,6 +1243,9 @@ int runGenerate(GenerateFlags& flags) {
   lod::GenerateOptions options = flags.options;
   options.levels.display = flags.shading.display();
   options.device = flags.shading.device;
+  auto bindings = flags.shading.parsedBindings();
+  if (!bindings) return fail(bindings.error().message);
+  options.bindings = *bindings;
   options.compile_ahead = !flags.no_compile_ahead;
   options.sort_prefetch = !flags.no_sort_prefetch;
   options.move_to_parameter = flags.move_to_parameter;
@@ -1452,9 +1456,10 @@ int runShader(ShaderFlags& flags) {
     return fail("shader: give --distance D (> 0) or --pixels N");
   if (auto ok = flags.check(); !ok) return fail(ok.error().message);
   // Refuse a bad output folder before the long work, not after.
-  if (auto ok = checkOutputFolder(flags.out, flags.force,
-                                  {flags.in, flags.shading.vert, flags.shading.frag}, "lod.json",
-                                  "generate");
+  if (auto ok = checkOutputFolder(
+          flags.out, flags.force,
+          {flags.in, flags.shading.vert, flags.shading.frag, flags.shading.bindings}, "lod.json",
+          "generate");
       !ok)
     return fail(ok.error().message);
   auto source = flags.shading.source();
@@ -1473,6 +1478,9 @@ int runShader(ShaderFlags& flags) {
   options.display = flags.shading.display();
   options.evaluation.domain.views = flags.shading.viewSet();
   options.device = flags.shading.device;
+  auto bindings = flags.shading.parsedBindings();
+  if (!bindings) return fail(bindings.error().message);
+  options.bindings = *bindings;
   options.method = flags.search == "gp" ? shader::SearchMethod::kGenetic : shader::SearchMethod::kGreedy;
   options.genetic.seed = flags.seed;
   options.genetic.generations = flags.generations;

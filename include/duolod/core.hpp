@@ -55,6 +55,12 @@ struct Ok {};
 using Status = Result<Ok>;
 inline Status okStatus() { return Ok{}; }
 
+// Text without a leading UTF-8 byte-order mark, which some editors (Visual Studio's, for HLSL)
+// write and shader compilers take for a stray token.
+inline std::string_view withoutByteOrderMark(std::string_view text) {
+  return text.starts_with("\xEF\xBB\xBF") ? text.substr(3) : text;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Math. Plain structs; matrices are column-major like OpenGL's.
 

@@ -387,6 +387,9 @@ struct GenerateOptions {
   double interleaved_top_fraction = 0.2;
   int interleaved_generations = 3;
   int device = -1;  // EGL device; -1 = Mesa surfaceless
+  // The shader's interface locations and bindings (render::Bindings; the CLI's --bindings), for
+  // every context the run makes.
+  render::Bindings bindings = {};
   // Compile the shader searches' coming variants in worker threads, one per core, each with its
   // own GL context (the search's CPU work and llvmpipe's compiles otherwise keep one core busy
   // and the other idle). The results are the same either way.

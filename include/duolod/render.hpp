@@ -182,6 +182,9 @@ struct ContextOptions {
   // draws in this context only. 0 chooses: 2 on a CPU rasterizer (llvmpipe) with two or more
   // hardware threads, else 1. The images are the same either way.
   int drawing_threads = 0;
+  // The shader interface's locations and bindings (setBindings) from the start, so that every
+  // context a task makes (its own, and those of its worker threads) feeds the shader alike.
+  Bindings bindings = {};
 };
 
 struct RenderOptions {

@@ -199,7 +199,7 @@ class ShaderSearchThread {
       done_ = true;
       changed_.notify_all();
     };
-    auto renderer = Renderer::create({.device = options_.device});
+    auto renderer = Renderer::create({.device = options_.device, .bindings = options_.bindings});
     if (!renderer) return failed("shader search context: " + renderer.error().message);
     auto original_asset = (*renderer)->uploadAsset(asset_);
     if (!original_asset) return failed(original_asset.error().message);
@@ -253,7 +253,8 @@ class ShaderSearchThread {
     if (options_.compile_ahead) {
       core::Asset drawn = asset_;  // what the scorer draws: this mesh, the asset's materials
       drawn.mesh = configuration.drawn;
-      (*scoring)->enableCompileAhead(std::move(drawn), {.device = options_.device});
+      (*scoring)->enableCompileAhead(std::move(drawn),
+                                     {.device = options_.device, .bindings = options_.bindings});
     }
     // Moving to parameter (He et al.): values averaged over the training domain by an
     // instrumented render on this configuration's mesh and distance.
@@ -387,7 +388,7 @@ core::Status Generator::setUp(const render::GlslSource& source) {
   if (!original) return original.error();
   original_ = std::move(*original);
 
-  auto renderer = Renderer::create({.device = options_.device});
+  auto renderer = Renderer::create({.device = options_.device, .bindings = options_.bindings});
   if (!renderer) return renderer.error();
   renderer_ = std::move(*renderer);
   if (!renderer_->canCountWork())
@@ -732,7 +733,7 @@ void Generator::startShaderSearch() {
     if (search_levels_.empty() || search_levels_.back() != level) search_levels_.push_back(level);
   }
   shader::RuleContext context;
-  context.texture_averages = shader::textureAverages(asset_);
+  context.texture_averages = shader::textureAverages(asset_, options_.bindings);
   shader_search_ = std::make_unique<ShaderSearchThread>(asset_, original_, std::move(context), options_);
 }
 
@@ -821,7 +822,7 @@ void Generator::startSortPrefetch() {
   for (const ShaderCandidate& candidate : shaders_) variants.push_back(candidate.variant);
   sort_prefetch_ = std::make_unique<SortByErrorPrefetch>(
       asset_, std::move(variants), std::move(levels), std::move(jobs),
-      render::ContextOptions{.device = options_.device});
+      render::ContextOptions{.device = options_.device, .bindings = options_.bindings});
 }
 
 core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
@@ -1261,7 +1262,7 @@ core::Result<int> Generator::coarsestMeshWithin(int level, int shader) {
 core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& options) {
   const int level_count = static_cast<int>(levels_.size());
   shader::RuleContext context;
-  context.texture_averages = shader::textureAverages(asset_);
+  context.texture_averages = shader::textureAverages(asset_, options_.bindings);
   SeparateSolution solution;
   std::map<uint64_t, int> candidate_of_hash{{shader::programHash(original_), 0}};
   for (int level = 0; level < level_count; ++level) {

@@ -136,7 +136,7 @@ core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix) {
     }
     std::stringstream buffer;
     buffer << in.rdbuf();
-    *text = buffer.str();
+    *text = std::string(core::withoutByteOrderMark(buffer.str()));
     *name = path;
   }
   return source;

@@ -226,6 +226,7 @@ core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& o
     return core::Error{"render: drawing_threads must be 0 (automatic), 1 or 2, got " +
                        std::to_string(options.drawing_threads)};
   s.drawing_threads = options.drawing_threads;
+  s.bindings = options.bindings;
   if (s.drawing_threads == 0) {
     // On llvmpipe the thread that draws shades vertices, clips and bins triangles while the
     // rasterizer threads wait, and the reverse: a second drawing context keeps both cores busy

@@ -78,7 +78,7 @@ class FileIncluder : public glslang::TShader::Includer {
     if (!in) return nullptr;
     std::stringstream text;
     text << in.rdbuf();
-    auto* contents = new std::string(text.str());
+    auto* contents = new std::string(core::withoutByteOrderMark(text.str()));
     return new IncludeResult(path.string(), contents->data(), contents->size(), contents);
   }
   std::vector<std::string> dirs_;
@@ -118,9 +118,11 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   ensureGlslangInitialized();
   EShLanguage language = toGlslang(stage);
   glslang::TShader shader(language);
-  const char* text = source.c_str();
+  const std::string_view body = core::withoutByteOrderMark(source);
+  const char* text = body.data();
+  const int length = static_cast<int>(body.size());
   const char* name = file_name.c_str();
-  shader.setStringsWithLengthsAndNames(&text, nullptr, &name, 1);
+  shader.setStringsWithLengthsAndNames(&text, &length, &name, 1);
   shader.setEntryPoint(options.entry_point.c_str());
   std::string preamble;
   // `#include` works as in C without the user naming the extension glslang requires for it.

@@ -34,7 +34,8 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   auto original = parseProgram(*vertex_words, *fragment_words);
   if (!original) return original.error();
 
-  auto renderer = render::Renderer::create({.device = options.device});
+  auto renderer =
+      render::Renderer::create({.device = options.device, .bindings = options.bindings});
   if (!renderer) return renderer.error();
   render::Renderer& gl = **renderer;
   auto asset_id = gl.uploadAsset(asset);
@@ -51,14 +52,15 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   auto scoring = ConfigurationScorer::create(gl, cache, *asset_id, asset.mesh, *original, config);
   if (!scoring) return scoring.error();
   ConfigurationScorer& scorer = **scoring;
-  if (options.compile_ahead) scorer.enableCompileAhead(asset, {.device = options.device});
+  if (options.compile_ahead)
+    scorer.enableCompileAhead(asset, {.device = options.device, .bindings = options.bindings});
   report.footprint_px = scorer.footprint();
   report.domain_samples = scorer.evaluator().sampleCount();
   std::vector<render::Sample> domain = render::domainSamples(
       core::computeBoundingSphere(asset.mesh), options.distance, config.domain);
 
   RuleContext context;
-  context.texture_averages = textureAverages(asset);
+  context.texture_averages = textureAverages(asset, options.bindings);
   if (options.move_to_parameter) context.average_value = scorer.averageValue(options.average_resolution);
   SearchCache search_cache(*original, context, scorer.scorer());
   auto search_start = std::chrono::steady_clock::now();

@@ -32,6 +32,7 @@ struct ShaderLodOptions {
   bool measure_time = true;
   render::TimingOptions timing;
   int device = -1;  // EGL device; -1 = Mesa surfaceless
+  render::Bindings bindings = {};  // the shader's interface (the CLI's --bindings)
   // Offer "moving to parameter" (He et al. 2015) to the search: each application averages the
   // value by an instrumented render of the predicted-error samples (shader/value_average.hpp) at
   // this resolution. Moving the colour output to a parameter is the front's nearly-constant end.

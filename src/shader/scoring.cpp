@@ -32,12 +32,11 @@ float srgbToLinear(float encoded) {
 
 }  // namespace
 
-std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset) {
+std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset,
+                                                         const render::Bindings& bindings) {
   std::map<uint32_t, std::array<float, 4>> averages;
   const core::Material no_material;  // the renderer's fallback: no textures at all
-  const core::Material& material =
-      asset.materials.empty() ? no_material : asset.materials.front();
-  render::Bindings bindings;  // shaders/INTERFACE.md's texture units
+  const core::Material& material = asset.materials.empty() ? no_material : asset.materials.front();
   const std::pair<int, int> textures[] = {
       {bindings.base_color, material.base_color_texture},
       {bindings.metallic_roughness, material.metallic_roughness_texture},

@@ -24,10 +24,12 @@ namespace duolod::shader {
 core::Result<Variant> evaluationVariant(const ShaderProgram& program);
 
 // Average linear RGBA of the textures of the asset's first material, by the sampler binding of
-// shaders/INTERFACE.md: what texture removal substitutes (Olano et al. 2003). A binding the
+// shaders/INTERFACE.md (or `bindings`' units): what texture removal substitutes (Olano et al.
+// 2003). A binding the
 // material has no texture for averages to the texel the renderer binds there instead
 // (render::kMissingTextureTexel, kMissingNormalTexel), so its samples fold away exactly.
-std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset);
+std::map<uint32_t, std::array<float, 4>> textureAverages(const core::Asset& asset,
+                                                         const render::Bindings& bindings = {});
 
 class CompileAhead;
 
