@@ -339,6 +339,32 @@ TEST(CliShaderTest, AByteOrderMarkIsNotAToken) {
   EXPECT_EQ(run.exit_code, 0) << run.err;
 }
 
+// A fragment stage whose alpha is 0 (here an `out vec3`: alpha undefined, 0 on llvmpipe) gave a
+// covered pixel count of 0, every variant an error of 0, and black levels with exit code 0. It is
+// refused before the search, saying why.
+TEST(CliShaderTest, AShaderWithoutAlphaIsRefused) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_shader_alpha");
+  std::string fragment = kLambertFragment;
+  const std::string vec4_out = "out vec4 outColor;";
+  fragment.replace(fragment.find(vec4_out), vec4_out.size(), "out vec3 outColor;");
+  const std::string write = "outColor = vec4(pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);";
+  fragment.replace(fragment.find(write), write.size(),
+                   "outColor = pow(clamp(lit, 0.0, 1.0), vec3(1.0 / 2.2));");
+  const std::string frag = (dir / "vec3.frag").string(), vert = (dir / "plain.vert").string();
+  std::ofstream(frag) << fragment;
+  std::string vertex = kMovedVertex;  // at INTERFACE.md's locations
+  vertex.replace(vertex.find("location = 4) in vec3 inNormal"), 13, "location = 1)");
+  vertex.replace(vertex.find("location = 1) in vec2 inUV0"), 13, "location = 3)");
+  std::ofstream(vert) << vertex;
+  test::CommandRun run = runCli({"shader", spot, "--vert", vert, "--frag", frag, "--pixels", "64",
+                                 "--search", "greedy", "--steps", "2", "--candidates", "4",
+                                 "--no-timing", "--out", (dir / "out").string()});
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  EXPECT_TRUE(test::contains(run.err, "alpha is 0 wherever the object is")) << run.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(CliShaderTest, RefusesToWriteIntoTheAssetsFolderEvenWithForce) {
   DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
   fs::path asset_dir = fs::path(spot).parent_path();

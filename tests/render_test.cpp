@@ -432,6 +432,20 @@ TEST(Metric, BoundFollowsEquationFour) {
 }
 
 // Batches that do not match are never within a bound, and nothing is read past a buffer.
+// s_d (eq. 3) is the reference's alpha: a reference with alpha 0 everywhere (a shader writing a
+// vec3 or alpha 0) would make every error 0, so it is refused; one covered pixel is enough.
+TEST(Metric, AReferenceWithoutAlphaIsRefused) {
+  render::ImageBatchF reference{
+      .width = 2, .height = 2, .count = 2, .pixels = std::vector<float>(2 * 2 * 4 * 2, 0.5f)};
+  for (size_t i = 3; i < reference.pixels.size(); i += 4) reference.pixels[i] = 0;
+  core::Status refused = metric::checkReferenceCoverage(reference);
+  ASSERT_FALSE(refused);
+  EXPECT_TRUE(test::contains(refused.error().message, "alpha is 0 wherever the object is"))
+      << refused.error().message;
+  reference.pixels[4 * 5 + 3] = 0.25f;  // one pixel of the second tile
+  EXPECT_TRUE(metric::checkReferenceCoverage(reference));
+}
+
 TEST(Metric, MismatchedBatchesGiveAnInfiniteError) {
   render::ImageBatch8 image{
       .width = 4, .height = 4, .count = 2, .pixels = std::vector<uint8_t>(4 * 4 * 4 * 2, 255)};

@@ -255,6 +255,41 @@ TEST(ShaderFrontend, RecursiveIncludesAreAnError) {
   }
 }
 
+// A vertex stage that never writes the position draws nothing: refused, naming the file, on the
+// SPIR-V path too (`shader` and `generate` compile the user's stages here; only the renderer's
+// GLSL path checked it). A pixel shader given as the vertex stage is the usual cause.
+TEST(ShaderFrontend, AVertexStageWithoutThePositionIsRefused) {
+  const char* no_position =
+      "#version 450 core\nlayout(location = 0) in vec3 p;\n"
+      "layout(location = 0) out vec3 v;\nvoid main() { v = p; }\n";
+  std::string message = expectError(no_position, Stage::kVertex, "nopos.vert", {});
+  EXPECT_TRUE(test::contains(message, "nopos.vert: the vertex stage never writes gl_Position"))
+      << message;
+  // Only the vertex stage needs it, and one that writes it through gl_PerVertex compiles.
+  expectCompiles(no_position, Stage::kFragment, "nopos.frag", {});
+  expectCompiles("#version 450 core\nvoid main() { gl_Position = vec4(0.0); }\n", Stage::kVertex,
+                 "ok.vert", {});
+  CompileOptions options;
+  options.language = Language::kHlsl;
+  options.entry_point = "PSMain";
+  message = expectError(kHlslPixel, Stage::kVertex, "material.hlsl", options);
+  EXPECT_TRUE(test::contains(message, "material.hlsl: the vertex stage never writes SV_Position"))
+      << message;
+}
+
+// A UTF-8 byte-order mark before the source, or before an included file, is not a token.
+TEST(ShaderFrontend, AByteOrderMarkIsSkipped) {
+  std::filesystem::path dir = test::scratchDir("shader_frontend_bom");
+  writeFile(dir / "common.glsl",
+            "\xEF\xBB\xBF"
+            "float half_of(float x) { return 0.5 * x; }\n");
+  const std::string source = std::string("\xEF\xBB\xBF") +
+                             "#version 450 core\n#include \"common.glsl\"\n"
+                             "layout(location = 0) out vec4 c;\n"
+                             "void main() { c = vec4(half_of(1.0)); }\n";
+  expectCompiles(source.c_str(), Stage::kFragment, (dir / "main.frag").string(), {});
+}
+
 TEST(ShaderFrontend, ValidatorRejectsBrokenModules) {
   std::vector<uint32_t> words =
       expectCompiles("#version 450 core\nlayout(location=0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n",

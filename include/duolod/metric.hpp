@@ -29,6 +29,12 @@ double tileSquaredError(const uint8_t* a, const float* b, size_t pixel_count);
 // Covered pixels of one tile: the sum of alpha.
 double tileCoverage(const float* rgba, size_t pixel_count);
 
+// Refuses a reference (f̄ of the original shader) whose alpha is 0 in every pixel: s_d of eq. (3)
+// is the sum of its alpha (shaders/INTERFACE.md: alpha 1 where the object is), so against such a
+// reference every variant's per-pixel error is 0 and any simplification passes. Its cause is a
+// shader that writes no alpha (`out vec3`, undefined alpha: 0 on llvmpipe) or alpha 0.
+core::Status checkReferenceCoverage(const render::ImageBatchF& reference);
+
 // The absolute per-pixel error bound of eq. (4): e_a(d) = ((d − d_near)/(d_far − d_near))^Q·e_max,
 // with d clamped into [d_near, d_far]; 0 at d_near for every Q.
 struct BoundConfig {

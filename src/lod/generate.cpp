@@ -443,6 +443,7 @@ core::Status Generator::makeLevels() {
     auto reference = renderer_->renderReference(original_asset_, *program, state.samples,
                                                 render_options);
     if (!reference) return reference.error();
+    if (auto covered = metric::checkReferenceCoverage(*reference); !covered) return covered.error();
     state.reference = std::move(*reference);
     // s_d of eq. (3): the reference's covered pixels (the error of f̄ against itself is 0).
     state.coverage_px = metric::imageError(state.reference, state.reference).coverage_px;

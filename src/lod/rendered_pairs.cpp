@@ -32,6 +32,7 @@ core::Result<RenderedPairEvaluator> RenderedPairEvaluator::create(
       {.resolution = evaluator.footprint_px_, .supersample = evaluator.options_.supersample});
   if (!reference)
     return core::Error{"rendered pair evaluation: reference: " + reference.error().message};
+  if (auto covered = metric::checkReferenceCoverage(*reference); !covered) return covered.error();
   evaluator.reference_ = std::move(*reference);
   double coverage = 0;
   const size_t tile_pixels = size_t(evaluator.reference_.width) * evaluator.reference_.height;

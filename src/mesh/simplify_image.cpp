@@ -68,6 +68,7 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
                                          {.resolution = resolution,
                                           .supersample = options.supersample});
     if (!reference) return reference.error();
+    if (auto covered = metric::checkReferenceCoverage(*reference); !covered) return covered.error();
   }
   const render::ImageBatchF& reference_images = options.reference ? *options.reference : *reference;
   auto current = renderer.render(*prepared_id, *program, samples, {.resolution = resolution});

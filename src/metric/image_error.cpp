@@ -76,6 +76,17 @@ double tileSquaredError(const uint8_t* a, const float* b, size_t pixel_count) {
 
 double tileCoverage(const float* rgba, size_t pixel_count) { return coverage(rgba, pixel_count, 1.0f); }
 
+core::Status checkReferenceCoverage(const render::ImageBatchF& reference) {
+  for (size_t i = 3; i < reference.pixels.size(); i += 4)
+    if (reference.pixels[i] > 0) return core::okStatus();
+  if (reference.count == 0) return core::okStatus();
+  return core::Error{
+      "the original shader's alpha is 0 wherever the object is: duolod counts the object's "
+      "pixels by the output's alpha (shaders/INTERFACE.md: `out vec4 outColor`, alpha 1 where "
+      "the object is), so every error would be 0. Write alpha 1 (a vec3 output leaves it "
+      "undefined)"};
+}
+
 double perPixelBound(const BoundConfig& config, double distance) {
   double span = std::max(1e-9, double(config.d_far) - config.d_near);
   double t = std::clamp((distance - config.d_near) / span, 0.0, 1.0);

@@ -163,6 +163,8 @@ core::Result<std::unique_ptr<VariantEvaluator>> VariantEvaluator::create(
   auto predicted = e.renderReference(e.predicted_samples_, e.predicted_resolution_);
   if (!predicted) return predicted.error();
   e.predicted_reference_ = std::move(predicted.value());
+  if (auto covered = metric::checkReferenceCoverage(e.predicted_reference_); !covered)
+    return covered.error();
   return evaluator;
 }
 

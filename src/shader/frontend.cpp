@@ -110,6 +110,26 @@ bool hasEntryPoint(const std::vector<uint32_t>& words) {
   return false;
 }
 
+// Whether the module declares the Position built-in (gl_Position, HLSL's SV_Position output):
+// glslang declares it only when the stage uses it, so a vertex stage without it draws nothing
+// (a fragment or pixel shader given as the vertex stage compiles as one).
+bool declaresPosition(const std::vector<uint32_t>& words) {
+  constexpr uint32_t kBuiltIn = static_cast<uint32_t>(spv::DecorationBuiltIn);
+  constexpr uint32_t kPosition = static_cast<uint32_t>(spv::BuiltInPosition);
+  for (size_t i = 5; i < words.size();) {
+    const uint32_t count = words[i] >> 16, opcode = words[i] & 0xffffu;
+    if (count == 0 || i + count > words.size()) return false;
+    if (opcode == static_cast<uint32_t>(spv::OpDecorate) && count >= 4 &&
+        words[i + 2] == kBuiltIn && words[i + 3] == kPosition)
+      return true;
+    if (opcode == static_cast<uint32_t>(spv::OpMemberDecorate) && count >= 5 &&
+        words[i + 3] == kBuiltIn && words[i + 4] == kPosition)
+      return true;
+    i += count;
+  }
+  return false;
+}
+
 }  // namespace
 
 core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, Stage stage,
@@ -189,6 +209,10 @@ core::Result<std::vector<uint32_t>> compileToSpirv(const std::string& source, St
   std::string log = logger.getAllMessages();
   if (words.empty()) return Error{file_name + ": SPIR-V generation failed: " + log};
   if (!hasEntryPoint(words)) return Error{file_name + ": the module has no entry point"};
+  if (stage == Stage::kVertex && !declaresPosition(words))
+    return Error{
+        file_name + ": the vertex stage never writes " + (hlsl ? "SV_Position" : "gl_Position") +
+        ", so nothing would be drawn (is it the " + (hlsl ? "pixel" : "fragment") + " stage?)"};
   return words;
 }
 
