@@ -365,6 +365,38 @@ TEST(CliShaderTest, AShaderWithoutAlphaIsRefused) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
+// GLSL 450 that GLSL ES 3.0 cannot express (bitCount) is simplified as any other: its levels are
+// written without the .es.glsl translation, with a warning naming the file and the reason. The
+// run failed after the whole search, naming a file it had generated.
+TEST(CliShaderTest, ATranslationTheShaderIsBeyondIsLeftOutWithAWarning) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_shader_es");
+  std::string fragment = kLambertFragment;
+  const std::string lit = "  outColor = vec4(";
+  fragment.insert(fragment.find(lit),
+                  "  lit *= 1.0 + 0.001 * float(bitCount(uint(gl_FragCoord.x)));\n");
+  std::string vertex = kMovedVertex;  // at INTERFACE.md's locations
+  vertex.replace(vertex.find("location = 4) in vec3 inNormal"), 13, "location = 1)");
+  vertex.replace(vertex.find("location = 1) in vec2 inUV0"), 13, "location = 3)");
+  const std::string frag = (dir / "bits.frag").string(), vert = (dir / "plain.vert").string();
+  std::ofstream(frag) << fragment;
+  std::ofstream(vert) << vertex;
+  const fs::path out = dir / "out";
+  test::CommandRun run =
+      runCli({"shader", spot, "--vert", vert, "--frag", frag, "--pixels", "64", "--search",
+              "greedy", "--steps", "2", "--candidates", "4", "--no-timing", "--out", out.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(test::contains(run.err,
+                             "duolod: warning: level00.frag.es.glsl not written: GLSL ES 300 "
+                             "cannot express this shader (line "))
+      << run.err;
+  EXPECT_TRUE(test::contains(run.err, "'bitCount'")) << run.err;
+  EXPECT_FALSE(fs::exists(out / "level00.frag.es.glsl"));
+  for (const char* file : {"level00.frag.glsl", "level00.frag.hlsl", "level00.frag.spv",
+                           "level00.vert.es.glsl", "autolod.frag.glsl"})
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+}
+
 TEST(CliShaderTest, RefusesToWriteIntoTheAssetsFolderEvenWithForce) {
   DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
   fs::path asset_dir = fs::path(spot).parent_path();

@@ -1533,6 +1533,12 @@ int runShader(ShaderFlags& flags) {
 int main(int argc, char** argv) {
   // Ctrl-C or a kill takes the unfinished output away (before any thread starts: see there).
   io::removeUnfinishedOutputsOnInterrupt("duolod");
+  // The library's warnings in the CLI's own form.
+  core::setLogSink([](core::LogLevel level, std::string_view message) {
+    static const char* kNames[] = {"debug", "info", "warning", "error"};
+    std::fprintf(stderr, "duolod: %s: %.*s\n", kNames[static_cast<int>(level)],
+                 static_cast<int>(message.size()), message.data());
+  });
   CLI::App app{
       "duolod " DUOLOD_VERSION
       " - automatic mesh and shader level of detail.\n"

@@ -7,6 +7,21 @@
 #include "duolod/shader.hpp"
 
 namespace duolod::shader {
+namespace {
+
+// The first line of a translation's check failure without the names glslang puts before it:
+// "NAME (GLSL ES 300): ERROR: NAME (GLSL ES 300):42: 'bitCount' : ..." -> "line 42: 'bitCount' :
+// ...".
+std::string firstReason(const std::string& message, const std::string& name) {
+  std::string line = message.substr(0, message.find('\n'));
+  while (!line.empty() && (line.back() == ' ' || line.back() == '\r')) line.pop_back();
+  for (const std::string& prefix : {name + ": ", std::string("ERROR: ")})
+    if (line.starts_with(prefix)) line.erase(0, prefix.size());
+  if (line.starts_with(name + ":")) line = "line " + line.substr(name.size() + 1);
+  return line;
+}
+
+}  // namespace
 
 core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
     const std::vector<uint32_t>& vertex, const std::vector<uint32_t>& fragment,
@@ -34,14 +49,22 @@ core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
     for (const Output& output : {Output{Target::kGlsl450, ".glsl", "glsl450_"},
                                  Output{Target::kGlslEs300, ".es.glsl", "glsles300_"},
                                  Output{Target::kHlsl50, ".hlsl", "hlsl50_"}}) {
+      const std::string file = base + output.extension;
       auto text = crossCompile(*stage.words, output.target, base);
-      if (!text) return text.error();
-      if (auto check = checkCrossCompiled(*text, output.target, stage.stage, base + output.extension);
-          !check)
-        return check.error();
-      if (auto ok = io::writeFileAtomic((directory / (base + output.extension)).string(), *text); !ok)
-        return ok.error();
-      files.push_back({output.kind + std::string(stage.suffix), base + output.extension});
+      core::Status check = text ? checkCrossCompiled(*text, output.target, stage.stage, file)
+                                : core::Status(text.error());
+      if (!check) {
+        if (output.target == Target::kGlsl450) return check.error();
+        // A language short of the shader's features (GLSL 450 has them all): the other files
+        // are still the shader.
+        const std::string name = file + " (" + targetName(output.target) + ")";
+        core::log(core::LogLevel::kWarning, file + " not written: " + targetName(output.target) +
+                                                " cannot express this shader (" +
+                                                firstReason(check.error().message, name) + ")");
+        continue;
+      }
+      if (auto ok = io::writeFileAtomic((directory / file).string(), *text); !ok) return ok.error();
+      files.push_back({output.kind + std::string(stage.suffix), file});
     }
   }
   return files;

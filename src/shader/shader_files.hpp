@@ -16,7 +16,9 @@ namespace duolod::shader {
 
 // Writes NAME.{vert,frag}.spv, .glsl, .es.glsl and .hlsl into `directory` atomically. Returns the
 // files written as (kind, file name): kinds spirv_vert, glsl450_vert, glsles300_vert,
-// hlsl50_vert and likewise _frag.
+// hlsl50_vert and likewise _frag. The SPIR-V and GLSL 450 files are the shader itself and must be
+// written; a GLSL ES 300 or HLSL 5.0 translation that cannot express it (an SSBO or bitCount in
+// ES 3.0) is left out, with a warning through core::log naming the file and the reason.
 core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
     const std::vector<uint32_t>& vertex, const std::vector<uint32_t>& fragment,
     const std::filesystem::path& directory, const std::string& name);
