@@ -274,6 +274,33 @@ TEST_F(RendererTest, SpirvProgramRendersLikeGlsl) {
   renderer_->releaseAsset(*asset);
 }
 
+// A uniform the driver optimized away has no active location: setting it does nothing, as its
+// value can change nothing (a value moved to a parameter in a branch that never writes the
+// output aborted `shader`'s search). A value of the wrong type for an active uniform is still an
+// error naming the location.
+TEST_F(RendererTest, UniformsTheDriverOptimizedAwayAreSkipped) {
+  const std::string vertex =
+      "#version 450 core\nlayout(location = 0) in vec3 p;\n"
+      "void main() { gl_Position = vec4(p, 1.0); }\n";
+  const std::string fragment =
+      "#version 450 core\nlayout(location = 40) uniform vec3 unused;\n"
+      "layout(location = 41) uniform vec4 tint;\nlayout(location = 0) out vec4 c;\n"
+      "void main() { c = tint; }\n";
+  auto program =
+      renderer_->compileProgram(render::GlslSource{vertex, fragment, "p.vert", "tint.frag"});
+  ASSERT_TRUE(program) << program.error().message;
+  const render::UniformValue unused{40, 3, {1, 2, 3, 0}};
+  EXPECT_TRUE(renderer_->setProgramUniforms(*program, std::span(&unused, 1)));
+  const render::UniformValue tint{41, 4, {1, 0, 0, 1}};
+  EXPECT_TRUE(renderer_->setProgramUniforms(*program, std::span(&tint, 1)));
+  const render::UniformValue wrong_type{41, 3, {1, 0, 0, 0}};
+  core::Status refused = renderer_->setProgramUniforms(*program, std::span(&wrong_type, 1));
+  ASSERT_FALSE(refused);
+  EXPECT_TRUE(test::contains(refused.error().message, "no 3-float uniform at location 41"))
+      << refused.error().message;
+  renderer_->releaseProgram(*program);
+}
+
 TEST_F(RendererTest, CompileErrorsCarryTheShaderLog) {
   render::GlslSource broken{"#version 450 core\nvoid main() { gl_Position = vec4(0); }\n",
                             "#version 450 core\nlayout(location=0) out vec4 c;\nvoid main() { c = "

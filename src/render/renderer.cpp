@@ -286,6 +286,20 @@ core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const Uni
   return core::okStatus();
 }
 
+namespace {
+bool hasActiveUniformAt(GLuint program, int location) {
+  GLint count = 0;
+  glGetProgramInterfaceiv(program, GL_UNIFORM, GL_ACTIVE_RESOURCES, &count);
+  const GLenum property = GL_LOCATION;
+  for (GLint i = 0; i < count; ++i) {
+    GLint found = -1;
+    glGetProgramResourceiv(program, GL_UNIFORM, GLuint(i), 1, &property, 1, nullptr, &found);
+    if (found == location) return true;
+  }
+  return false;
+}
+}  // namespace
+
 core::Status internal::setUniforms(GLuint id, std::span<const UniformValue> values) {
   while (glGetError() != GL_NO_ERROR) {
   }
@@ -301,10 +315,15 @@ core::Status internal::setUniforms(GLuint id, std::span<const UniformValue> valu
       case 3: glProgramUniform3fv(id, v.location, 1, x); break;
       default: glProgramUniform4fv(id, v.location, 1, x); break;
     }
-    if (GLenum error = glGetError(); error != GL_NO_ERROR)
+    if (GLenum error = glGetError(); error != GL_NO_ERROR) {
+      // A uniform the driver optimized away (its value can change nothing, e.g. moved to a
+      // parameter in a branch that never writes the output) has no active location: nothing to
+      // set. An active one of another type is the caller's mistake.
+      if (!hasActiveUniformAt(id, v.location)) continue;
       return Error{"setProgramUniforms: the program has no " + std::to_string(v.components) +
                    "-float uniform at location " + std::to_string(v.location) + " (GL error " +
                    std::to_string(error) + ")"};
+    }
   }
   return core::okStatus();
 }
