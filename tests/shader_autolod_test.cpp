@@ -98,6 +98,32 @@ std::vector<render::UniformValue> uniforms(const std::vector<ParameterValue>& pa
   return values;
 }
 
+// The switch's name and location are checked on the original before any search: a user uniform
+// at location 39 (or named autoLOD) failed `shader` and `generate` only once every level was made.
+TEST(AutoLodTest, AnOriginalHoldingTheSwitchsPlaceIsRefusedFirst) {
+  const std::string plain_vertex = vertexSource("", "");
+  EXPECT_TRUE(
+      checkRoomForAutoLod(program(plain_vertex, kOriginalFragment, {}), "o.vert", "o.frag"));
+  const ShaderProgram at_39 =
+      program(plain_vertex,
+              fragmentSource("layout(location = 39) uniform float uExposure;\n",
+                             "  outColor = vec4(uExposure, 0.0, 0.0, 1.0);\n"),
+              {});
+  core::Status refused = checkRoomForAutoLod(at_39, "o.vert", "exposure.frag");
+  ASSERT_FALSE(refused);
+  EXPECT_TRUE(
+      test::contains(refused.error().message, "exposure.frag: uniform 'uExposure' at location 39"))
+      << refused.error().message;
+  const ShaderProgram named = program(vertexSource("layout(location = 7) uniform float autoLOD;\n",
+                                                   "  vObjectPosition.x += autoLOD;\n"),
+                                      kConstantFragment, {});
+  refused = checkRoomForAutoLod(named, "named.vert", "o.frag");
+  ASSERT_FALSE(refused);
+  EXPECT_TRUE(
+      test::contains(refused.error().message, "named.vert: uniform 'autoLOD' at location 7"))
+      << refused.error().message;
+}
+
 TEST(AutoLodTest, LevelSelectionFollowsThresholds) {
   EXPECT_EQ(autoLodLevel(kThresholds, 0.0f), 0);
   EXPECT_EQ(autoLodLevel(kThresholds, -3.0f), 0);  // below the first threshold: the original

@@ -386,6 +386,9 @@ core::Status Generator::setUp(const render::GlslSource& source) {
   if (!fragment) return fragment.error();
   auto original = shader::parseProgram(*vertex, *fragment);
   if (!original) return original.error();
+  if (auto room = shader::checkRoomForAutoLod(*original, source.vertex_name, source.fragment_name);
+      !room)
+    return room.error();
   original_ = std::move(*original);
 
   auto renderer = Renderer::create({.device = options_.device, .bindings = options_.bindings});

@@ -151,6 +151,27 @@ std::string parameterKey(const ParameterValue& parameter) {
   return key;
 }
 
+}  // namespace
+
+core::Status checkRoomForAutoLod(const ShaderProgram& original, const std::string& vertex_name,
+                                 const std::string& fragment_name, const AutoLodOptions& options) {
+  for (const auto& [module, file] :
+       {std::pair{&original.vertex, &vertex_name}, std::pair{&original.fragment, &fragment_name}}) {
+    ir::DefUse uses(*module);
+    for (const ir::LooseUniform& uniform : ir::looseUniforms(*module, uses))
+      if (uniform.name == options.uniform_name || uniform.location == options.autolod_location)
+        return core::Error{*file + ": uniform '" + uniform.name + "' at location " +
+                           std::to_string(uniform.location.value_or(0)) +
+                           ": the single LOD shader's level switch needs the name '" +
+                           options.uniform_name + "' and location " +
+                           std::to_string(options.autolod_location) +
+                           " (shaders/INTERFACE.md, reserved): rename or move it"};
+  }
+  return core::okStatus();
+}
+
+namespace {
+
 core::Result<std::vector<LevelMoves>> planLocations(std::span<const ShaderProgram> levels,
                                                     const AutoLodOptions& options) {
   std::vector<LevelMoves> moves(levels.size());

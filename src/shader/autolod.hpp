@@ -33,7 +33,7 @@
 namespace duolod::shader {
 
 struct AutoLodOptions {
-  uint32_t autolod_location = 39;  // clear of INTERFACE.md, the region uniform (30) and rules (40+)
+  uint32_t autolod_location = 39;  // INTERFACE.md reserves it; rules' parameters start at 40
   std::string uniform_name = "autoLOD";
 };
 
@@ -55,6 +55,13 @@ struct AutoLodShader {
 // Errors: mismatched counts, thresholds not increasing, a level already using autoLOD's location
 // or name, variants that disagree on a uniform block's or sampler's type at one binding, or a
 // module that fails validation after merging.
+// Checked before a search, whose levels end in an autoLOD shader: the original may not have a
+// loose uniform at the switch's location or with its name (buildAutoLodShader would refuse every
+// level then, after the whole search). The error names the stage's file and the uniform.
+core::Status checkRoomForAutoLod(const ShaderProgram& original, const std::string& vertex_name,
+                                 const std::string& fragment_name,
+                                 const AutoLodOptions& options = {});
+
 core::Result<AutoLodShader> buildAutoLodShader(std::span<const ShaderProgram> levels,
                                                std::span<const float> thresholds,
                                                const AutoLodOptions& options = {});

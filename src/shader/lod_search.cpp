@@ -33,6 +33,8 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   if (!fragment_words) return fragment_words.error();
   auto original = parseProgram(*vertex_words, *fragment_words);
   if (!original) return original.error();
+  if (auto room = checkRoomForAutoLod(*original, source.vertex_name, source.fragment_name); !room)
+    return room.error();
 
   auto renderer =
       render::Renderer::create({.device = options.device, .bindings = options.bindings});
