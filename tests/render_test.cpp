@@ -544,6 +544,33 @@ TEST_F(RendererTest, ManySamplesSpanSeveralAtlasChunksInOrder) {
   renderer_->releaseAsset(*asset);
 }
 
+// An attribute location past the 16 OpenGL guarantees is refused when the file is read (it was
+// "OpenGL error 1281" at the first draw, naming neither file nor key), and a block marked unused
+// (-1) is not bound (the same GL error).
+TEST(Bindings, LocationsStayWithinWhatOpenGLGuarantees) {
+  auto past = render::parseBindings(R"({"attributes": {"normal": 16}})", "b.json");
+  ASSERT_FALSE(past);
+  EXPECT_TRUE(
+      test::contains(past.error().message,
+                     "b.json: 'attributes.normal' must be an integer from -1 (unused) to 15"))
+      << past.error().message;
+  EXPECT_TRUE(render::parseBindings(R"({"attributes": {"normal": 15}, "blocks": {"material": 31}})",
+                                    "b.json"));
+  auto unused = render::parseBindings(R"({"blocks": {"material": -1}})", "b.json");
+  ASSERT_TRUE(unused) << unused.error().message;
+  auto renderer = render::Renderer::create({.bindings = *unused});
+  if (!renderer) GTEST_SKIP() << "SKIPPED: no OpenGL 4.5 context: " << renderer.error().message;
+  auto source = render::loadShaderPair(test::sourcePath("shaders/constant"));
+  ASSERT_TRUE(source) << source.error().message;
+  auto program = (*renderer)->compileProgram(*source);
+  ASSERT_TRUE(program) << program.error().message;
+  auto asset = (*renderer)->uploadAsset(squareAsset({0.2f, 0.4f, 0.6f, 1}));
+  ASSERT_TRUE(asset) << asset.error().message;
+  render::Sample sample = frontSample(4.0f);
+  auto images = (*renderer)->render(*asset, *program, std::span(&sample, 1), {.resolution = 16});
+  EXPECT_TRUE(images) << images.error().message;
+}
+
 TEST(Bindings, ParsesAndRejectsWithTheKeyNamed) {
   auto parsed = render::parseBindings(
       R"({"attributes": {"position": 2, "uv0": -1}, "textures": {"baseColor": 7}})", "b.json");

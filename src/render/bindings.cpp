@@ -59,9 +59,12 @@ core::Result<Bindings> parseBindings(const std::string& json_text, const std::st
       for (Field& f : fields)
         if (section == f.section && key == f.key) field = &f;
       if (!field) return Error{file_name + ": unknown key '" + section + "." + key + "'"};
-      if (!entry.is_number_integer() || entry.get<int>() < -1 || entry.get<int>() > 31)
+      // OpenGL guarantees 16 vertex attributes (GL_MAX_VERTEX_ATTRIBS); a location past them was
+      // an "OpenGL error 1281" at the first draw.
+      const int highest = section == "attributes" ? 15 : 31;
+      if (!entry.is_number_integer() || entry.get<int>() < -1 || entry.get<int>() > highest)
         return Error{file_name + ": '" + section + "." + key +
-                     "' must be an integer from -1 (unused) to 31"};
+                     "' must be an integer from -1 (unused) to " + std::to_string(highest)};
       *field->target = entry.get<int>();
       explicit_fields.push_back(field);
     }

@@ -415,8 +415,9 @@ core::Result<ImageBatch8> drawRegions(Renderer::State& s, RegionTarget& target,
     drawer.bindMaterial(material);
     for (int light = 0; light < lights_per_view; ++light) {
       int sample = view * lights_per_view + light;
-      glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, target.frame_ubo,
-                        stride * sample, sizeof(FrameBlock));
+      if (s.bindings.frame_block >= 0)  // -1: the shader reads no frame block
+        glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, target.frame_ubo,
+                          stride * sample, sizeof(FrameBlock));
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, kLightLayerBinding, light_buffer,
                         GLintptr(light_stride * light), 4 * sizeof(float));
       glDrawArrays(GL_TRIANGLES, GLint(run_start * 3), GLsizei((run_end - run_start) * 3));

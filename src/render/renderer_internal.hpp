@@ -380,8 +380,9 @@ struct ChunkDrawer {
 
   void bindMaterial(uint32_t material_index) {
     const Bindings& b = s.bindings;
-    glBindBufferRange(GL_UNIFORM_BUFFER, b.material_block, asset.material_ubo,
-                      asset.material_stride * material_index, sizeof(MaterialBlock));
+    if (b.material_block >= 0)  // -1: the shader reads no material block
+      glBindBufferRange(GL_UNIFORM_BUFFER, b.material_block, asset.material_ubo,
+                        asset.material_stride * material_index, sizeof(MaterialBlock));
     core::Material fallback;
     const core::Material& m =
         material_index < asset.materials.size() ? asset.materials[material_index] : fallback;
@@ -409,8 +410,9 @@ struct ChunkDrawer {
       int x = (i % layout.columns) * tile, y = (i / layout.columns) * tile;
       glViewport(x, y, tile, tile);
       glScissor(x, y, tile, tile);
-      glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo,
-                        stride * (first + i), sizeof(FrameBlock));
+      if (s.bindings.frame_block >= 0)  // -1: the shader reads no frame block
+        glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo,
+                          stride * (first + i), sizeof(FrameBlock));
       for (const GpuSubmesh& sub : asset.submeshes) {
         bindMaterial(sub.material);
         glDrawElements(GL_TRIANGLES, sub.index_count, GL_UNSIGNED_INT,

@@ -77,8 +77,9 @@ core::Result<SceneFrame> Renderer::renderScene(std::span<const InstanceBatch> ba
     const bool single_material = asset.submeshes.size() == 1;
     if (single_material) drawer.bindMaterial(asset.submeshes.front().material);
     for (size_t i = 0; i < batch.models.size(); ++i, ++slot) {
-      glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo,
-                        stride * static_cast<GLsizeiptr>(slot), sizeof(FrameBlock));
+      if (s.bindings.frame_block >= 0)  // -1: the shader reads no frame block
+        glBindBufferRange(GL_UNIFORM_BUFFER, s.bindings.frame_block, s.frame_ubo,
+                          stride * static_cast<GLsizeiptr>(slot), sizeof(FrameBlock));
       for (const GpuSubmesh& sub : asset.submeshes) {
         if (!single_material) drawer.bindMaterial(sub.material);
         glDrawElements(GL_TRIANGLES, sub.index_count, GL_UNSIGNED_INT,
