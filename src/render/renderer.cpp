@@ -153,7 +153,18 @@ core::Result<GLuint> linkProgram(GLuint vertex, GLuint fragment, const std::stri
   if (!linked) {
     std::string log = programLog(program);
     glDeleteProgram(program);
-    return Error{what + ": program failed to link:\n" + log};
+    // The usual cause with a user's pair: an HLSL stage beside a GLSL one. HLSL's cbuffer
+    // matrices arrive row_major (as HLSL lays them out), a GLSL block's column_major, so the two
+    // cannot share a block holding matrices.
+    const bool blocks_differ = log.find("mismatching definitions") != std::string::npos ||
+                               (log.find("uniform block") != std::string::npos &&
+                                log.find("do not match") != std::string::npos);
+    return Error{what + ": program failed to link:\n" + log +
+                 (blocks_differ ? "\n(each uniform block must be declared alike in both stages, "
+                                  "matrix layout included: an HLSL stage's cbuffer matrices are "
+                                  "row_major, so a block holding matrices cannot be shared by an "
+                                  "HLSL stage and a GLSL one; give both stages in one language)"
+                                : "")};
   }
   return program;
 }
