@@ -274,10 +274,10 @@ TEST_F(RendererTest, SpirvProgramRendersLikeGlsl) {
   renderer_->releaseAsset(*asset);
 }
 
-// A uniform the driver optimized away has no active location: setting it does nothing, as its
-// value can change nothing (a value moved to a parameter in a branch that never writes the
-// output aborted `shader`'s search). A value of the wrong type for an active uniform is still an
-// error naming the location.
+// A uniform its SPIR-V declares but the driver optimized away has no active location: setting it
+// does nothing, as its value can change nothing (a value moved to a parameter in a branch that
+// never writes the output aborted `shader`'s search). A location the program never declared, or
+// a value of the wrong type for an active uniform, is still an error naming the location.
 TEST_F(RendererTest, UniformsTheDriverOptimizedAwayAreSkipped) {
   const std::string vertex =
       "#version 450 core\nlayout(location = 0) in vec3 p;\n"
@@ -286,18 +286,24 @@ TEST_F(RendererTest, UniformsTheDriverOptimizedAwayAreSkipped) {
       "#version 450 core\nlayout(location = 40) uniform vec3 unused;\n"
       "layout(location = 41) uniform vec4 tint;\nlayout(location = 0) out vec4 c;\n"
       "void main() { c = tint; }\n";
-  auto program =
-      renderer_->compileProgram(render::GlslSource{vertex, fragment, "p.vert", "tint.frag"});
+  auto vertex_words = shader::compileToSpirv(vertex, shader::Stage::kVertex, "p.vert");
+  auto fragment_words = shader::compileToSpirv(fragment, shader::Stage::kFragment, "tint.frag");
+  ASSERT_TRUE(vertex_words && fragment_words);
+  auto program = renderer_->compileProgram(render::SpirvBinary{*vertex_words, *fragment_words});
   ASSERT_TRUE(program) << program.error().message;
   const render::UniformValue unused{40, 3, {1, 2, 3, 0}};
   EXPECT_TRUE(renderer_->setProgramUniforms(*program, std::span(&unused, 1)));
   const render::UniformValue tint{41, 4, {1, 0, 0, 1}};
   EXPECT_TRUE(renderer_->setProgramUniforms(*program, std::span(&tint, 1)));
-  const render::UniformValue wrong_type{41, 3, {1, 0, 0, 0}};
-  core::Status refused = renderer_->setProgramUniforms(*program, std::span(&wrong_type, 1));
-  ASSERT_FALSE(refused);
-  EXPECT_TRUE(test::contains(refused.error().message, "no 3-float uniform at location 41"))
-      << refused.error().message;
+  for (const render::UniformValue& wrong :
+       {render::UniformValue{41, 3, {1, 0, 0, 0}}, render::UniformValue{9, 2, {}}}) {
+    core::Status refused = renderer_->setProgramUniforms(*program, std::span(&wrong, 1));
+    ASSERT_FALSE(refused);
+    EXPECT_TRUE(test::contains(refused.error().message, "no " + std::to_string(wrong.components) +
+                                                            "-float uniform at location " +
+                                                            std::to_string(wrong.location)))
+        << refused.error().message;
+  }
   renderer_->releaseProgram(*program);
 }
 

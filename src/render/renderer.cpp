@@ -280,7 +280,13 @@ core::Status Renderer::setProgramUniforms(ProgramId program, std::span<const Uni
   if (program < 0 || program >= static_cast<int>(s.programs.size()) || !s.programs[program])
     return Error{"setProgramUniforms: unknown program id " + std::to_string(program)};
   const GLuint id = s.programs[program];
-  if (auto set = setUniforms(id, values); !set) return set;
+  const auto declared = s.declared_uniforms.find(id);
+  if (auto set = setUniforms(id, values,
+                             declared == s.declared_uniforms.end()
+                                 ? std::span<const int>()
+                                 : std::span<const int>(declared->second));
+      !set)
+    return set;
   // A region program's values go to the helper's copy too, when it next draws with it.
   if (auto region = s.region_programs.find(id); region != s.region_programs.end()) {
     std::vector<UniformValue>& kept = region->second.uniforms;
@@ -309,9 +315,28 @@ bool hasActiveUniformAt(GLuint program, int location) {
   }
   return false;
 }
+
+// The Location of every UniformConstant variable of a SPIR-V module (loose uniforms; samplers
+// have bindings, not locations).
+void collectUniformLocations(const std::vector<uint32_t>& words, std::vector<int>& locations) {
+  std::map<uint32_t, int> located;
+  std::vector<uint32_t> uniforms;
+  for (size_t i = 5; i < words.size();) {
+    const uint32_t count = words[i] >> 16, opcode = words[i] & 0xffffu;
+    if (count == 0 || i + count > words.size()) return;
+    if (opcode == 71 /* OpDecorate */ && count >= 4 && words[i + 2] == 30 /* Location */)
+      located[words[i + 1]] = static_cast<int>(words[i + 3]);
+    if (opcode == 59 /* OpVariable */ && count >= 4 && words[i + 3] == 0 /* UniformConstant */)
+      uniforms.push_back(words[i + 2]);
+    i += count;
+  }
+  for (uint32_t id : uniforms)
+    if (auto found = located.find(id); found != located.end()) locations.push_back(found->second);
+}
 }  // namespace
 
-core::Status internal::setUniforms(GLuint id, std::span<const UniformValue> values) {
+core::Status internal::setUniforms(GLuint id, std::span<const UniformValue> values,
+                                   std::span<const int> declared) {
   while (glGetError() != GL_NO_ERROR) {
   }
   for (const UniformValue& v : values) {
@@ -330,7 +355,9 @@ core::Status internal::setUniforms(GLuint id, std::span<const UniformValue> valu
       // A uniform the driver optimized away (its value can change nothing, e.g. moved to a
       // parameter in a branch that never writes the output) has no active location: nothing to
       // set. An active one of another type is the caller's mistake.
-      if (!hasActiveUniformAt(id, v.location)) continue;
+      if (std::find(declared.begin(), declared.end(), v.location) != declared.end() &&
+          !hasActiveUniformAt(id, v.location))
+        continue;
       return Error{"setProgramUniforms: the program has no " + std::to_string(v.components) +
                    "-float uniform at location " + std::to_string(v.location) + " (GL error " +
                    std::to_string(error) + ")"};
@@ -585,6 +612,10 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const SpirvBinary& bi
   }
   auto program = linkProgram(*vertex, *fragment, "SPIR-V program");
   if (!program) return program.error();
+  std::vector<int>& declared = state_->declared_uniforms[*program];
+  declared.clear();  // (a recycled GL name)
+  collectUniformLocations(binary.vertex, declared);
+  collectUniformLocations(binary.fragment, declared);
   state_->programs.push_back(*program);
   return static_cast<ProgramId>(state_->programs.size() - 1);
 }
@@ -595,6 +626,7 @@ void Renderer::releaseProgram(ProgramId program) {
   if (program >= 0 && program < static_cast<int>(s.programs.size()) && s.programs[program]) {
     // A region program's copy in the helper's context goes with it, deleted there.
     const GLuint id = s.programs[program];
+    s.declared_uniforms.erase(id);
     if (s.region_programs.erase(id) > 0 && s.region_helper) {
       s.region_helper->run([id](internal::RegionHelper::Context& helper) {
         if (auto copy = helper.programs.find(id); copy != helper.programs.end()) {

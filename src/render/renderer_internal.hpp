@@ -148,9 +148,11 @@ struct RegionProgram {
 
 // A program from GLSL source, compiled and linked in the current context.
 core::Result<GLuint> buildProgram(const GlslSource& source);
-// glProgramUniform of each value; fails on a location or size the program lacks.
-core::Status setUniforms(GLuint program, std::span<const UniformValue> values);
-
+// glProgramUniform of each value; fails on a location or size the program lacks. A location in
+// `declared` (the program's SPIR-V declares a uniform there) that the driver optimized away is
+// skipped: its value can change nothing.
+core::Status setUniforms(GLuint program, std::span<const UniformValue> values,
+                         std::span<const int> declared = {});
 
 // Creates `gpu.vao` and one buffer per present attribute stream of `mesh`, bound to VAO binding
 // point = stream slot (position 0, normal 1, tangent 2, uv0 3, uv1 4, colour 5); the attribute
@@ -210,6 +212,8 @@ struct Renderer::State {
   GlContext context;
   std::vector<std::optional<internal::GpuAsset>> assets;
   std::vector<GLuint> programs;  // 0 = released
+  // Per SPIR-V program: the loose uniform locations its modules declare (setUniforms).
+  std::map<GLuint, std::vector<int>> declared_uniforms;
   Bindings bindings;
   core::Vec3 ambient{0.1f, 0.1f, 0.1f};
   core::Vec3 light_color{2.0f, 2.0f, 2.0f};
