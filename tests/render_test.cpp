@@ -562,6 +562,13 @@ TEST(Bindings, LocationsStayWithinWhatOpenGLGuarantees) {
       << past.error().message;
   EXPECT_TRUE(render::parseBindings(R"({"attributes": {"normal": 15}, "blocks": {"material": 31}})",
                                     "b.json"));
+  // A key given twice was taken silently, the last one winning.
+  auto twice = render::parseBindings(R"({"attributes": {"normal": 2, "normal": 1}})", "b.json");
+  ASSERT_FALSE(twice);
+  EXPECT_TRUE(test::contains(twice.error().message, "b.json: key 'normal' is given twice"))
+      << twice.error().message;
+  EXPECT_TRUE(render::parseBindings(R"({"attributes": {"normal": 2}, "textures": {"normal": 1}})",
+                                    "b.json"));
   auto unused = render::parseBindings(R"({"blocks": {"material": -1}})", "b.json");
   ASSERT_TRUE(unused) << unused.error().message;
   auto renderer = render::Renderer::create({.bindings = *unused});

@@ -27,11 +27,30 @@ std::map<std::string, uint32_t> hlslVertexInputLocations(const Bindings& binding
 
 core::Result<Bindings> parseBindings(const std::string& json_text, const std::string& file_name) {
   nlohmann::json document;
+  // A key given twice in one object: the parser keeps the last silently, which hides a mistake
+  // ({"normal": 2, "normal": 1}). The keys of each open object, to name it.
+  std::vector<std::vector<std::string>> open_keys;
+  std::string duplicate;
+  auto track = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) open_keys.emplace_back();
+    if (event == Event::object_end && !open_keys.empty()) open_keys.pop_back();
+    if (event == Event::key && !open_keys.empty() && parsed.is_string()) {
+      const std::string key = parsed.get<std::string>();
+      std::vector<std::string>& keys = open_keys.back();
+      if (duplicate.empty() && std::find(keys.begin(), keys.end(), key) != keys.end())
+        duplicate = key;
+      keys.push_back(key);
+    }
+    return true;
+  };
   try {
-    document = nlohmann::json::parse(json_text);
+    document = nlohmann::json::parse(json_text, track);
   } catch (const nlohmann::json::parse_error& e) {
     return Error{file_name + ": not valid JSON (" + e.what() + ")"};
   }
+  if (!duplicate.empty())
+    return Error{file_name + ": key '" + duplicate + "' is given twice in one object"};
   if (!document.is_object()) return Error{file_name + ": expected a JSON object"};
   Bindings bindings;
   struct Field {
