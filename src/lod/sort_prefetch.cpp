@@ -63,32 +63,24 @@ void SortByErrorPrefetch::run() {
   try {
     renderAhead();
   } catch (const std::bad_alloc&) {
-    stopAfterException("out of memory");
+    stop("SortByError prefetch: out of memory");
   } catch (const std::exception& e) {
-    stopAfterException(e.what());
+    stop(std::string("SortByError prefetch: ") + e.what());
   } catch (...) {
-    stopAfterException("an unknown exception");
+    stop("SortByError prefetch: an unknown exception");
   }
 }
 
-void SortByErrorPrefetch::stopAfterException(const std::string& what) {
+void SortByErrorPrefetch::stop(std::string failure) {
   {
     std::lock_guard lock(mutex_);
-    failure_ = "SortByError prefetch: " + what;
+    failure_ = std::move(failure);
     stopped_ = true;
   }
   changed_.notify_all();
 }
 
 void SortByErrorPrefetch::renderAhead() {
-  auto stop = [&](std::string failure) {
-    {
-      std::lock_guard lock(mutex_);
-      failure_ = std::move(failure);
-      stopped_ = true;
-    }
-    changed_.notify_all();
-  };
   auto renderer = render::Renderer::create(context_);
   if (!renderer) return stop("SortByError prefetch context: " + renderer.error().message);
   // M_0 uploaded as the caller uploads it (uploadMesh over the asset's materials), so both draw

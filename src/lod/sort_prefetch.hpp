@@ -61,7 +61,7 @@ class SortByErrorPrefetch {
   enum class State { kQueued, kRunning, kDone, kTaken };
   void run();
   void renderAhead();
-  void stopAfterException(const std::string& what);
+  void stop(std::string failure);  // this thread ends early, saying why
 
   const core::Asset& asset_;
   const std::vector<shader::Variant> shaders_;

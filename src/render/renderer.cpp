@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <glslang/SPIRV/spirv.hpp>
 #include <optional>
 #include <string_view>
 #include <thread>
@@ -324,9 +325,9 @@ void collectUniformLocations(const std::vector<uint32_t>& words, std::vector<int
   for (size_t i = 5; i < words.size();) {
     const uint32_t count = words[i] >> 16, opcode = words[i] & 0xffffu;
     if (count == 0 || i + count > words.size()) return;
-    if (opcode == 71 /* OpDecorate */ && count >= 4 && words[i + 2] == 30 /* Location */)
+    if (opcode == spv::OpDecorate && count >= 4 && words[i + 2] == spv::DecorationLocation)
       located[words[i + 1]] = static_cast<int>(words[i + 3]);
-    if (opcode == 59 /* OpVariable */ && count >= 4 && words[i + 3] == 0 /* UniformConstant */)
+    if (opcode == spv::OpVariable && count >= 4 && words[i + 3] == spv::StorageClassUniformConstant)
       uniforms.push_back(words[i + 2]);
     i += count;
   }

@@ -50,11 +50,6 @@ struct AutoLodShader {
   int moved_parameters = 0;  // parameters given a new location to avoid a clash
 };
 
-// Combines `levels` (the original first, the cheapest last) with `thresholds` (one per level,
-// finite, strictly increasing; thresholds[0] is where level 0 nominally starts, usually 0).
-// Errors: mismatched counts, thresholds not increasing, a level already using autoLOD's location
-// or name, variants that disagree on a uniform block's or sampler's type at one binding, or a
-// module that fails validation after merging.
 // Checked before a search, whose levels end in an autoLOD shader: the original may not have a
 // loose uniform at the switch's location or with its name (buildAutoLodShader would refuse every
 // level then, after the whole search). The error names the stage's file and the uniform.
@@ -62,6 +57,11 @@ core::Status checkRoomForAutoLod(const ShaderProgram& original, const std::strin
                                  const std::string& fragment_name,
                                  const AutoLodOptions& options = {});
 
+// Combines `levels` (the original first, the cheapest last) with `thresholds` (one per level,
+// finite, strictly increasing; thresholds[0] is where level 0 nominally starts, usually 0).
+// Errors: mismatched counts, thresholds not increasing, a level already using autoLOD's location
+// or name, variants that disagree on a uniform block's or sampler's type at one binding, or a
+// module that fails validation after merging.
 core::Result<AutoLodShader> buildAutoLodShader(std::span<const ShaderProgram> levels,
                                                std::span<const float> thresholds,
                                                const AutoLodOptions& options = {});
