@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "duolod/shader.hpp"
@@ -257,6 +258,56 @@ TEST(ShaderIr, BackwardSliceSeparatesInterpolatedFromTextured) {
   EXPECT_TRUE(out_sources.instructions.count(comparison));
 }
 
+// SliceSummaries (every value's slice flags from one pass over the dependence graph) must say
+// exactly what slicing each value on its own says, on shaders with calls, loops, branches and
+// textures: every function-body value of the reference shaders' stages and the small shader.
+void expectSummariesMatchSlices(const ir::Module& module, const std::string& what) {
+  ir::DefUse uses(module);
+  auto computes = [](const ir::Instruction& instruction) {
+    return instruction.opcode != spv::OpLoad && instruction.opcode != spv::OpCompositeExtract;
+  };
+  ir::SliceSummaries summaries(module, uses, computes);
+  int values = 0;
+  std::set<int> combinations;  // of the flags: the comparison is not of constant answers
+  for (const ir::Function& function : module.functions)
+    for (const ir::Block& block : function.blocks)
+      for (const ir::Instruction& instruction : block.instructions) {
+        if (!instruction.hasResult()) continue;
+        ++values;
+        ir::ValueSources slice = ir::backwardSlice(module, uses, instruction.result_id);
+        bool marked = false;
+        for (ir::Id id : slice.instructions) marked |= computes(*uses.def(id));
+        ir::SliceFlags summary = summaries.of(instruction.result_id);
+        EXPECT_EQ(summary.reads_input, slice.reads_input) << what << " %" << instruction.result_id;
+        EXPECT_EQ(summary.reads_uniform, slice.reads_uniform)
+            << what << " %" << instruction.result_id;
+        EXPECT_EQ(summary.reads_texture, slice.reads_texture)
+            << what << " %" << instruction.result_id;
+        EXPECT_EQ(summary.reads_other, slice.reads_other) << what << " %" << instruction.result_id;
+        EXPECT_EQ(summary.uses_derivatives, slice.uses_derivatives)
+            << what << " %" << instruction.result_id;
+        EXPECT_EQ(summary.has_side_effects, slice.has_side_effects)
+            << what << " %" << instruction.result_id;
+        EXPECT_EQ(summary.reaches_marked, marked) << what << " %" << instruction.result_id;
+        combinations.insert(summary.reads_input | summary.reads_uniform << 1 |
+                            summary.reads_texture << 2 | summary.reads_other << 3 |
+                            summary.uses_derivatives << 4 | summary.reaches_marked << 5);
+      }
+  EXPECT_GT(values, 20) << what;
+  EXPECT_GE(combinations.size(), 3u) << what;
+  std::printf("[ summaries ] %s: %d values agree\n", what.c_str(), values);
+}
+
+TEST(ShaderIr, SliceSummariesAgreeWithSlicingEachValue) {
+  for (const char* name : {"pbr", "noise_phong", "blend"})
+    for (const char* extension : {".vert", ".frag"}) {
+      std::string file = std::string(name) + extension;
+      Stage stage = std::string(extension) == ".vert" ? Stage::kVertex : Stage::kFragment;
+      expectSummariesMatchSlices(parseOrDie(compileOrDie(readShader(file), stage, file)), file);
+    }
+  expectSummariesMatchSlices(smallShader().module, "small.frag");
+}
+
 TEST(ShaderIr, MutationsKeepTheModuleValid) {
   SmallShader shader = smallShader();
   ir::Module& module = shader.module;
@@ -396,6 +447,11 @@ TEST(ShaderIr, CorruptedModulesNeverCrashTheAnalyses) {
         for (const ir::Instruction& instruction : block.instructions)
           if (instruction.hasResult() && next() % 64 == 0) ir::backwardSlice(*module, uses, instruction.result_id);
     }
+    ir::SliceSummaries summaries(*module, uses, [](const ir::Instruction&) { return true; });
+    for (const ir::Function& function : module->functions)
+      for (const ir::Block& block : function.blocks)
+        for (const ir::Instruction& instruction : block.instructions)
+          if (instruction.hasResult()) summaries.of(instruction.result_id);
     EXPECT_TRUE(ir::parseModule(ir::emitModule(*module)).ok()) << "trial " << trial;
   }
   EXPECT_GT(parsed, 0);

@@ -247,6 +247,51 @@ TEST_P(MoveToParameterReference, SampledSitesValidateAndLink) {
   }
 }
 
+// Replacing the end of a long dependence chain kills the whole chain (each value, its variable
+// and its store), and one call of removeDeadCode finds it all: a second call removes nothing.
+// Also the site enumeration's answers on such a shader: every chain value is a site.
+TEST(DeadCode, ALongChainGoesInOneCall) {
+  constexpr int kLength = 300;
+  std::string fragment =
+      "#version 450 core\nlayout(location = 1) in vec2 vUV;\n"
+      "layout(location = 0) out vec4 outColor;\nvoid main() {\n"
+      "  float a0 = vUV.x;\n";
+  for (int i = 1; i < kLength; ++i)
+    fragment +=
+        "  float a" + std::to_string(i) + " = a" + std::to_string(i - 1) + " * 1.01 + vUV.y;\n";
+  fragment += "  outColor = vec4(a" + std::to_string(kLength - 1) + ", 0.0, 0.0, 1.0);\n}\n";
+  ShaderProgram program = makeProgram(passThroughVertex(), fragment);
+  ir::Id last = ir::kNoId;  // the value stored into a299
+  size_t multiplies = 0;
+  for (const ir::Block& block : program.fragment.entryFunction(spv::ExecutionModelFragment)->blocks)
+    for (const ir::Instruction& instruction : block.instructions) {
+      if (instruction.opcode == spv::OpFAdd) last = instruction.result_id;
+      multiplies += instruction.opcode == spv::OpFMul;
+    }
+  ASSERT_EQ(multiplies, static_cast<size_t>(kLength - 1));
+
+  RuleContext context;
+  context.average_value = [](const ShaderProgram&, Stage, ir::Id) {
+    return core::Result<std::vector<float>>(std::vector<float>{0.5f});
+  };
+  std::vector<RuleSite> sites = findMoveToParameterSites(program, context);
+  // Each multiply and add, and outColor's vec4 (it computes through a299).
+  EXPECT_EQ(sites.size(), static_cast<size_t>(2 * (kLength - 1) + 1));
+
+  size_t before = bodyInstructionCount(program.fragment);
+  ir::Id type = ir::DefUse(program.fragment).def(last)->type_id;
+  ir::Id uniform = program.fragment.addLooseUniform(type, "uLast", 40);
+  ASSERT_TRUE(replaceValueByLoad(program.fragment, last, uniform).ok());
+  // Per chain link: a load of the previous variable, the multiply, the add, a load of vUV.y's
+  // component, the store; then the first link's and the variables. What stays: outColor's store,
+  // its construct, the new load, the return.
+  EXPECT_LT(bodyInstructionCount(program.fragment), 12u);
+  EXPECT_GT(before - bodyInstructionCount(program.fragment),
+            static_cast<size_t>(5 * (kLength - 1)));
+  EXPECT_EQ(removeDeadCode(program.fragment), 0u);
+  emitValidated(program, "chain");
+}
+
 INSTANTIATE_TEST_SUITE_P(Shaders, MoveToParameterReference,
                          ::testing::Values("noise_phong", "pbr", "blend"));
 

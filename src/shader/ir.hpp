@@ -15,11 +15,11 @@
 //   std::vector<uint32_t> out = ir::emitModule(*module);  // then shader::validateSpirv(out, ...)
 #pragma once
 
-#include <glslang/SPIRV/spirv.hpp>
-
 #include <cstdint>
 #include <functional>
+#include <glslang/SPIRV/spirv.hpp>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <span>
@@ -328,5 +328,39 @@ struct ValueSources {
   }
 };
 ValueSources backwardSlice(const Module& module, const DefUse& uses, Id value);
+
+// The flags of backwardSlice(value), for many values of one module. A value's slice is the
+// closure of a fixed dependence graph (what one instruction depends on does not depend on which
+// slice reaches it), so the flags are ORed once per strongly connected component (Tarjan) and
+// shared: all of a module's values cost O(module) instead of O(module) each (the rules'
+// site enumeration sliced every candidate, quadratic in the shader's length).
+struct SliceFlags {
+  bool reads_input = false;
+  bool reads_uniform = false;
+  bool reads_texture = false;
+  bool reads_other = false;
+  bool uses_derivatives = false;
+  bool has_side_effects = false;
+  bool reaches_marked = false;  // the slice holds an instruction `marked` accepts
+  bool onlyInputsUniformsConstants() const {
+    return !reads_other && !reads_texture && !uses_derivatives && !has_side_effects;
+  }
+};
+class SliceSummaries {
+ public:
+  // `module` and `uses` must outlive this and stay unchanged. `marked` is asked about each
+  // function-body instruction a slice holds (ValueSources::instructions).
+  SliceSummaries(const Module& module, const DefUse& uses,
+                 std::function<bool(const Instruction&)> marked);
+  ~SliceSummaries();
+  SliceSummaries(SliceSummaries&&) noexcept;
+  SliceSummaries& operator=(SliceSummaries&&) noexcept;
+  // Computed on first demand, for the value and everything its slice reaches.
+  SliceFlags of(Id value);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace duolod::shader::ir

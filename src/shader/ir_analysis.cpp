@@ -481,6 +481,21 @@ class Slicer {
     return std::move(sources_);
   }
 
+  // One node of the slice graph on its own: what visit() pushes for `id` (its dependences) and
+  // the flags it sets itself. A node's visit depends on the node alone (callees are summarized
+  // again for each node: their flags are the same each time), so run(value) is the closure of
+  // these steps and its flags their OR.
+  ValueSources step(Id id, std::vector<Id>& dependences) {
+    sources_ = ValueSources{};
+    seen_.clear();
+    callees_.clear();
+    work_.clear();
+    visit(id);
+    dependences.assign(work_.begin(), work_.end());
+    work_.clear();
+    return std::move(sources_);
+  }
+
  private:
   void push(Id id) {
     if (id != kNoId && seen_.insert(id).second) work_.push_back(id);
@@ -666,6 +681,130 @@ class Slicer {
 
 ValueSources backwardSlice(const Module& module, const DefUse& uses, Id value) {
   return Slicer(module, uses).run(value);
+}
+
+namespace {
+
+void merge(SliceFlags& into, const SliceFlags& from) {
+  into.reads_input |= from.reads_input;
+  into.reads_uniform |= from.reads_uniform;
+  into.reads_texture |= from.reads_texture;
+  into.reads_other |= from.reads_other;
+  into.uses_derivatives |= from.uses_derivatives;
+  into.has_side_effects |= from.has_side_effects;
+  into.reaches_marked |= from.reaches_marked;
+}
+
+}  // namespace
+
+struct SliceSummaries::Impl {
+  struct Node {
+    std::vector<Id> dependences;
+    SliceFlags own;
+    int index = -1, lowlink = -1;
+    int component = -1;
+    bool on_stack = false;
+  };
+
+  Impl(const Module& module, const DefUse& uses, std::function<bool(const Instruction&)> marked)
+      : uses(uses), slicer(module, uses), marked(std::move(marked)) {}
+
+  int nodeFor(Id id) {
+    auto [found, added] = node_of.emplace(id, static_cast<int>(nodes.size()));
+    if (!added) return found->second;
+    Node node;
+    ValueSources own = slicer.step(id, node.dependences);
+    node.own.reads_input = own.reads_input;
+    node.own.reads_uniform = own.reads_uniform;
+    node.own.reads_texture = own.reads_texture;
+    node.own.reads_other = own.reads_other;
+    node.own.uses_derivatives = own.uses_derivatives;
+    node.own.has_side_effects = own.has_side_effects;
+    if (own.instructions.count(id)) {
+      const Instruction* def = uses.def(id);
+      node.own.reaches_marked = def && this->marked(*def);
+    }
+    nodes.push_back(std::move(node));
+    return found->second;
+  }
+
+  // Tarjan's strongly connected components from `root`, iteratively (a shader's dependence chain
+  // can be thousands of values long); a component's flags are its members' and those of the
+  // components it depends on, which Tarjan completes first.
+  void complete(int root) {
+    std::vector<std::pair<int, size_t>> calls;
+    std::vector<int> stack;
+    auto open = [&](int v) {
+      nodes[v].index = nodes[v].lowlink = next_index++;
+      nodes[v].on_stack = true;
+      stack.push_back(v);
+      calls.emplace_back(v, 0);
+    };
+    open(root);
+    while (!calls.empty()) {
+      int v = calls.back().first;
+      size_t next = calls.back().second;
+      if (next < nodes[v].dependences.size()) {
+        calls.back().second = next + 1;
+        int w = nodeFor(nodes[v].dependences[next]);
+        if (nodes[w].component >= 0) continue;
+        if (nodes[w].index < 0) {
+          open(w);
+        } else if (nodes[w].on_stack) {
+          nodes[v].lowlink = std::min(nodes[v].lowlink, nodes[w].index);
+        }
+        continue;
+      }
+      calls.pop_back();
+      if (!calls.empty()) {
+        int parent = calls.back().first;
+        nodes[parent].lowlink = std::min(nodes[parent].lowlink, nodes[v].lowlink);
+      }
+      if (nodes[v].lowlink != nodes[v].index) continue;
+      int component = static_cast<int>(component_flags.size());
+      size_t first = stack.size();
+      do {
+        --first;
+      } while (stack[first] != v);
+      SliceFlags flags;
+      for (size_t k = first; k < stack.size(); ++k) {
+        Node& member = nodes[stack[k]];
+        member.on_stack = false;
+        member.component = component;
+        merge(flags, member.own);
+      }
+      for (size_t k = first; k < stack.size(); ++k)
+        for (Id dependence : nodes[stack[k]].dependences) {
+          int other = nodes[node_of.at(dependence)].component;
+          if (other != component) merge(flags, component_flags[static_cast<size_t>(other)]);
+        }
+      component_flags.push_back(flags);
+      stack.resize(first);
+    }
+  }
+
+  const DefUse& uses;
+  Slicer slicer;
+  std::function<bool(const Instruction&)> marked;
+  std::unordered_map<Id, int> node_of;
+  std::vector<Node> nodes;
+  std::vector<SliceFlags> component_flags;
+  int next_index = 0;
+};
+
+SliceSummaries::SliceSummaries(const Module& module, const DefUse& uses,
+                               std::function<bool(const Instruction&)> marked)
+    : impl_(std::make_unique<Impl>(module, uses, std::move(marked))) {}
+
+SliceSummaries::~SliceSummaries() = default;
+SliceSummaries::SliceSummaries(SliceSummaries&&) noexcept = default;
+SliceSummaries& SliceSummaries::operator=(SliceSummaries&&) noexcept = default;
+
+SliceFlags SliceSummaries::of(Id value) {
+  int node = impl_->nodeFor(value);
+  if (impl_->nodes[static_cast<size_t>(node)].component < 0) impl_->complete(node);
+  return impl_
+      ->component_flags[static_cast<size_t>(impl_->nodes[static_cast<size_t>(node)].component)];
 }
 
 }  // namespace duolod::shader::ir

@@ -24,16 +24,17 @@ std::set<Id> entryLoopBlocks(const ir::Module& fragment) {
   return entry < 0 ? std::set<Id>{} : blocksInLoops(fragment.functions[static_cast<size_t>(entry)]);
 }
 
-// Why `value` cannot be moved to a parameter, or "" when it can. `in_loops`: entryLoopBlocks().
+// Why `value` cannot be moved to a parameter, or "" when it can. `in_loops`: entryLoopBlocks();
+// `slices`: computingSliceSummaries() of the same module.
 std::string unsuitability(const ir::Module& fragment, const ir::DefUse& uses,
-                          const std::set<Id>& in_loops, Id value) {
+                          const std::set<Id>& in_loops, ir::SliceSummaries& slices, Id value) {
   if (std::string why = valueTargetUnsuitability(fragment, uses, value); !why.empty()) return why;
   const ir::InstructionRef* ref = uses.defRef(value);
   const ir::Function& function = fragment.functions[static_cast<size_t>(ref->function)];
   if (in_loops.count(function.blocks[ref->block].id())) return "inside a loop";
-  ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
-  if (sources.has_side_effects) return "its computation has side effects";
-  if (computingInstructionCount(uses, sources) == 0) return "computes nothing";
+  ir::SliceFlags slice = slices.of(value);
+  if (slice.has_side_effects) return "its computation has side effects";
+  if (!slice.reaches_marked) return "computes nothing";
   return "";
 }
 
@@ -46,8 +47,9 @@ std::vector<RuleSite> findMoveToParameterSites(const ShaderProgram& program,
   const ir::Module& fragment = program.fragment;
   ir::DefUse uses(fragment);
   const std::set<Id> in_loops = entryLoopBlocks(fragment);
+  ir::SliceSummaries slices = computingSliceSummaries(fragment, uses);
   for (Id value : candidateValues(fragment, uses, spv::ExecutionModelFragment)) {
-    if (!unsuitability(fragment, uses, in_loops, value).empty()) continue;
+    if (!unsuitability(fragment, uses, in_loops, slices, value).empty()) continue;
     RuleSite site;
     site.kind = RuleKind::kMoveToParameter;
     site.stage = Stage::kFragment;
@@ -68,8 +70,9 @@ core::Result<ShaderProgram> applyMoveToParameter(const ShaderProgram& program, c
   std::string name;
   {
     ir::DefUse uses(program.fragment);
+    ir::SliceSummaries slices = computingSliceSummaries(program.fragment, uses);
     if (std::string why = unsuitability(program.fragment, uses, entryLoopBlocks(program.fragment),
-                                        site.target);
+                                        slices, site.target);
         !why.empty())
       return siteError(site, why);
     type_id = uses.def(site.target)->type_id;

@@ -492,14 +492,16 @@ int returnBlockIndex(const Module& vertex) {
   return found;
 }
 
-// Why fragment `value` is not a per-vertex candidate by its dependences, or "".
-std::string unsuitability(const Module& fragment, const ir::DefUse& uses, Id value) {
+// Why fragment `value` is not a per-vertex candidate by its dependences, or "". `slices`:
+// computingSliceSummaries() of `fragment`.
+std::string unsuitability(const Module& fragment, const ir::DefUse& uses,
+                          ir::SliceSummaries& slices, Id value) {
   if (std::string why = valueTargetUnsuitability(fragment, uses, value); !why.empty()) return why;
-  ir::ValueSources sources = ir::backwardSlice(fragment, uses, value);
-  if (!sources.onlyInputsUniformsConstants())
+  ir::SliceFlags slice = slices.of(value);
+  if (!slice.onlyInputsUniformsConstants())
     return "depends on textures, derivatives, side effects or other memory";
-  if (!sources.reads_input) return "reads no interpolated input";
-  if (computingInstructionCount(uses, sources) == 0) return "computes nothing";
+  if (!slice.reads_input) return "reads no interpolated input";
+  if (!slice.reaches_marked) return "computes nothing";
   return "";
 }
 
@@ -514,8 +516,9 @@ std::vector<RuleSite> findPerVertexSites(const ShaderProgram& program, const Rul
   // GP enumerates sites on every mutation, and a copy + translator per value was 17% of its time).
   Module scratch = program.vertex;
   VertexTranslator translator(program.fragment, scratch);
+  ir::SliceSummaries slices = computingSliceSummaries(program.fragment, uses);
   for (Id value : candidateValues(program.fragment, uses, spv::ExecutionModelFragment)) {
-    if (!unsuitability(program.fragment, uses, value).empty()) continue;
+    if (!unsuitability(program.fragment, uses, slices, value).empty()) continue;
     translator.clearFailure();
     if (!translator.translate(value)) continue;
     RuleSite site;
@@ -540,7 +543,8 @@ core::Result<ShaderProgram> applyPerVertex(const ShaderProgram& program, const R
   std::string name;
   {
     ir::DefUse uses(program.fragment);
-    if (std::string why = unsuitability(program.fragment, uses, site.target); !why.empty())
+    ir::SliceSummaries slices = computingSliceSummaries(program.fragment, uses);
+    if (std::string why = unsuitability(program.fragment, uses, slices, site.target); !why.empty())
       return siteError(site, why);
     fragment_type = uses.def(site.target)->type_id;
     name = identifierFrom(describeComputedValue(program.fragment, uses, site.target));

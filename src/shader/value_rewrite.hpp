@@ -61,9 +61,13 @@ std::set<ir::Id> blocksInLoops(const ir::Function& function);
 std::vector<ir::Id> candidateValues(const ir::Module& module, const ir::DefUse& uses,
                                     spv::ExecutionModel model);
 
-// Number of slice instructions that compute something (not loads, access chains, variables or
-// composite shuffles): a value with none is a plain copy of an input or a uniform.
-int computingInstructionCount(const ir::DefUse& uses, const ir::ValueSources& sources);
+// Whether an instruction computes something (not a load, access chain, variable or composite
+// shuffle): a value whose slice holds none is a plain copy of an input or a uniform.
+bool isComputingInstruction(const ir::Instruction& instruction);
+
+// Slice flags of `module`'s values, with reaches_marked meaning "computes something"
+// (isComputingInstruction): what the value rules ask of each candidate.
+ir::SliceSummaries computingSliceSummaries(const ir::Module& module, const ir::DefUse& uses);
 
 // A readable name for a computed `value` in descriptions: its OpName, else the GLSL variable it is
 // stored into (glslang names variables, not the results stored into them), else describeOperand (rules.cpp).
