@@ -36,6 +36,12 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
                            "level0.frag.glsl", "level0.frag.es.glsl", "level0.frag.hlsl",
                            "level0.vert.glsl", "autolod.frag.glsl", "autolod.vert.spv"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
+  // Vertex inputs by the interface's semantics (an engine binds streams by them).
+  for (const char* file : {"level0.vert.hlsl", "autolod.vert.hlsl"}) {
+    const std::string hlsl = test::readText((out / file).string());
+    EXPECT_TRUE(test::contains(hlsl, "inPosition : POSITION0;")) << file << "\n" << hlsl;
+    EXPECT_TRUE(test::contains(hlsl, "inNormal : NORMAL0;")) << file << "\n" << hlsl;
+  }
 
   // The training views are recorded (the upright band here; its held-out views check it below).
   EXPECT_NE(test::readText((out / "lod.json").string()).find("\"views\": \"upright\""),

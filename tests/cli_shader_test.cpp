@@ -302,6 +302,15 @@ TEST(CliShaderTest, BindingsReachTheSearch) {
   EXPECT_NEAR(originalError(dir / "with"), expected, 1e-4 * expected);
   EXPECT_GT(std::abs(originalError(dir / "without") - expected), 0.1 * expected)
       << "the bindings change nothing here: the test shows nothing";
+  // The HLSL files' vertex inputs carry the semantics of the streams the bindings put at their
+  // locations (an engine binds by semantic); they were TEXCOORD<location> whatever the bindings.
+  const std::string with_hlsl = test::readText(dir / "with" / "level00.vert.hlsl");
+  EXPECT_TRUE(test::contains(with_hlsl, "inPosition : POSITION0;")) << with_hlsl;
+  EXPECT_TRUE(test::contains(with_hlsl, "inNormal : NORMAL0;")) << with_hlsl;
+  EXPECT_TRUE(test::contains(with_hlsl, "inUV0 : TEXCOORD0;")) << with_hlsl;
+  const std::string without_hlsl = test::readText(dir / "without" / "level00.vert.hlsl");
+  EXPECT_TRUE(test::contains(without_hlsl, "inNormal : TEXCOORD1;")) << without_hlsl;  // 4: uv1
+  EXPECT_TRUE(test::contains(without_hlsl, "inUV0 : NORMAL0;")) << without_hlsl;       // 1: normal
 
   const fs::path out = dir / "into";
   fs::create_directories(out);

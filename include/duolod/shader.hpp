@@ -54,9 +54,13 @@ enum class Target {
 const char* targetName(Target target);
 
 // Emits source for `target` from a SPIR-V module (use the unoptimised module: names are kept, so
-// the output reads like the input). `what` names the module in errors.
-core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Target target,
-                                       const std::string& what);
+// the output reads like the input). `what` names the module in errors. An HLSL vertex stage's
+// input at a location listed in `hlsl_vertex_semantics` gets that semantic (e.g. 0 → "POSITION0",
+// so that an engine binds its streams by name, as Direct3D does); an unlisted one is
+// TEXCOORD<location>, SPIRV-Cross's default.
+core::Result<std::string> crossCompile(
+    const std::vector<uint32_t>& words, Target target, const std::string& what,
+    const std::map<uint32_t, std::string>& hlsl_vertex_semantics = {});
 // HLSL source as GLSL 450, so that an HLSL shader goes wherever duolod takes GLSL (the renderer,
 // the rules, `duolod shader` and `generate`): compiled by glslang's HLSL front end (entry point
 // `options.entry_point`; stage inputs and outputs get locations in declaration order), legalized

@@ -100,7 +100,8 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   for (size_t k = 0; k < result.levels.size(); ++k) {
     const GeneratedLevel& level = result.levels[k];
     const std::string name = "level" + std::to_string(k);
-    auto files = shader::writeShaderFiles(level.readable.vertex, level.readable.fragment, out, name);
+    auto files = shader::writeShaderFiles(level.readable.vertex, level.readable.fragment, out, name,
+                                          options.bindings);
     if (!files) return files.error();
     io::LodJsonLevel row;
     row.level = static_cast<int>(k);
@@ -147,8 +148,8 @@ core::Status writeLodOutput(const GenerateResult& result, const core::Asset& ass
   if (!autolod) return autolod.error();
   auto autolod_words = shader::emitProgram(autolod->program, /*optimize=*/false);
   if (!autolod_words) return autolod_words.error();
-  auto autolod_files =
-      shader::writeShaderFiles(autolod_words->vertex, autolod_words->fragment, out, "autolod");
+  auto autolod_files = shader::writeShaderFiles(autolod_words->vertex, autolod_words->fragment, out,
+                                                "autolod", options.bindings);
   if (!autolod_files) return autolod_files.error();
   io::LodJsonDocument::AutoLod& autolod_entry = document.autolod.emplace();
   autolod_entry.files = std::move(*autolod_files);

@@ -84,8 +84,9 @@ const char* targetName(Target target) {
   return "?";
 }
 
-core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Target target,
-                                       const std::string& what) {
+core::Result<std::string> crossCompile(
+    const std::vector<uint32_t>& words, Target target, const std::string& what,
+    const std::map<uint32_t, std::string>& hlsl_vertex_semantics) {
   // SPIRV-Cross trusts its input (a corrupt module crashed its parser): validated first.
   if (auto valid = validateSpirv(words, what); !valid) return valid.error();
   // SPIRV-Cross reports unsupported constructs by throwing CompilerError.
@@ -99,6 +100,8 @@ core::Result<std::string> crossCompile(const std::vector<uint32_t>& words, Targe
       hlsl.point_size_compat = true;
       hlsl.use_entry_point_name = false;  // "main", which checkCrossCompiled expects
       compiler.set_hlsl_options(hlsl);
+      for (const auto& [location, semantic] : hlsl_vertex_semantics)
+        compiler.add_vertex_attribute_remap({location, semantic});
       spirv_cross::CompilerGLSL::Options common;
       common.vertex.flip_vert_y = false;
       common.vertex.fixup_clipspace = false;  // keep OpenGL's clip space; the reader's engine maps it

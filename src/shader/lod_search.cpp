@@ -137,6 +137,7 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   auto autolod = buildAutoLodShader(levels, thresholds);
   if (!autolod) return autolod.error();
   report.autolod = std::move(*autolod);
+  report.bindings = options.bindings;
 
   report.search = search_cache.counters();
   report.compile = cache->counters();
@@ -154,10 +155,10 @@ namespace {
 
 // NAME.{vert,frag}.* of the readable (unoptimised) module.
 core::Status writeProgramFiles(const ShaderProgram& program, const fs::path& directory,
-                               const std::string& name) {
+                               const std::string& name, const render::Bindings& bindings) {
   auto words = emitProgram(program, /*optimize=*/false);
   if (!words) return core::Error{name + ": " + words.error().message};
-  auto files = writeShaderFiles(words->vertex, words->fragment, directory, name);
+  auto files = writeShaderFiles(words->vertex, words->fragment, directory, name, bindings);
   if (!files) return files.error();
   return core::okStatus();
 }
@@ -205,7 +206,8 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
   for (size_t k = 0; k < report.variants.size(); ++k) {
     const ShaderLodVariant& variant = report.variants[k];
     std::string name = levelFileName(k);
-    if (auto ok = writeProgramFiles(*variant.search.program, out, name); !ok) return ok;
+    if (auto ok = writeProgramFiles(*variant.search.program, out, name, report.bindings); !ok)
+      return ok;
     nlohmann::json rules = nlohmann::json::array();
     for (const RuleSite& site : variant.search.sites)
       rules.push_back({{"rule", std::string(ruleName(site.kind))}, {"description", site.description}});
@@ -221,7 +223,8 @@ core::Status writeShaderLod(const ShaderLodReport& report, const std::string& di
                       {"time_ratio", positiveOrNull(variant.time_ratio)},
                       {"parameters", parametersJson(variant.search.program->parameters)}});
   }
-  if (auto ok = writeProgramFiles(report.autolod.program, out, "autolod"); !ok) return ok;
+  if (auto ok = writeProgramFiles(report.autolod.program, out, "autolod", report.bindings); !ok)
+    return ok;
 
   const SearchCounters& s = report.search;
   nlohmann::json summary = {{"device", report.device},

@@ -67,6 +67,7 @@ struct ShaderLodReport {
   int footprint_px = 0;
   int domain_samples = 0;
   std::string device;
+  render::Bindings bindings;  // ShaderLodOptions::bindings: the HLSL files' vertex input semantics
   double search_seconds = 0, rerender_seconds = 0, timing_seconds = 0, total_seconds = 0;
 };
 

@@ -1,6 +1,7 @@
 // Writing a program's shader files (shader/shader_files.hpp).
 #include "shader/shader_files.hpp"
 
+#include <map>
 #include <span>
 
 #include "duolod/io.hpp"
@@ -25,8 +26,12 @@ std::string firstReason(const std::string& message, const std::string& name) {
 
 core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
     const std::vector<uint32_t>& vertex, const std::vector<uint32_t>& fragment,
-    const std::filesystem::path& directory, const std::string& name) {
+    const std::filesystem::path& directory, const std::string& name,
+    const render::Bindings& bindings) {
   std::vector<std::pair<std::string, std::string>> files;
+  std::map<uint32_t, std::string> vertex_semantics;
+  for (const auto& [semantic, location] : render::hlslVertexInputLocations(bindings))
+    vertex_semantics[location] = semantic;
   struct StageWords {
     const char* suffix;
     Stage stage;
@@ -50,7 +55,9 @@ core::Result<std::vector<std::pair<std::string, std::string>>> writeShaderFiles(
                                  Output{Target::kGlslEs300, ".es.glsl", "glsles300_"},
                                  Output{Target::kHlsl50, ".hlsl", "hlsl50_"}}) {
       const std::string file = base + output.extension;
-      auto text = crossCompile(*stage.words, output.target, base);
+      auto text = crossCompile(
+          *stage.words, output.target, base,
+          stage.stage == Stage::kVertex ? vertex_semantics : std::map<uint32_t, std::string>{});
       core::Status check = text ? checkCrossCompiled(*text, output.target, stage.stage, file)
                                 : core::Status(text.error());
       if (!check) {
