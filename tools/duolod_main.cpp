@@ -148,7 +148,20 @@ struct ShadingFlags {
         ->capture_default_str();
   }
 
+  // The shader pair, checked against what duolod feeds it (shader::checkShaderInterface): what
+  // reads zeros is a warning, a pair that cannot render right an error.
   core::Result<render::GlslSource> source() const {
+    auto pair = readSource();
+    if (!pair) return pair;
+    auto bound = parsedBindings();
+    if (!bound) return bound.error();
+    auto warnings = shader::checkShaderInterface(*pair, *bound);
+    if (!warnings) return warnings.error();
+    for (const std::string& warning : *warnings) core::log(core::LogLevel::kWarning, warning);
+    return pair;
+  }
+
+  core::Result<render::GlslSource> readSource() const {
     if (vert.empty() != frag.empty()) return core::Error{"--vert and --frag go together"};
     if (!vert.empty() && shader_option && shader_option->count() > 0)
       return core::Error{"give --shader or --vert with --frag, not both"};

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "duolod/core.hpp"
+#include "duolod/render.hpp"
 
 namespace duolod::shader {
 
@@ -89,6 +90,16 @@ core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
                                       const std::string& fragment_file,
                                       const CompileOptions& vertex_options = {},
                                       const CompileOptions& fragment_options = {});
+
+// Checks a vertex + fragment pair against what duolod feeds it (shaders/INTERFACE.md, moved by
+// `bindings`). An error for what cannot render right: a fragment input that no vertex output at
+// its location writes, or one of another type (SPIR-V stages link by location unchecked); two
+// sampler types on one texture unit (OpenGL refuses the draw). Warnings, naming file and
+// variable, for what reads zeros: a vertex input no stream feeds, a texture at a unit nothing is
+// bound to or not 2D, a uniform block other than Frame and Material, a storage block, a loose
+// uniform. Compile errors are returned as they are.
+core::Result<std::vector<std::string>> checkShaderInterface(const render::GlslSource& source,
+                                                            const render::Bindings& bindings = {});
 
 // Re-compiles emitted source with glslang as a check: GLSL 450 to SPIR-V (validated), GLSL ES 300
 // with the ES profile, HLSL with the HLSL front end (entry "main"). The error names `what`.
