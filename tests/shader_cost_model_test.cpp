@@ -354,5 +354,44 @@ TEST(ShaderCostProfile, LoopAndBranchCountsPerInvocation) {
   EXPECT_EQ(profile->vertex_executions[0], 1.0);
 }
 
+// A shader's own storage block at binding 7, the fragment counters' default: the counters move
+// past it, so it reads zeros (duolod binds it no buffer) and the branch it decides never runs.
+// Aliased with the counters, it read the entry block's count and the branch ran everywhere.
+const char* kStorageBranchShader = R"(#version 450
+layout(location = 0) in vec3 vObjectPosition;
+layout(std430, binding = 7) buffer Data { uint data[]; };
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec4 sum = vec4(vObjectPosition, 1.0);
+  if (data[0] > 0u) sum = sin(sum);
+  outColor = sum;
+}
+)";
+
+TEST(ShaderCostProfile, AShadersOwnStorageBlockIsNotTheCounters) {
+  ir::Module vertex = compileModule(kPositionVertexShader, Stage::kVertex, "position.vert");
+  ir::Module fragment = compileModule(kStorageBranchShader, Stage::kFragment, "storage.frag");
+  ir::Module plain = compileModule(kLoopBranchShader, Stage::kFragment, "loop.frag");
+  EXPECT_EQ(counterBindings(vertex, plain), std::make_pair(6u, 7u));
+  EXPECT_EQ(counterBindings(vertex, fragment), std::make_pair(6u, 8u));
+
+  auto renderer = render::Renderer::create();
+  if (!renderer.ok()) GTEST_SKIP() << "SKIPPED: no OpenGL context: " << renderer.error().message;
+  auto asset = (*renderer)->uploadAsset(squareAsset());
+  ASSERT_TRUE(asset.ok()) << asset.error().message;
+  std::vector<render::Sample> samples{headOnSample()};
+  auto profile = profileBlockCounts(**renderer, *asset, vertex, fragment, samples, 64);
+  ASSERT_TRUE(profile.ok()) << profile.error().message;
+  EXPECT_EQ(profile->fragment_runs, 32u * 32u);
+  std::vector<BlockOps> blocks = blockOpCounts(fragment);
+  int branches = 0;
+  for (size_t b = 0; b < blocks.size(); ++b)
+    if (at(blocks[b].ops, OpClass::kTranscendental) > 0) {
+      EXPECT_EQ(profile->fragment_executions[b], 0.0) << "the unbound block reads zeros";
+      ++branches;
+    }
+  EXPECT_EQ(branches, 1);
+}
+
 }  // namespace
 }  // namespace duolod::shader

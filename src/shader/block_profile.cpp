@@ -85,9 +85,10 @@ core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
                                               int resolution,
                                               std::span<const render::UniformValue> uniforms,
                                               render::ImageBatch8* images_out) {
-  auto vertex_copy = instrumentBlockCounts(vertex, kVertexCounterBinding);
+  const auto [vertex_binding, fragment_binding] = counterBindings(vertex, fragment);
+  auto vertex_copy = instrumentBlockCounts(vertex, vertex_binding);
   if (!vertex_copy.ok()) return Error{"vertex stage: " + vertex_copy.error().message};
-  auto fragment_copy = instrumentBlockCounts(fragment, kFragmentCounterBinding);
+  auto fragment_copy = instrumentBlockCounts(fragment, fragment_binding);
   if (!fragment_copy.ok()) return Error{"fragment stage: " + fragment_copy.error().message};
   render::SpirvBinary binary{ir::emitModule(vertex_copy->module),
                              ir::emitModule(fragment_copy->module)};
@@ -104,8 +105,8 @@ core::Result<BlockProfile> profileBlockCounts(render::Renderer& renderer,
   BlockProfile profile;
   core::Status status = core::okStatus();
   {
-    CounterBuffer vertex_counters(vertex_copy->counter_count, kVertexCounterBinding);
-    CounterBuffer fragment_counters(fragment_copy->counter_count, kFragmentCounterBinding);
+    CounterBuffer vertex_counters(vertex_copy->counter_count, vertex_binding);
+    CounterBuffer fragment_counters(fragment_copy->counter_count, fragment_binding);
     render::RenderOptions options{.resolution = resolution, .count_work = true};
     render::RenderStats stats;
     auto images = renderer.render(asset, *program, samples, options, &stats);

@@ -3,7 +3,9 @@
 #include "shader/instrument.hpp"
 
 #include <algorithm>
+#include <set>
 #include <string>
+#include <utility>
 
 namespace duolod::shader {
 
@@ -34,6 +36,25 @@ size_t firstInsertionIndex(const ir::Block& block, bool entry_block) {
 }
 
 }  // namespace
+
+std::pair<uint32_t, uint32_t> counterBindings(const ir::Module& vertex,
+                                              const ir::Module& fragment) {
+  std::set<uint32_t> taken = {14, 15};
+  for (const ir::Module* module : {&vertex, &fragment}) {
+    ir::DefUse uses(*module);
+    for (const ir::UniformBlock& block : ir::uniformBlocks(*module, uses)) {
+      const ir::Instruction* variable = uses.def(block.variable);
+      const bool storage = (variable && variable->operands[0] == spv::StorageClassStorageBuffer) ||
+                           uses.hasDecoration(block.block_type, spv::DecorationBufferBlock);
+      if (storage && block.binding) taken.insert(*block.binding);
+    }
+  }
+  uint32_t first = kVertexCounterBinding;
+  while (taken.count(first)) ++first;
+  uint32_t second = first + 1;
+  while (taken.count(second)) ++second;
+  return {first, second};
+}
 
 core::Result<InstrumentedModule> instrumentBlockCounts(const ir::Module& original,
                                                        uint32_t binding) {

@@ -27,10 +27,15 @@
 
 namespace duolod::shader {
 
-// SSBO bindings of the counters (clear of everything shaders/INTERFACE.md uses; SSBO bindings
-// are their own namespace in OpenGL, but keep them apart from the UBOs anyway for readability).
+// SSBO bindings of the counters: by default 6 and 7 (clear of everything shaders/INTERFACE.md
+// uses; SSBO bindings are their own namespace in OpenGL, but kept apart from the UBOs anyway for
+// readability).
 inline constexpr uint32_t kVertexCounterBinding = 6;
 inline constexpr uint32_t kFragmentCounterBinding = 7;
+// The counters' bindings for a program: the first two from 6 up that neither stage's own storage
+// blocks use, skipping 14-15 (the image-driven mode's), so that a shader's own buffer is never
+// the counters' (its writes would count, the counts would be its data).
+std::pair<uint32_t, uint32_t> counterBindings(const ir::Module& vertex, const ir::Module& fragment);
 
 struct InstrumentedModule {
   ir::Module module;
