@@ -8,6 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "duolod/render.hpp"
+#include "duolod/shader.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -323,6 +325,65 @@ TEST(CliShaderTest, BindingsReachTheSearch) {
   EXPECT_EQ(refused.exit_code, 1);
   EXPECT_TRUE(test::contains(refused.err, "is the folder of the input " + inside)) << refused.err;
   EXPECT_EQ(test::readText(inside), R"({"attributes": {"normal": 4, "uv0": 1}})");
+}
+
+// Compiled shaders (.spv, for OpenGL or Vulkan) are taken as their GLSL (SPIRV-Cross): the
+// error is the GLSL pair's, `shader` simplifies them; a module of the other stage, a file that is
+// not SPIR-V and a truncated one are errors naming the file.
+TEST(CliShaderTest, SpirvFilesAreTakenAsTheirGlsl) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_shader_spirv");
+  auto write = [&](const std::string& file, const std::vector<uint32_t>& words) {
+    std::ofstream(dir / file, std::ios::binary)
+        .write(reinterpret_cast<const char*>(words.data()),
+               static_cast<std::streamsize>(words.size() * 4));
+    return (dir / file).string();
+  };
+  auto source = render::loadShaderPair("noise_phong");
+  ASSERT_TRUE(source.ok()) << source.error().message;
+  auto vertex = shader::compileToSpirv(source->vertex, shader::Stage::kVertex, "np.vert");
+  auto fragment = shader::compileToSpirv(source->fragment, shader::Stage::kFragment, "np.frag");
+  ASSERT_TRUE(vertex.ok() && fragment.ok());
+  const std::string vert = write("np.vert.spv", *vertex), frag = write("np.frag.spv", *fragment);
+
+  auto errorOf = [&](const std::vector<std::string>& shading) {
+    std::vector<std::string> args = {"error", spot, spot, "--pixels", "32"};
+    args.insert(args.end(), shading.begin(), shading.end());
+    test::CommandRun run = runCli(args);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    const size_t at = run.out.find("per-pixel error");
+    return at == std::string::npos ? -1.0 : std::stod(run.out.substr(at + 15));
+  };
+  const double glsl = errorOf({"--shader", "noise_phong"});
+  EXPECT_GT(glsl, 0);
+  EXPECT_EQ(errorOf({"--vert", vert, "--frag", frag}), glsl);
+
+  test::CommandRun simplified = runCli({"shader", spot, "--vert", vert, "--frag", frag, "--pixels",
+                                        "48", "--search", "greedy", "--steps", "1", "--candidates",
+                                        "2", "--no-timing", "--out", (dir / "out").string()});
+  EXPECT_EQ(simplified.exit_code, 0) << simplified.err;
+  EXPECT_TRUE(fs::exists(dir / "out" / "level01.frag.spv"));
+
+  const std::vector<std::pair<std::vector<std::string>, std::string>> refused = {
+      {{"--vert", frag, "--frag", frag},
+       "np.frag.spv: holds no vertex entry point (it holds fragment 'main')"},
+      {{"--vert", write("junk.spv", {0x6f6d2023u, 0x6c6f2075u, 0x0a21u, 1u, 2u}), "--frag", frag},
+       "junk.spv: not a SPIR-V module"},
+      {{"--vert", write("cut.spv", std::vector<uint32_t>(vertex->begin(), vertex->begin() + 100)),
+        "--frag", frag},
+       "cut.spv: invalid SPIR-V"}};
+  for (const auto& [shading, message] : refused) {
+    std::vector<std::string> args = {"error", spot, spot, "--pixels", "32"};
+    args.insert(args.end(), shading.begin(), shading.end());
+    test::CommandRun run = runCli(args);
+    EXPECT_EQ(run.exit_code, 1) << message;
+    EXPECT_TRUE(test::contains(run.err, message)) << run.err;
+  }
+  std::ofstream(dir / "odd.spv", std::ios::binary) << "abcdefg";
+  test::CommandRun odd = runCli({"error", spot, spot, "--pixels", "32", "--vert",
+                                 (dir / "odd.spv").string(), "--frag", frag});
+  EXPECT_EQ(odd.exit_code, 1);
+  EXPECT_TRUE(test::contains(odd.err, "odd.spv: not a SPIR-V module (7 bytes")) << odd.err;
 }
 
 // A UTF-8 byte-order mark (Visual Studio saves HLSL with one) is not a token: the files compile

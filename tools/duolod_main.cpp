@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -83,11 +84,18 @@ int fail(const std::string& message) {
   return 1;
 }
 
-bool isHlslFile(const std::string& path) {
+std::string lowerExtension(const std::string& path) {
   std::string extension = fs::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension == ".hlsl";
+  return extension;
+}
+
+bool isHlslFile(const std::string& path) {
+  return lowerExtension(path) == ".hlsl";
+}
+bool isSpirvFile(const std::string& path) {
+  return lowerExtension(path) == ".spv";
 }
 
 // Options shared by the commands that render.
@@ -120,11 +128,12 @@ struct ShadingFlags {
                          "prefix P with P.vert and P.frag")
             ->capture_default_str();
     command->add_option("--vert", vert,
-                        "vertex shader: GLSL 450, or HLSL when the file name ends in .hlsl "
-                        "(README, Shaders); needs --frag");
+                        "vertex shader: GLSL 450, HLSL when the file name ends in .hlsl, "
+                        "SPIR-V (for OpenGL or Vulkan) when it ends in .spv (README, Shaders); "
+                        "needs --frag");
     command->add_option("--frag", frag,
-                        "fragment (pixel) shader: GLSL 450, or HLSL when the file name ends in "
-                        ".hlsl; needs --vert");
+                        "fragment (pixel) shader: GLSL 450, HLSL when the file name ends in "
+                        ".hlsl, SPIR-V when it ends in .spv; needs --vert");
     vert_entry_option =
         command->add_option("--vert-entry", vert_entry, "entry point of an HLSL --vert")
             ->capture_default_str();
@@ -185,6 +194,14 @@ struct ShadingFlags {
                       const std::string& entry) -> core::Result<std::string> {
         auto bytes = io::readFileBytes(path);  // names a missing file or a folder
         if (!bytes) return bytes.error();
+        if (isSpirvFile(path)) {  // compiled (for OpenGL or Vulkan): GLSL 450 by SPIRV-Cross
+          if (bytes->size() % 4 != 0)
+            return core::Error{path + ": not a SPIR-V module (" + std::to_string(bytes->size()) +
+                               " bytes, not a whole number of 32-bit words)"};
+          std::vector<uint32_t> words(bytes->size() / 4);
+          std::memcpy(words.data(), bytes->data(), bytes->size());
+          return shader::spirvToGlsl(words, stage, path);
+        }
         std::string text(core::withoutByteOrderMark(
             {reinterpret_cast<const char*>(bytes->data()), bytes->size()}));
         if (!isHlslFile(path)) return text;
@@ -195,7 +212,7 @@ struct ShadingFlags {
         return shader::hlslToGlsl(text, stage, path, options);
       };
       auto name = [](const std::string& path) {
-        return isHlslFile(path) ? path + " (as GLSL)" : path;
+        return isHlslFile(path) || isSpirvFile(path) ? path + " (as GLSL)" : path;
       };
       if (isHlslFile(vert) && isHlslFile(frag)) {
         // An HLSL pair: its varyings are matched by semantic, as Direct3D matches them.
@@ -676,13 +693,6 @@ std::string formatNumber(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", value);
   return text;
-}
-
-std::string lowerExtension(const std::string& path) {
-  std::string extension = fs::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  return extension;
 }
 
 struct SimplifyFlags {

@@ -91,6 +91,13 @@ core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
                                       const CompileOptions& vertex_options = {},
                                       const CompileOptions& fragment_options = {});
 
+// A SPIR-V module's `stage` entry point as GLSL 450 (SPIRV-Cross), so that compiled shaders go
+// wherever duolod takes GLSL (the CLI's --vert/--frag take .spv files). The module must validate
+// for OpenGL 4.5 or Vulkan 1.0-1.2 and hold an entry point of `stage`; errors name `file_name`
+// and what is wrong (not a SPIR-V file, invalid, the stages it holds instead).
+core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
+                                      const std::string& file_name);
+
 // Checks a vertex + fragment pair against what duolod feeds it (shaders/INTERFACE.md, moved by
 // `bindings`). An error for what cannot render right: a fragment input that no vertex output at
 // its location writes, or one of another type (SPIR-V stages link by location unchecked); two

@@ -8,6 +8,7 @@
 #include <exception>
 #include <map>
 #include <set>
+#include <spirv-tools/libspirv.hpp>
 #include <spirv-tools/optimizer.hpp>
 #include <spirv_glsl.hpp>
 #include <spirv_hlsl.hpp>
@@ -113,6 +114,89 @@ core::Result<std::string> crossCompile(
     return compiler.compile();
   } catch (const std::exception& error) {
     return Error{what + ": SPIRV-Cross (" + targetName(target) + "): " + error.what()};
+  }
+}
+
+namespace {
+
+const char* executionModelName(spv::ExecutionModel model) {
+  switch (model) {
+    case spv::ExecutionModelVertex:
+      return "vertex";
+    case spv::ExecutionModelTessellationControl:
+      return "tessellation control";
+    case spv::ExecutionModelTessellationEvaluation:
+      return "tessellation evaluation";
+    case spv::ExecutionModelGeometry:
+      return "geometry";
+    case spv::ExecutionModelFragment:
+      return "fragment";
+    case spv::ExecutionModelGLCompute:
+      return "compute";
+    default:
+      return "other";
+  }
+}
+
+spv::ExecutionModel executionModelOf(Stage stage) {
+  switch (stage) {
+    case Stage::kVertex:
+      return spv::ExecutionModelVertex;
+    case Stage::kTessControl:
+      return spv::ExecutionModelTessellationControl;
+    case Stage::kTessEvaluation:
+      return spv::ExecutionModelTessellationEvaluation;
+    case Stage::kGeometry:
+      return spv::ExecutionModelGeometry;
+    case Stage::kFragment:
+      return spv::ExecutionModelFragment;
+  }
+  return spv::ExecutionModelVertex;
+}
+
+}  // namespace
+
+core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
+                                      const std::string& file_name) {
+  constexpr uint32_t kMagic = 0x07230203;
+  if (words.size() < 5 || words[0] != kMagic)
+    return Error{
+        file_name + ": not a SPIR-V module (" +
+        (words.empty() ? std::string("empty") : "it does not start with the magic number") + ")"};
+  // SPIRV-Cross trusts its input: validated first, for OpenGL or for Vulkan (an engine's
+  // shaders are often compiled for Vulkan; SPIRV-Cross's GLSL drops what OpenGL lacks).
+  core::Status valid = validateSpirv(words, file_name);
+  if (!valid) {
+    bool valid_for_vulkan = false;
+    for (spv_target_env environment :
+         {SPV_ENV_VULKAN_1_0, SPV_ENV_VULKAN_1_1, SPV_ENV_VULKAN_1_2}) {
+      spvtools::SpirvTools tools(environment);
+      tools.SetMessageConsumer(
+          [](spv_message_level_t, const char*, const spv_position_t&, const char*) {});
+      if (tools.Validate(words)) {
+        valid_for_vulkan = true;
+        break;
+      }
+    }
+    if (!valid_for_vulkan) return valid.error();
+  }
+  try {
+    spirv_cross::CompilerGLSL compiler(words);
+    const spv::ExecutionModel wanted = executionModelOf(stage);
+    std::string held;
+    for (const spirv_cross::EntryPoint& entry : compiler.get_entry_points_and_stages()) {
+      if (entry.execution_model == wanted) {
+        compiler.set_entry_point(entry.name, entry.execution_model);
+        setGlslOptions(compiler, Target::kGlsl450);
+        return compiler.compile();
+      }
+      held += std::string(held.empty() ? "" : ", ") + executionModelName(entry.execution_model) +
+              " '" + entry.name + "'";
+    }
+    return Error{file_name + ": holds no " + executionModelName(wanted) +
+                 " entry point (it holds " + (held.empty() ? std::string("none") : held) + ")"};
+  } catch (const std::exception& error) {
+    return Error{file_name + ": SPIRV-Cross (GLSL 450): " + error.what()};
   }
 }
 
