@@ -374,6 +374,20 @@ TEST(ShaderCostProfile, AShadersOwnStorageBlockIsNotTheCounters) {
   ir::Module plain = compileModule(kLoopBranchShader, Stage::kFragment, "loop.frag");
   EXPECT_EQ(counterBindings(vertex, plain), std::make_pair(6u, 7u));
   EXPECT_EQ(counterBindings(vertex, fragment), std::make_pair(6u, 8u));
+  // Arrays of storage blocks take a binding per element.
+  for (auto [declaration, expected] :
+       {std::pair{"layout(std430, binding = 6) buffer Data { uint data[]; } blocks[2];",
+                  std::make_pair(8u, 9u)},
+        std::pair{"layout(std430, binding = 5) buffer Data { uint data[]; } blocks[3];",
+                  std::make_pair(8u, 9u)}}) {
+    const std::string source = std::string("#version 450\n") + declaration +
+                               "\nlayout(location = 0) out vec4 outColor;\n"
+                               "void main() { outColor = vec4(float(blocks[1].data[0])); }\n";
+    EXPECT_EQ(
+        counterBindings(vertex, compileModule(source.c_str(), Stage::kFragment, "arrays.frag")),
+        expected)
+        << declaration;
+  }
 
   auto renderer = render::Renderer::create();
   if (!renderer.ok()) GTEST_SKIP() << "SKIPPED: no OpenGL context: " << renderer.error().message;

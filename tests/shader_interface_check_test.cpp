@@ -149,5 +149,53 @@ TEST(ShaderInterfaceCheck, PairsThatCannotRenderRightAreErrors) {
   EXPECT_TRUE(fine->empty());
 }
 
+// What OpenGL accepts passes (a review's false errors): a fragment input the code never reads
+// (nothing reads it undefined), varyings split by component, an unused sampler sharing a unit,
+// a fragment input reading one element of an array output. A sampler array takes consecutive
+// units, each compared.
+TEST(ShaderInterfaceCheck, WhatOpenGLAcceptsPasses) {
+  const std::string vertex =
+      std::string("#version 450 core\nlayout(location = 0) in vec3 inPosition;\n") + kFrame + R"(
+layout(location = 0) out vec3 vA;
+layout(location = 1, component = 0) out vec2 vLow;
+layout(location = 1, component = 2) out vec2 vHigh;
+layout(location = 2) out vec4 vArray[2];
+void main() {
+  vA = inPosition;
+  vLow = inPosition.xy;
+  vHigh = inPosition.yz;
+  vArray[0] = vec4(inPosition, 1.0);
+  vArray[1] = vec4(inPosition.zyx, 1.0);
+  gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0)));
+}
+)";
+  const std::string fragment = fragmentStage(R"(
+layout(location = 0) in vec3 vA;
+layout(location = 1) in vec2 vLow;
+layout(location = 1, component = 2) in vec2 vHigh;
+layout(location = 3) in vec4 vSecond;
+layout(location = 9) in vec3 vNeverRead;
+layout(binding = 0) uniform sampler2D uBase;
+layout(binding = 0) uniform samplerCube uNeverSampled;
+)",
+                                             "+ texture(uBase, vLow + vHigh).rgb + vSecond.xyz");
+  auto accepted = checkShaderInterface(pair(vertex, fragment));
+  ASSERT_TRUE(accepted.ok()) << accepted.error().message;
+  EXPECT_TRUE(accepted->empty()) << accepted->front();
+
+  auto arrays = checkShaderInterface(
+      pair(vertexStage(),
+           fragmentStage("layout(location = 0) in vec3 vA;\nlayout(location = 1) in vec2 vB;\n"
+                         "layout(binding = 0) uniform sampler2D uPair[2];\n"
+                         "layout(binding = 1) uniform samplerCube uEnv;\n",
+                         "+ texture(uPair[0], vB).rgb + texture(uPair[1], vB).rgb + "
+                         "texture(uEnv, vA).rgb")));
+  ASSERT_FALSE(arrays.ok());
+  EXPECT_NE(arrays.error().message.find("'uEnv' (a samplerCube) and test.frag: 'uPair[1]' (a "
+                                        "sampler2D) share texture unit 1"),
+            std::string::npos)
+      << arrays.error().message;
+}
+
 }  // namespace
 }  // namespace duolod::shader

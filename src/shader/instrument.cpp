@@ -42,12 +42,9 @@ std::pair<uint32_t, uint32_t> counterBindings(const ir::Module& vertex,
   std::set<uint32_t> taken = {14, 15};
   for (const ir::Module* module : {&vertex, &fragment}) {
     ir::DefUse uses(*module);
-    for (const ir::UniformBlock& block : ir::uniformBlocks(*module, uses)) {
-      const ir::Instruction* variable = uses.def(block.variable);
-      const bool storage = (variable && variable->operands[0] == spv::StorageClassStorageBuffer) ||
-                           uses.hasDecoration(block.block_type, spv::DecorationBufferBlock);
-      if (storage && block.binding) taken.insert(*block.binding);
-    }
+    for (const ir::StorageBlock& block : ir::storageBlocks(*module, uses))
+      if (block.binding)
+        for (uint32_t i = 0; i < block.count; ++i) taken.insert(*block.binding + i);
   }
   uint32_t first = kVertexCounterBinding;
   while (taken.count(first)) ++first;

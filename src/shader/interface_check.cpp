@@ -1,5 +1,6 @@
 // A user's shader pair against what duolod feeds it (shaders/INTERFACE.md, moved by a bindings
 // file): what cannot render right is an error, what reads zeros a warning (see shader.hpp).
+#include <algorithm>
 #include <map>
 #include <set>
 #include <string>
@@ -85,6 +86,47 @@ bool isStorageBlock(const ir::DefUse& uses, const ir::UniformBlock& block) {
          uses.hasDecoration(block.block_type, spv::DecorationBufferBlock);
 }
 
+// Whether a global variable is read or written anywhere in a function (names, decorations and
+// the entry point's interface list do not count): OpenGL ignores what no code touches.
+bool isUsed(const ir::DefUse& uses, Id variable) {
+  for (const ir::InstructionRef& user : uses.users(variable))
+    if (user.function >= 0) return true;
+  return false;
+}
+
+// Array elements of a type (1 for a non-array), and the element type.
+uint32_t arrayLength(const ir::DefUse& uses, Id& type) {
+  uint32_t count = 1;
+  const ir::Instruction* def = uses.def(type);
+  for (int depth = 0; def && def->opcode == spv::OpTypeArray && depth < 8; ++depth) {
+    count *= static_cast<uint32_t>(
+        std::max<int64_t>(1, ir::constantIntValue(uses, def->operands[1]).value_or(1)));
+    type = def->operands[0];
+    def = uses.def(type);
+  }
+  return count;
+}
+
+// Locations a varying of `type` takes (GLSL 4.50 §4.4.1: a matrix one per column, a 64-bit
+// three- or four-component vector two, arrays their element's times their length).
+uint32_t locationsSpanned(const ir::DefUse& uses, Id type) {
+  const uint32_t count = arrayLength(uses, type);
+  ir::TypeInfo info = ir::typeInfo(uses, type);
+  uint32_t per_element = 1;
+  if (info.opcode == spv::OpTypeMatrix) per_element = std::max(info.columns, 1u);
+  if (info.width == 64 && info.opcode == spv::OpTypeVector && info.components > 2) per_element = 2;
+  if (const ir::Instruction* def = uses.def(type); def && def->opcode == spv::OpTypeStruct) {
+    per_element = 0;
+    for (Id member : def->operands) per_element += locationsSpanned(uses, member);
+  }
+  return count * per_element;
+}
+
+struct Varying {
+  const ir::InterfaceVariable* variable = nullptr;
+  bool starts_here = false;  // the location is its first (else inside an array or matrix)
+};
+
 std::string blockName(const ir::UniformBlock& block) {
   return block.name.empty() ? block.instance_name : block.name;
 }
@@ -114,30 +156,41 @@ core::Result<std::vector<std::string>> checkShaderInterface(const render::GlslSo
                          "(0, 0, 0, 1)");
 
   // Varyings: SPIR-V stages link by location without a check; a fragment input that no vertex
-  // output writes is undefined, one of another type reads the wrong bits.
-  std::map<uint32_t, const ir::InterfaceVariable*> outputs;
+  // output writes is undefined, one of another type reads the wrong bits. Keyed by (location,
+  // component); an input the code never reads is no read.
+  std::map<std::pair<uint32_t, uint32_t>, Varying> outputs;
   const std::vector<ir::InterfaceVariable> vertex_interface =
       ir::interfaceVariables(vertex->module, vertex_uses);
-  for (const ir::InterfaceVariable& output : vertex_interface)
-    if (output.storage == spv::StorageClassOutput && !output.builtin && output.location &&
-        !vertex_uses.decoration(output.variable, spv::DecorationComponent))
-      outputs[*output.location] = &output;
+  for (const ir::InterfaceVariable& output : vertex_interface) {
+    if (output.storage != spv::StorageClassOutput || output.builtin || !output.location) continue;
+    const uint32_t component =
+        vertex_uses.decoration(output.variable, spv::DecorationComponent).value_or(0);
+    const uint32_t span = locationsSpanned(vertex_uses, output.value_type);
+    for (uint32_t k = 0; k < std::max(span, 1u); ++k)
+      outputs[{*output.location + k, component}] = Varying{&output, k == 0};
+  }
   for (const ir::InterfaceVariable& input :
        ir::interfaceVariables(fragment->module, fragment_uses)) {
     if (input.storage != spv::StorageClassInput || input.builtin || !input.location ||
-        fragment_uses.decoration(input.variable, spv::DecorationComponent))
+        !isUsed(fragment_uses, input.variable))
       continue;
-    auto found = outputs.find(*input.location);
-    const std::string where = fragment->file + ": fragment input '" + input.name +
-                              "' at location " + std::to_string(*input.location);
+    const uint32_t component =
+        fragment_uses.decoration(input.variable, spv::DecorationComponent).value_or(0);
+    auto found = outputs.find({*input.location, component});
+    const std::string where =
+        fragment->file + ": fragment input '" + input.name + "' at location " +
+        std::to_string(*input.location) +
+        (component ? " component " + std::to_string(component) : std::string());
     if (found == outputs.end())
       return core::Error{where + ": " + vertex->file +
-                         " writes no output at that location (the stages are linked by location)"};
+                         " writes no output there (the stages are linked by location)"};
+    if (!found->second.starts_here) continue;  // part of an array or matrix: not compared
     const std::string input_type = glslTypeName(fragment_uses, input.value_type);
-    const std::string output_type = glslTypeName(vertex_uses, found->second->value_type);
+    const std::string output_type = glslTypeName(vertex_uses, found->second.variable->value_type);
     if (!input_type.empty() && !output_type.empty() && input_type != output_type)
       return core::Error{where + " is a " + input_type + ", but " + vertex->file +
-                         "'s output there, '" + found->second->name + "', is a " + output_type};
+                         "'s output there, '" + found->second.variable->name + "', is a " +
+                         output_type};
   }
 
   // Textures: a unit duolod binds nothing to samples (0, 0, 0, 1); two sampler types on one unit
@@ -150,24 +203,30 @@ core::Result<std::vector<std::string>> checkShaderInterface(const render::GlslSo
   for (const ParsedStage* stage : {&*vertex, &*fragment}) {
     const ir::DefUse& uses = stage == &*vertex ? vertex_uses : fragment_uses;
     for (const ir::Sampler& sampler : ir::samplers(stage->module, uses)) {
-      if (!sampler.binding) continue;
+      // OpenGL checks only the samplers the program uses (an unused one is no active uniform).
+      if (!sampler.binding || !isUsed(uses, sampler.variable)) continue;
+      Id element = sampler.type;
+      const uint32_t count = arrayLength(uses, element);  // an array takes consecutive units
       const std::string signature = samplerSignature(uses, sampler.type);
-      const std::string who = stage->file + ": '" + sampler.name + "'";
-      auto [known, added] = unit_types.emplace(*sampler.binding, std::pair{signature, who});
-      if (!added && !signature.empty() && !known->second.first.empty() &&
-          known->second.first != signature)
-        return core::Error{who + " (a " + signature + ") and " + known->second.second + " (a " +
-                           known->second.first + ") share texture unit " +
-                           std::to_string(*sampler.binding) +
-                           ": OpenGL draws nothing with two sampler types on one unit"};
-      if (!added) continue;
-      if (!bound.count(*sampler.binding))
-        warnings.push_back(who + " at binding " + std::to_string(*sampler.binding) +
-                           " is bound to no texture (shaders/INTERFACE.md, --bindings): it "
-                           "samples (0, 0, 0, 1)");
-      else if (!signature.empty() && signature != "sampler2D")
-        warnings.push_back(who + " at binding " + std::to_string(*sampler.binding) + " is a " +
-                           signature + "; duolod binds 2D textures only: it samples (0, 0, 0, 1)");
+      for (uint32_t k = 0; k < count; ++k) {
+        const uint32_t unit = *sampler.binding + k;
+        const std::string who = stage->file + ": '" + sampler.name +
+                                (count > 1 ? "[" + std::to_string(k) + "]" : std::string()) + "'";
+        auto [known, added] = unit_types.emplace(unit, std::pair{signature, who});
+        if (!added && !signature.empty() && !known->second.first.empty() &&
+            known->second.first != signature)
+          return core::Error{who + " (a " + signature + ") and " + known->second.second + " (a " +
+                             known->second.first + ") share texture unit " + std::to_string(unit) +
+                             ": OpenGL draws nothing with two sampler types on one unit"};
+        if (!added) continue;
+        if (!bound.count(unit))
+          warnings.push_back(who + " at binding " + std::to_string(unit) +
+                             " is bound to no texture (shaders/INTERFACE.md, --bindings): it "
+                             "samples (0, 0, 0, 1)");
+        else if (!signature.empty() && signature != "sampler2D")
+          warnings.push_back(who + " at binding " + std::to_string(unit) + " is a " + signature +
+                             "; duolod binds 2D textures only: it samples (0, 0, 0, 1)");
+      }
     }
   }
 
@@ -177,23 +236,32 @@ core::Result<std::vector<std::string>> checkShaderInterface(const render::GlslSo
     const ir::DefUse& uses = stage == &*vertex ? vertex_uses : fragment_uses;
     for (const ir::UniformBlock& block : ir::uniformBlocks(stage->module, uses)) {
       const int binding = block.binding ? static_cast<int>(*block.binding) : -1;
-      const bool storage = isStorageBlock(uses, block);
-      if (!storage && (binding == bindings.frame_block || binding == bindings.material_block))
+      if (isStorageBlock(uses, block) || !isUsed(uses, block.variable) ||
+          binding == bindings.frame_block || binding == bindings.material_block)
         continue;
       if (!reported.insert({blockName(block), std::to_string(binding)}).second) continue;
       warnings.push_back(
-          stage->file + ": " + (storage ? "storage block '" : "uniform block '") +
-          blockName(block) + "'" +
+          stage->file + ": uniform block '" + blockName(block) + "'" +
           (binding >= 0 ? " at binding " + std::to_string(binding) : " without a binding") +
-          (storage ? " gets no buffer (duolod binds none): it reads zeros and its writes are lost"
-                   : " is neither Frame nor Material (shaders/INTERFACE.md, --bindings): it "
-                     "reads zeros"));
+          " is neither Frame nor Material (shaders/INTERFACE.md, --bindings): it reads zeros");
+    }
+    for (const ir::StorageBlock& block : ir::storageBlocks(stage->module, uses)) {
+      const int binding = block.binding ? static_cast<int>(*block.binding) : -1;
+      if (!isUsed(uses, block.variable) ||
+          !reported.insert({block.name, std::to_string(binding)}).second)
+        continue;
+      warnings.push_back(
+          stage->file + ": storage block '" + block.name + "'" +
+          (binding >= 0 ? " at binding " + std::to_string(binding) : " without a binding") +
+          " gets no buffer (duolod binds none): it reads zeros and its writes are lost");
     }
     for (const ir::LooseUniform& uniform : ir::looseUniforms(stage->module, uses))
-      warnings.push_back(
-          stage->file + ": uniform '" + uniform.name + "'" +
-          (uniform.location ? " at location " + std::to_string(*uniform.location) : std::string()) +
-          " is set by nothing (duolod sets blocks, not loose uniforms): it reads 0");
+      if (isUsed(uses, uniform.variable))
+        warnings.push_back(
+            stage->file + ": uniform '" + uniform.name + "'" +
+            (uniform.location ? " at location " + std::to_string(*uniform.location)
+                              : std::string()) +
+            " is set by nothing (duolod sets blocks, not loose uniforms): it reads 0");
   }
   return warnings;
 }

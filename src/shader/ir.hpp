@@ -276,6 +276,14 @@ struct UniformBlock {
 };
 std::vector<UniformBlock> uniformBlocks(const Module& module, const DefUse& uses);
 
+struct StorageBlock {  // a shader storage block (or an array of them)
+  Id variable = kNoId;
+  std::string name;  // the block type's name, else the instance's
+  std::optional<uint32_t> binding;
+  uint32_t count = 1;  // array elements: bindings binding .. binding + count - 1
+};
+std::vector<StorageBlock> storageBlocks(const Module& module, const DefUse& uses);
+
 struct LooseUniform {  // a non-opaque UniformConstant with a Location
   Id variable = kNoId;
   Id value_type = kNoId;

@@ -251,6 +251,35 @@ std::vector<UniformBlock> uniformBlocks(const Module& module, const DefUse& uses
   return result;
 }
 
+std::vector<StorageBlock> storageBlocks(const Module& module, const DefUse& uses) {
+  std::vector<StorageBlock> result;
+  forEachGlobalVariable(module, [&](const Instruction& variable) {
+    auto storage = static_cast<spv::StorageClass>(variable.operands[0]);
+    if (storage != spv::StorageClassUniform && storage != spv::StorageClassStorageBuffer) return;
+    Id type = pointeeType(uses, variable.type_id);
+    uint32_t count = 1;
+    const Instruction* def = uses.def(type);
+    for (int depth = 0; def && def->opcode == spv::OpTypeArray && depth < kMaxNesting; ++depth) {
+      count *= static_cast<uint32_t>(
+          std::max<int64_t>(1, constantIntValue(uses, def->operands[1]).value_or(1)));
+      type = def->operands[0];
+      def = uses.def(type);
+    }
+    if (def && def->opcode == spv::OpTypeRuntimeArray) {
+      type = def->operands[0];
+      def = uses.def(type);
+    }
+    if (!def || def->opcode != spv::OpTypeStruct) return;
+    if (storage == spv::StorageClassUniform &&
+        !uses.hasDecoration(type, spv::DecorationBufferBlock))
+      return;  // a uniform block
+    std::string name = module.name(type);
+    result.push_back({variable.result_id, name.empty() ? module.name(variable.result_id) : name,
+                      uses.decoration(variable.result_id, spv::DecorationBinding), count});
+  });
+  return result;
+}
+
 std::vector<LooseUniform> looseUniforms(const Module& module, const DefUse& uses) {
   std::vector<LooseUniform> result;
   forEachGlobalVariable(module, [&](const Instruction& variable) {
