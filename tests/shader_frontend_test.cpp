@@ -313,5 +313,28 @@ TEST(ShaderFrontend, ValidatorRejectsBrokenModules) {
   EXPECT_GT(refused, 0);
 }
 
+// HLSL output semantics: the given ones by location; an input at another location gets the first
+// TEXCOORD<k> no input has (SPIRV-Cross's own TEXCOORD<location> gave location 1 the TEXCOORD1
+// of the uv1 stream at location 4).
+TEST(ShaderFrontend, HlslVertexSemanticsNeverRepeat) {
+  auto words = compileToSpirv(R"(#version 450
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec4 inExtra;
+layout(location = 3) in vec2 inUV0;
+layout(location = 4) in vec2 inUV1;
+void main() { gl_Position = vec4(inPosition + inExtra.xyz, 1.0) + vec4(inUV0, inUV1); }
+)",
+                              Stage::kVertex, "semantics.vert");
+  ASSERT_TRUE(words.ok()) << words.error().message;
+  auto hlsl = crossCompile(*words, Target::kHlsl50, "semantics.vert",
+                           {{0, "POSITION0"}, {3, "TEXCOORD0"}, {4, "TEXCOORD1"}});
+  ASSERT_TRUE(hlsl.ok()) << hlsl.error().message;
+  for (const char* expected : {"inPosition : POSITION0;", "inExtra : TEXCOORD2;",
+                               "inUV0 : TEXCOORD0;", "inUV1 : TEXCOORD1;"})
+    EXPECT_NE(hlsl->find(expected), std::string::npos) << expected << "\n" << *hlsl;
+  EXPECT_TRUE(
+      checkCrossCompiled(*hlsl, Target::kHlsl50, Stage::kVertex, "semantics.vert.hlsl").ok());
+}
+
 }  // namespace
 }  // namespace duolod::shader

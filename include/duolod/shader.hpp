@@ -93,8 +93,11 @@ core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
 
 // A SPIR-V module's `stage` entry point as GLSL 450 (SPIRV-Cross), so that compiled shaders go
 // wherever duolod takes GLSL (the CLI's --vert/--frag take .spv files). The module must validate
-// for OpenGL 4.5 or Vulkan 1.0-1.2 and hold an entry point of `stage`; errors name `file_name`
-// and what is wrong (not a SPIR-V file, invalid, the stages it holds instead).
+// for OpenGL 4.5 or Vulkan 1.0-1.3 and hold an entry point of `stage`; errors name `file_name`
+// and what is wrong (not a SPIR-V file, invalid, the stages it holds instead). HLSL-born modules
+// are legalized first (as hlslToGlsl does); separate textures and samplers become one sampler2D
+// named and bound as the texture; a push-constant block becomes a uniform block at the first
+// binding from 32 up that no block takes.
 core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
                                       const std::string& file_name);
 

@@ -7,6 +7,7 @@
 #include <cctype>
 #include <exception>
 #include <map>
+#include <optional>
 #include <set>
 #include <spirv-tools/libspirv.hpp>
 #include <spirv-tools/optimizer.hpp>
@@ -56,9 +57,10 @@ void setGlslOptions(spirv_cross::CompilerGLSL& compiler, Target target) {
 // main(). SPIRV-Tools' legalization passes (the ones DXC and glslang's optimizer run for HLSL:
 // exhaustive inlining, then forwarding loads and stores through locals) make each sample read the
 // resource itself, and leave one function, so the rules see the whole shader as they see GLSL's.
-core::Result<std::vector<uint32_t>> legalizeHlsl(const std::vector<uint32_t>& words,
-                                                 const std::string& file_name) {
-  spvtools::Optimizer optimizer(SPV_ENV_OPENGL_4_5);
+core::Result<std::vector<uint32_t>> legalize(const std::vector<uint32_t>& words,
+                                             spv_target_env environment,
+                                             const std::string& file_name) {
+  spvtools::Optimizer optimizer(environment);
   std::string messages;
   optimizer.SetMessageConsumer(
       [&](spv_message_level_t severity, const char*, const spv_position_t&, const char* message) {
@@ -70,8 +72,32 @@ core::Result<std::vector<uint32_t>> legalizeHlsl(const std::vector<uint32_t>& wo
   options.set_run_validator(false);  // validated before and after, with our messages
   if (!optimizer.Run(words.data(), words.size(), &legal, options))
     return Error{file_name + ": SPIRV-Tools could not legalize the HLSL's SPIR-V: " + messages};
-  if (auto valid = validateSpirv(legal, file_name + " (legalized)"); !valid) return valid.error();
+  spvtools::SpirvTools tools(environment);
+  std::string problems;
+  tools.SetMessageConsumer(
+      [&](spv_message_level_t, const char*, const spv_position_t& position, const char* message) {
+        problems += "word " + std::to_string(position.index) + ": " + message + "\n";
+      });
+  if (!tools.Validate(legal)) return Error{file_name + " (legalized): invalid SPIR-V: " + problems};
   return legal;
+}
+
+core::Result<std::vector<uint32_t>> legalizeHlsl(const std::vector<uint32_t>& words,
+                                                 const std::string& file_name) {
+  return legalize(words, SPV_ENV_OPENGL_4_5, file_name);
+}
+
+// The language of a module's OpSource, if it has one.
+std::optional<spv::SourceLanguage> sourceLanguage(const std::vector<uint32_t>& words) {
+  for (size_t at = 5; at < words.size();) {
+    const uint32_t count = words[at] >> 16, opcode = words[at] & 0xffff;
+    if (count == 0 || at + count > words.size()) break;
+    if (opcode == spv::OpSource && count >= 2)
+      return static_cast<spv::SourceLanguage>(words[at + 1]);
+    if (opcode == spv::OpFunction) break;  // debug instructions come before any function
+    at += count;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -101,8 +127,25 @@ core::Result<std::string> crossCompile(
       hlsl.point_size_compat = true;
       hlsl.use_entry_point_name = false;  // "main", which checkCrossCompiled expects
       compiler.set_hlsl_options(hlsl);
-      for (const auto& [location, semantic] : hlsl_vertex_semantics)
-        compiler.add_vertex_attribute_remap({location, semantic});
+      if (!hlsl_vertex_semantics.empty() &&
+          compiler.get_execution_model() == spv::ExecutionModelVertex) {
+        // An input at a location without a stream would get SPIRV-Cross's TEXCOORD<location>,
+        // which may be a semantic given to a stream (TEXCOORD1 at location 1): each gets the
+        // first TEXCOORD<k> no other input has.
+        std::map<uint32_t, std::string> semantics = hlsl_vertex_semantics;
+        std::set<std::string> used;
+        for (const auto& [location, semantic] : semantics) used.insert(semantic);
+        uint32_t next = 0;
+        for (const spirv_cross::Resource& input : compiler.get_shader_resources().stage_inputs) {
+          const uint32_t location = compiler.get_decoration(input.id, spv::DecorationLocation);
+          if (semantics.count(location)) continue;
+          while (used.count("TEXCOORD" + std::to_string(next))) ++next;
+          semantics[location] = "TEXCOORD" + std::to_string(next);
+          used.insert(semantics[location]);
+        }
+        for (const auto& [location, semantic] : semantics)
+          compiler.add_vertex_attribute_remap({location, semantic});
+      }
       spirv_cross::CompilerGLSL::Options common;
       common.vertex.flip_vert_y = false;
       common.vertex.fixup_clipspace = false;  // keep OpenGL's clip space; the reader's engine maps it
@@ -165,29 +208,68 @@ core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage 
         (words.empty() ? std::string("empty") : "it does not start with the magic number") + ")"};
   // SPIRV-Cross trusts its input: validated first, for OpenGL or for Vulkan (an engine's
   // shaders are often compiled for Vulkan; SPIRV-Cross's GLSL drops what OpenGL lacks).
+  std::optional<spv_target_env> environment;
+  std::string vulkan_messages;
   core::Status valid = validateSpirv(words, file_name);
-  if (!valid) {
-    bool valid_for_vulkan = false;
-    for (spv_target_env environment :
-         {SPV_ENV_VULKAN_1_0, SPV_ENV_VULKAN_1_1, SPV_ENV_VULKAN_1_2}) {
-      spvtools::SpirvTools tools(environment);
-      tools.SetMessageConsumer(
-          [](spv_message_level_t, const char*, const spv_position_t&, const char*) {});
+  if (valid) {
+    environment = SPV_ENV_OPENGL_4_5;
+  } else {
+    for (spv_target_env vulkan :
+         {SPV_ENV_VULKAN_1_0, SPV_ENV_VULKAN_1_1, SPV_ENV_VULKAN_1_2, SPV_ENV_VULKAN_1_3}) {
+      spvtools::SpirvTools tools(vulkan);
+      vulkan_messages.clear();
+      tools.SetMessageConsumer([&](spv_message_level_t, const char*, const spv_position_t&,
+                                   const char* message) { vulkan_messages += message; });
       if (tools.Validate(words)) {
-        valid_for_vulkan = true;
+        environment = vulkan;
         break;
       }
     }
-    if (!valid_for_vulkan) return valid.error();
+    if (!environment)
+      return Error{valid.error().message + " (and for Vulkan 1.3: " + vulkan_messages + ")"};
+  }
+  std::vector<uint32_t> module = words;
+  if (sourceLanguage(words) == spv::SourceLanguageHLSL) {
+    // As the HLSL input path does (legalizeHlsl): textures and samplers passed to functions
+    // become reads of the resources themselves, which SPIRV-Cross's GLSL needs.
+    auto legal = legalize(words, *environment, file_name);
+    if (!legal) return legal.error();
+    module = std::move(*legal);
   }
   try {
-    spirv_cross::CompilerGLSL compiler(words);
+    spirv_cross::CompilerGLSL compiler(module);
     const spv::ExecutionModel wanted = executionModelOf(stage);
     std::string held;
     for (const spirv_cross::EntryPoint& entry : compiler.get_entry_points_and_stages()) {
       if (entry.execution_model == wanted) {
         compiler.set_entry_point(entry.name, entry.execution_model);
         setGlslOptions(compiler, Target::kGlsl450);
+        spirv_cross::CompilerGLSL::Options options = compiler.get_common_options();
+        options.emit_push_constant_as_uniform_buffer = true;  // GLSL has no push constants
+        compiler.set_common_options(options);
+        // ...and OpenGL needs the block a binding: the first one from 32 up that no uniform block
+        // takes, past every binding a bindings file can give Frame or Material (0-31), so that
+        // it reads zeros (the interface check says so) instead of another block's data.
+        const spirv_cross::ShaderResources resources = compiler.get_shader_resources();
+        std::set<uint32_t> taken;
+        for (const spirv_cross::Resource& block : resources.uniform_buffers)
+          taken.insert(compiler.get_decoration(block.id, spv::DecorationBinding));
+        uint32_t free_binding = 32;
+        for (const spirv_cross::Resource& block : resources.push_constant_buffers) {
+          while (taken.count(free_binding)) ++free_binding;
+          compiler.set_decoration(block.id, spv::DecorationBinding, free_binding);
+          taken.insert(free_binding);
+        }
+        // Vulkan's separate textures and samplers: one sampler2D per pair, named and bound as
+        // the texture (as the HLSL path binds Texture2D + SamplerState).
+        compiler.build_combined_image_samplers();
+        for (const spirv_cross::CombinedImageSampler& combined :
+             compiler.get_combined_image_samplers()) {
+          compiler.set_name(combined.combined_id, compiler.get_name(combined.image_id));
+          compiler.set_decoration(
+              combined.combined_id, spv::DecorationBinding,
+              compiler.get_decoration(combined.image_id, spv::DecorationBinding));
+        }
         return compiler.compile();
       }
       held += std::string(held.empty() ? "" : ", ") + executionModelName(entry.execution_model) +
