@@ -217,8 +217,9 @@ TEST(CliShaderTest, BadFlagsAreClearErrors) {
       runCli({"shader", "missing.obj", "--distance", "3", "--shader", "pbr", "--vert-entry", "VS",
               "--out", (test::scratchDir("cli_shader_bad") / "out").string()});
   EXPECT_NE(glsl_entry.exit_code, 0);
-  EXPECT_TRUE(
-      test::contains(glsl_entry.err, "--vert-entry names the entry point of an HLSL --vert"))
+  EXPECT_TRUE(test::contains(
+      glsl_entry.err,
+      "--vert-entry names the entry point of an HLSL (.hlsl) or SPIR-V (.spv) --vert"))
       << glsl_entry.err;
 }
 
@@ -357,6 +358,7 @@ TEST(CliShaderTest, SpirvFilesAreTakenAsTheirGlsl) {
   const double glsl = errorOf({"--shader", "noise_phong"});
   EXPECT_GT(glsl, 0);
   EXPECT_EQ(errorOf({"--vert", vert, "--frag", frag}), glsl);
+  EXPECT_EQ(errorOf({"--vert", vert, "--frag", frag, "--frag-entry", "main"}), glsl);
 
   test::CommandRun simplified = runCli({"shader", spot, "--vert", vert, "--frag", frag, "--pixels",
                                         "48", "--search", "greedy", "--steps", "1", "--candidates",
@@ -367,6 +369,8 @@ TEST(CliShaderTest, SpirvFilesAreTakenAsTheirGlsl) {
   const std::vector<std::pair<std::vector<std::string>, std::string>> refused = {
       {{"--vert", frag, "--frag", frag},
        "np.frag.spv: holds no vertex entry point (it holds fragment 'main')"},
+      {{"--vert", vert, "--frag", frag, "--frag-entry", "shade"},
+       "np.frag.spv: holds no fragment entry point 'shade' (it holds fragment 'main')"},
       {{"--vert", write("junk.spv", {0x6f6d2023u, 0x6c6f2075u, 0x0a21u, 1u, 2u}), "--frag", frag},
        "junk.spv: not a SPIR-V module"},
       {{"--vert", write("cut.spv", std::vector<uint32_t>(vertex->begin(), vertex->begin() + 100)),

@@ -135,10 +135,16 @@ struct ShadingFlags {
                         "fragment (pixel) shader: GLSL 450, HLSL when the file name ends in "
                         ".hlsl, SPIR-V when it ends in .spv; needs --vert");
     vert_entry_option =
-        command->add_option("--vert-entry", vert_entry, "entry point of an HLSL --vert")
+        command
+            ->add_option("--vert-entry", vert_entry,
+                         "entry point of an HLSL or SPIR-V --vert (SPIR-V: else its first "
+                         "vertex entry point)")
             ->capture_default_str();
     frag_entry_option =
-        command->add_option("--frag-entry", frag_entry, "entry point of an HLSL --frag")
+        command
+            ->add_option("--frag-entry", frag_entry,
+                         "entry point of an HLSL or SPIR-V --frag (SPIR-V: else its first "
+                         "fragment entry point)")
             ->capture_default_str();
     command->add_option("--bindings", bindings,
                         "JSON file moving the shader interface's attribute locations, block and "
@@ -174,12 +180,14 @@ struct ShadingFlags {
     if (vert.empty() != frag.empty()) return core::Error{"--vert and --frag go together"};
     if (!vert.empty() && shader_option && shader_option->count() > 0)
       return core::Error{"give --shader or --vert with --frag, not both"};
-    // An entry point names a function of an HLSL file; GLSL's is always main().
+    // An entry point names a function of an HLSL file or a SPIR-V module; GLSL's is main().
     for (auto [option, file, flag] : {std::tuple{vert_entry_option, &vert, "--vert"},
                                       std::tuple{frag_entry_option, &frag, "--frag"}})
-      if (option && option->count() > 0 && !isHlslFile(*file))
-        return core::Error{option->get_name() + " names the entry point of an HLSL " + flag +
-                           " file (.hlsl); " +
+      if (option && option->count() > 0 && !isHlslFile(*file) && !isSpirvFile(*file))
+        return core::Error{option->get_name() +
+                           " names the entry point of an HLSL (.hlsl) or "
+                           "SPIR-V (.spv) " +
+                           flag + " file; " +
                            (file->empty() ? std::string("there is none")
                                           : *file + " is GLSL, whose entry point is main()")};
     if (!vert.empty()) {
@@ -200,7 +208,11 @@ struct ShadingFlags {
                                " bytes, not a whole number of 32-bit words)"};
           std::vector<uint32_t> words(bytes->size() / 4);
           std::memcpy(words.data(), bytes->data(), bytes->size());
-          return shader::spirvToGlsl(words, stage, path);
+          // Without --vert-entry/--frag-entry: the module's first entry point of the stage.
+          const CLI::Option* chosen =
+              stage == shader::Stage::kVertex ? vert_entry_option : frag_entry_option;
+          return shader::spirvToGlsl(words, stage, path,
+                                     chosen && chosen->count() > 0 ? entry : std::string());
         }
         std::string text(core::withoutByteOrderMark(
             {reinterpret_cast<const char*>(bytes->data()), bytes->size()}));

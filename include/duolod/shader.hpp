@@ -97,9 +97,11 @@ core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
 // and what is wrong (not a SPIR-V file, invalid, the stages it holds instead). HLSL-born modules
 // are legalized first (as hlslToGlsl does); separate textures and samplers become one sampler2D
 // named and bound as the texture; a push-constant block becomes a uniform block at the first
-// binding from 32 up that no block takes.
+// binding from 32 up that no block takes. `entry_point` names the entry point to take; empty:
+// the module's first one of `stage`.
 core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
-                                      const std::string& file_name);
+                                      const std::string& file_name,
+                                      const std::string& entry_point = "");
 
 // Checks a vertex + fragment pair against what duolod feeds it (shaders/INTERFACE.md, moved by
 // `bindings`). An error for what cannot render right: a fragment input that no vertex output at

@@ -200,7 +200,8 @@ spv::ExecutionModel executionModelOf(Stage stage) {
 }  // namespace
 
 core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
-                                      const std::string& file_name) {
+                                      const std::string& file_name,
+                                      const std::string& entry_point) {
   constexpr uint32_t kMagic = 0x07230203;
   if (words.size() < 5 || words[0] != kMagic)
     return Error{
@@ -241,7 +242,7 @@ core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage 
     const spv::ExecutionModel wanted = executionModelOf(stage);
     std::string held;
     for (const spirv_cross::EntryPoint& entry : compiler.get_entry_points_and_stages()) {
-      if (entry.execution_model == wanted) {
+      if (entry.execution_model == wanted && (entry_point.empty() || entry.name == entry_point)) {
         compiler.set_entry_point(entry.name, entry.execution_model);
         setGlslOptions(compiler, Target::kGlsl450);
         spirv_cross::CompilerGLSL::Options options = compiler.get_common_options();
@@ -275,8 +276,9 @@ core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage 
       held += std::string(held.empty() ? "" : ", ") + executionModelName(entry.execution_model) +
               " '" + entry.name + "'";
     }
-    return Error{file_name + ": holds no " + executionModelName(wanted) +
-                 " entry point (it holds " + (held.empty() ? std::string("none") : held) + ")"};
+    return Error{file_name + ": holds no " + executionModelName(wanted) + " entry point" +
+                 (entry_point.empty() ? std::string() : " '" + entry_point + "'") + " (it holds " +
+                 (held.empty() ? std::string("none") : held) + ")"};
   } catch (const std::exception& error) {
     return Error{file_name + ": SPIRV-Cross (GLSL 450): " + error.what()};
   }
