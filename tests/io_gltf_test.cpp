@@ -529,6 +529,62 @@ TEST(GltfReader, TwoPrimitivesWithDifferentMaterialsGiveTwoSubmeshes) {
   EXPECT_NE(m.submeshes[0].material, m.submeshes[1].material);
 }
 
+// Primitives that share their vertex accessors (duolod's writer gives every material of a level
+// the level's one vertex accessor) are read once per placement: the mesh holds the accessor's
+// vertices once, not once per primitive (2000 primitives over 8000 vertices made 16 million
+// vertices and took seconds). A second placement of the mesh, under another node, is its own.
+TEST(GltfReader, PrimitivesSharingAVertexAccessorShareTheirVertices) {
+  constexpr int kPrimitives = 2000, kGrid = 64;  // a 64 x 64 vertex grid, one quad per primitive
+  HandGltf g;
+  std::vector<float> positions;
+  for (int y = 0; y < kGrid; ++y)
+    for (int x = 0; x < kGrid; ++x) positions.insert(positions.end(), {float(x), float(y), 0});
+  int position_accessor = g.addFloats(positions, "VEC3");
+  std::vector<uint32_t> indices;
+  json primitives = json::array();
+  for (int p = 0; p < kPrimitives; ++p) {
+    uint32_t corner = uint32_t((p / (kGrid - 1)) * kGrid + p % (kGrid - 1));
+    indices.insert(indices.end(), {corner, corner + 1, corner + kGrid + 1, corner,
+                                   corner + kGrid + 1, corner + kGrid});
+  }
+  int index_view = g.addView(indices);
+  for (int p = 0; p < kPrimitives; ++p) {
+    int accessor = g.addAccessor(index_view, kUnsignedInt, 6, "SCALAR", {{"byteOffset", p * 24}});
+    primitives.push_back(primitive(position_accessor, accessor, p));
+    g.doc["materials"].push_back({{"name", "m" + std::to_string(p)}});
+  }
+  int mesh = g.addMesh(primitives);
+  g.addNode({{"mesh", mesh}});
+  g.addNode({{"mesh", mesh}, {"translation", {0, 0, 10}}, {"scale", {-1, 1, 1}}});
+  g.setScene({0, 1});
+  io::LoadOptions options;
+  options.weld = false;
+  options.generate_normals = options.generate_tangents = false;
+  auto loaded = io::loadAsset(g.write(test::scratchDir("g"), "shared"), options);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  const core::Mesh& m = loaded->mesh;
+  EXPECT_EQ(m.vertexCount(), size_t(2 * kGrid * kGrid)) << "the accessor once per node";
+  EXPECT_EQ(m.triangleCount(), size_t(2 * 2 * kPrimitives));
+  ASSERT_EQ(m.submeshes.size(), size_t(kPrimitives));
+  for (const core::Submesh& sub : m.submeshes) {
+    ASSERT_EQ(sub.index_count, 12u);
+    const uint32_t p = sub.material;
+    const float x = float(p % (kGrid - 1)), y = float(p / (kGrid - 1));
+    // First node: untransformed, counter-clockwise from +z, its quad's corners.
+    Vec3 a = m.positions[m.indices[sub.first_index]],
+         b = m.positions[m.indices[sub.first_index + 1]],
+         c = m.positions[m.indices[sub.first_index + 2]];
+    EXPECT_EQ(a, (Vec3{x, y, 0})) << "material " << p;
+    EXPECT_EQ(b, (Vec3{x + 1, y, 0})) << "material " << p;
+    EXPECT_EQ(c, (Vec3{x + 1, y + 1, 0})) << "material " << p;
+    // Second node: mirrored in x and lifted; its winding is swapped back to counter-clockwise.
+    Vec3 d = m.positions[m.indices[sub.first_index + 6]],
+         e = m.positions[m.indices[sub.first_index + 7]];
+    EXPECT_EQ(d, (Vec3{-x, y, 10})) << "material " << p;
+    EXPECT_EQ(e, (Vec3{-x - 1, y + 1, 10})) << "material " << p;
+  }
+}
+
 TEST(GltfReader, PrimitiveWithoutIndicesIsATriangleList) {
   HandGltf g;
   int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0, 3, 0, 0, 2, 1, 0}, "VEC3");
@@ -554,9 +610,9 @@ TEST(GltfReader, UnsignedByteAndUnsignedShortIndices) {
   g.setScene({0});
   auto asset = io::readGltf(g.write(test::scratchDir("g"), "indices"), {});
   ASSERT_TRUE(asset) << asset.error().message;
-  // Each primitive brings its own 4 vertices: the second one's are 4..7.
-  EXPECT_EQ(asset->mesh.vertexCount(), 8u);
-  EXPECT_EQ(asset->mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 7, 6, 5, 7, 5, 4}));
+  // The primitives share their POSITION accessor, so they share its 4 vertices.
+  EXPECT_EQ(asset->mesh.vertexCount(), 4u);
+  EXPECT_EQ(asset->mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 3, 2, 1, 3, 1, 0}));
 }
 
 TEST(GltfReader, NormalizedUnsignedByteColorsAreInZeroOne) {

@@ -308,6 +308,88 @@ TEST(ShaderIr, SliceSummariesAgreeWithSlicingEachValue) {
   expectSummariesMatchSlices(smallShader().module, "small.frag");
 }
 
+// A fragment shader of `branches` sequential if/else blocks, each updating the colour `c`.
+std::string manyBranchesShader(int branches) {
+  std::string source = R"(#version 450 core
+layout(std140, binding = 1) uniform Material { vec4 uBaseColorFactor; vec4 uMaterialParams; };
+layout(location = 0) out vec4 outColor;
+void main() {
+  vec3 c = uBaseColorFactor.rgb;
+  float a = uMaterialParams.x;
+)";
+  for (int i = 0; i < branches; ++i)
+    source +=
+        "  if (c.x > " + std::to_string(i) + ".0 * a) c = c * 1.5 + vec3(a); else c = c.zxy;\n";
+  return source + "  outColor = vec4(c, 1.0);\n}\n";
+}
+
+ir::Id valueStoredTo(const ir::Module& module, const std::string& variable) {
+  ir::Id target = variableNamed(module, variable.c_str()), value = ir::kNoId;
+  for (const ir::Function& function : module.functions)
+    for (const ir::Block& block : function.blocks)
+      for (const ir::Instruction& instruction : block.instructions)
+        if (instruction.opcode == spv::OpStore && instruction.operands[0] == target)
+          value = instruction.operands[1];
+  return value;
+}
+
+TEST(ShaderIr, SliceSummariesOfManyBranchesAgreeAndGrowLinearly) {
+  expectSummariesMatchSlices(
+      parseOrDie(compileOrDie(manyBranchesShader(12), Stage::kFragment, "branches.frag")),
+      "12 branches");
+  // A local stored in N branches and loaded in N: each load depends on the variable, not on its
+  // N stores, so the graph has O(N) edges (it had N² before, and 400 branches took a minute).
+  std::vector<size_t> edges;
+  for (int branches : {100, 300}) {
+    ir::Module module =
+        parseOrDie(compileOrDie(manyBranchesShader(branches), Stage::kFragment, "branches.frag"));
+    ir::DefUse uses(module);
+    ir::SliceSummaries summaries(module, uses, [](const ir::Instruction&) { return false; });
+    ir::Id out = valueStoredTo(module, "outColor");
+    ASSERT_NE(out, ir::kNoId);
+    ir::SliceFlags flags = summaries.of(out);
+    ir::ValueSources slice = ir::backwardSlice(module, uses, out);
+    EXPECT_TRUE(flags.reads_uniform && slice.reads_uniform);
+    EXPECT_EQ(flags.reads_input, slice.reads_input);
+    EXPECT_EQ(flags.reads_other, slice.reads_other);
+    edges.push_back(summaries.dependenceCount());
+    std::printf("[ branches ] %d: %zu dependence edges\n", branches, edges.back());
+    EXPECT_LT(edges.back(), size_t(branches) * 40) << branches << " branches";
+  }
+  EXPECT_LT(double(edges[1]) / double(edges[0]), 3.5) << "300 branches against 100";
+}
+
+// backwardSlice of several values in one walk is the union of their slices.
+TEST(ShaderIr, BackwardSliceOfManyValuesIsTheUnionOfTheirSlices) {
+  ir::Module module =
+      parseOrDie(compileOrDie(readShader("pbr.frag"), Stage::kFragment, "pbr.frag"));
+  ir::DefUse uses(module);
+  std::vector<ir::Id> values;
+  int seen = 0;
+  for (const ir::Function& function : module.functions)
+    for (const ir::Block& block : function.blocks)
+      for (const ir::Instruction& instruction : block.instructions)
+        if (instruction.hasResult() && ++seen % 11 == 0) values.push_back(instruction.result_id);
+  ASSERT_GT(values.size(), 5u);
+  ir::ValueSources together = ir::backwardSlice(module, uses, values);
+  std::set<ir::Id> instructions, globals;
+  bool reads_texture = false, reads_input = false, uses_derivatives = false;
+  for (ir::Id value : values) {
+    ir::ValueSources one = ir::backwardSlice(module, uses, value);
+    instructions.insert(one.instructions.begin(), one.instructions.end());
+    globals.insert(one.global_reads.begin(), one.global_reads.end());
+    reads_texture |= one.reads_texture;
+    reads_input |= one.reads_input;
+    uses_derivatives |= one.uses_derivatives;
+  }
+  EXPECT_EQ(together.instructions, instructions);
+  EXPECT_EQ(together.global_reads, globals);
+  EXPECT_EQ(together.reads_texture, reads_texture);
+  EXPECT_EQ(together.reads_input, reads_input);
+  EXPECT_EQ(together.uses_derivatives, uses_derivatives);
+  EXPECT_TRUE(ir::backwardSlice(module, uses, std::span<const ir::Id>{}).instructions.empty());
+}
+
 TEST(ShaderIr, MutationsKeepTheModuleValid) {
   SmallShader shader = smallShader();
   ir::Module& module = shader.module;

@@ -10,6 +10,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -326,6 +327,7 @@ class GltfFlattener {
 
   core::Status addMesh(int mesh_index, const Mat4& world) {
     const tinygltf::Mesh& gmesh = model_.meshes[mesh_index];
+    ++instance_;  // the vertices appended for this placement of the mesh are shared below
     for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
       const tinygltf::Primitive& prim = gmesh.primitives[p];
       std::string what = path_ + ": mesh " + std::to_string(mesh_index) + " primitive " +
@@ -345,6 +347,16 @@ class GltfFlattener {
                             const std::string& what) {
     auto position_it = prim.attributes.find("POSITION");
     if (position_it == prim.attributes.end()) return Error{what + ": has no POSITION attribute"};
+    // Primitives of one mesh often share their vertex accessors and differ only in indices and
+    // material (duolod's own writer does so): append those vertices once per placement, not once
+    // per primitive, which would cost primitives x vertices in time and memory.
+    VertexSourceKey key{instance_, {}};
+    for (size_t s = 0; s < kVertexAttributes.size(); ++s) {
+      auto it = prim.attributes.find(kVertexAttributes[s]);
+      key.accessors[s] = it == prim.attributes.end() ? -1 : it->second;
+    }
+    if (auto shared = appended_.find(key); shared != appended_.end())
+      return addTriangles(prim, world, what, shared->second.base, shared->second.count);
     auto positions = readFloats(model_, position_it->second, 3, what + " POSITION");
     if (!positions) return positions.error();
     size_t count = positions->size() / 3;
@@ -375,24 +387,6 @@ class GltfFlattener {
       for (size_t v = 0; v < count; ++v)
         for (int c = 0; c < components; ++c) colors[v * 4 + c] = (*read)[v * components + c];
     }
-    std::vector<uint32_t> indices;
-    if (prim.indices >= 0) {
-      auto read = readIndices(model_, prim.indices, what);
-      if (!read) return read.error();
-      indices = std::move(read.value());
-    } else {
-      indices.resize(count);
-      for (size_t i = 0; i < count; ++i) indices[i] = static_cast<uint32_t>(i);
-    }
-    if (indices.size() % 3 != 0)
-      return Error{what + ": " + std::to_string(indices.size()) +
-                   (prim.indices >= 0 ? " indices" : " vertices (it has no indices)") +
-                   " is not a whole number of triangles"};
-    for (size_t i = 0; i < indices.size(); ++i)
-      if (indices[i] >= count)
-        return Error{what + ": index " + std::to_string(i) + " = " + std::to_string(indices[i]) +
-                     " is out of range (" + std::to_string(count) + " vertices)"};
-
     // Streams present anywhere must be present everywhere; fill absent ones with defaults.
     core::Mesh& mesh = asset_.mesh;
     uint32_t base = static_cast<uint32_t>(mesh.positions.size());
@@ -422,6 +416,32 @@ class GltfFlattener {
                    return Vec4{colors[v * 4], colors[v * 4 + 1], colors[v * 4 + 2],
                                colors[v * 4 + 3]};
                  });
+    appended_[key] = {base, count};
+    return addTriangles(prim, world, what, base, count);
+  }
+
+  // The primitive's triangles, over `count` vertices already appended from `base` on, into its
+  // material's bucket.
+  core::Status addTriangles(const tinygltf::Primitive& prim, const Mat4& world,
+                            const std::string& what, uint32_t base, size_t count) {
+    std::vector<uint32_t> indices;
+    if (prim.indices >= 0) {
+      auto read = readIndices(model_, prim.indices, what);
+      if (!read) return read.error();
+      indices = std::move(read.value());
+    } else {
+      indices.resize(count);
+      for (size_t i = 0; i < count; ++i) indices[i] = static_cast<uint32_t>(i);
+    }
+    if (indices.size() % 3 != 0)
+      return Error{what + ": " + std::to_string(indices.size()) +
+                   (prim.indices >= 0 ? " indices" : " vertices (it has no indices)") +
+                   " is not a whole number of triangles"};
+    for (size_t i = 0; i < indices.size(); ++i)
+      if (indices[i] >= count)
+        return Error{what + ": index " + std::to_string(i) + " = " + std::to_string(indices[i]) +
+                     " is out of range (" + std::to_string(count) + " vertices)"};
+    const bool mirrored = determinant3(world) < 0;
     int material = prim.material;
     if (material < -1 || material >= static_cast<int>(model_.materials.size()))
       return Error{what + ": refers to missing material " + std::to_string(material)};
@@ -462,11 +482,25 @@ class GltfFlattener {
     for (size_t v = 0; v < count; ++v) stream.push_back(here ? get(v) : fallback);
   }
 
+  static constexpr std::array<const char*, 6> kVertexAttributes = {
+      "POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0"};
+  struct VertexSourceKey {
+    int instance;                                         // which addMesh call (placement)
+    std::array<int, kVertexAttributes.size()> accessors;  // -1: attribute absent
+    auto operator<=>(const VertexSourceKey&) const = default;
+  };
+  struct AppendedVertices {
+    uint32_t base;
+    size_t count;
+  };
+
   const tinygltf::Model& model_;
   const std::string& path_;
   core::Asset& asset_;
   std::map<int, std::vector<uint32_t>> triangles_by_material_;
   std::vector<bool> visited_;  // nodes already flattened
+  int instance_ = 0;
+  std::map<VertexSourceKey, AppendedVertices> appended_;
   bool has_normals_ = false, has_tangents_ = false, has_uv0_ = false, has_uv1_ = false,
        has_colors_ = false;
 };

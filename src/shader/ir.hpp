@@ -336,6 +336,9 @@ struct ValueSources {
   }
 };
 ValueSources backwardSlice(const Module& module, const DefUse& uses, Id value);
+// The union of the values' slices, in one walk: each instruction is visited once however many
+// slices share it (many loop conditions reading one variable).
+ValueSources backwardSlice(const Module& module, const DefUse& uses, std::span<const Id> values);
 
 // The flags of backwardSlice(value), for many values of one module. A value's slice is the
 // closure of a fixed dependence graph (what one instruction depends on does not depend on which
@@ -365,6 +368,8 @@ class SliceSummaries {
   SliceSummaries& operator=(SliceSummaries&&) noexcept;
   // Computed on first demand, for the value and everything its slice reaches.
   SliceFlags of(Id value);
+  // The dependence edges of the values computed so far: the work of() did (tests count it).
+  size_t dependenceCount() const;
 
  private:
   struct Impl;

@@ -500,8 +500,8 @@ class Slicer {
  public:
   Slicer(const Module& module, const DefUse& uses) : module_(module), uses_(uses) {}
 
-  ValueSources run(Id value) {
-    push(value);
+  ValueSources run(std::span<const Id> values) {
+    for (Id value : values) push(value);
     while (!work_.empty()) {
       Id id = work_.back();
       work_.pop_back();
@@ -514,10 +514,19 @@ class Slicer {
   // the flags it sets itself. A node's visit depends on the node alone (callees are summarized
   // again for each node: their flags are the same each time), so run(value) is the closure of
   // these steps and its flags their OR.
+  //
+  // In this mode a variable read through loads is a node of its own, whose dependences are the
+  // stores into it: each load depends on the variable alone. Otherwise every load would list
+  // every store, and a local updated in N places and read in N places would cost N² edges (N
+  // sequential if/else blocks updating one colour).
+  // Such a node's id is the variable's plus the module's bound, apart from the variable's own
+  // value (its pointer).
   ValueSources step(Id id, std::vector<Id>& dependences) {
+    variables_are_nodes_ = module_.bound < (1u << 31);
     sources_ = ValueSources{};
     seen_.clear();
     callees_.clear();
+    followed_.clear();
     work_.clear();
     visit(id);
     dependences.assign(work_.begin(), work_.end());
@@ -562,8 +571,18 @@ class Slicer {
           sources_.reads_uniform = true;
         }
         break;
-      case spv::StorageClassPrivate: followStores(variable); break;
+      case spv::StorageClassPrivate:
+        readVariable(variable);
+        break;
       default: sources_.reads_other = true;
+    }
+  }
+
+  void readVariable(const Instruction& variable) {
+    if (variables_are_nodes_) {
+      push(variable.result_id + module_.bound);
+    } else {
+      followStores(variable);
     }
   }
 
@@ -571,6 +590,9 @@ class Slicer {
   // place: flow-insensitive), under the conditions deciding that store, or passed to a call that
   // may write it.
   void followStores(const Instruction& variable) {
+    // Within one walk a second follow pushes only what the first did: a variable loaded in N
+    // places would cost N times its stores.
+    if (!followed_.insert(variable.result_id).second) return;
     if (variable.operands.size() >= 2) push(variable.operands[1]);  // initializer
     std::vector<Id> pointers = {variable.result_id};
     std::set<Id> visited_pointers;
@@ -615,7 +637,7 @@ class Slicer {
     if (def->opcode == spv::OpVariable) {
       auto storage = static_cast<spv::StorageClass>(def->operands[0]);
       if (storage == spv::StorageClassFunction) {
-        followStores(*def);
+        readVariable(*def);
       } else {
         classifyGlobal(*def);
       }
@@ -652,6 +674,10 @@ class Slicer {
   }
 
   void visit(Id id) {
+    if (variables_are_nodes_ && id >= module_.bound) {  // a variable's stores (see step())
+      if (const Instruction* variable = uses_.def(id - module_.bound)) followStores(*variable);
+      return;
+    }
     const InstructionRef* ref = uses_.defRef(id);
     if (!ref) return;
     const Instruction& instruction = *ref->instruction;
@@ -701,15 +727,20 @@ class Slicer {
   const Module& module_;
   const DefUse& uses_;
   ValueSources sources_;
-  std::set<Id> seen_, callees_;
+  std::set<Id> seen_, callees_, followed_;
   std::vector<Id> work_;
   std::map<int, ControlDependence> control_;
+  bool variables_are_nodes_ = false;  // step() mode
 };
 
 }  // namespace
 
 ValueSources backwardSlice(const Module& module, const DefUse& uses, Id value) {
-  return Slicer(module, uses).run(value);
+  return Slicer(module, uses).run(std::span<const Id>(&value, 1));
+}
+
+ValueSources backwardSlice(const Module& module, const DefUse& uses, std::span<const Id> values) {
+  return Slicer(module, uses).run(values);
 }
 
 namespace {
@@ -834,6 +865,12 @@ SliceFlags SliceSummaries::of(Id value) {
   if (impl_->nodes[static_cast<size_t>(node)].component < 0) impl_->complete(node);
   return impl_
       ->component_flags[static_cast<size_t>(impl_->nodes[static_cast<size_t>(node)].component)];
+}
+
+size_t SliceSummaries::dependenceCount() const {
+  size_t count = 0;
+  for (const Impl::Node& node : impl_->nodes) count += node.dependences.size();
+  return count;
 }
 
 }  // namespace duolod::shader::ir

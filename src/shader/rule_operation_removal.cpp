@@ -64,10 +64,8 @@ Substitute substituteFor(const ir::DefUse& uses, const ir::Instruction& operatio
   return Substitute::kNone;
 }
 
-// Ids (in `function`) that must not change: the backward slices of the conditions of conditional
-// branches and switches inside loops, and everything in the functions those slices call.
-void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
-                           const ir::Function& function, std::unordered_set<ir::Id>& protect) {
+// The conditions of `function`'s conditional branches and switches inside loops.
+void collectLoopConditions(const ir::Function& function, std::vector<ir::Id>& conditions) {
   ir::Cfg cfg = ir::buildCfg(function);
   std::vector<bool> in_loop(cfg.blocks.size(), false);
   for (size_t header = 0; header < cfg.blocks.size(); ++header) {
@@ -77,19 +75,28 @@ void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
     for (size_t block = 0; block < blocks.size(); ++block)
       if (blocks[block]) in_loop[block] = true;
   }
-  std::vector<ir::Id> callees;
   for (size_t block = 0; block < cfg.blocks.size(); ++block) {
     if (!in_loop[block]) continue;
     const ir::Instruction& terminator = function.blocks[block].terminator();
-    if (terminator.opcode != spv::OpBranchConditional && terminator.opcode != spv::OpSwitch)
-      continue;
-    ir::ValueSources slice = ir::backwardSlice(module, uses, terminator.operands[0]);
-    for (ir::Id id : slice.instructions) {
-      protect.insert(id);
-      const ir::Instruction* definition = uses.def(id);
-      if (definition && definition->opcode == spv::OpFunctionCall)
-        callees.push_back(definition->operands[0]);
-    }
+    if (terminator.opcode == spv::OpBranchConditional || terminator.opcode == spv::OpSwitch)
+      conditions.push_back(terminator.operands[0]);
+  }
+}
+
+// Ids that must not change: the backward slices of the loop conditions (collectLoopConditions),
+// and everything in the functions those slices call. One slice of all conditions together: a
+// slice per condition re-walked what the conditions share (64 loops reading one uniform block).
+void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
+                           std::unordered_set<ir::Id>& protect) {
+  std::vector<ir::Id> conditions;
+  for (const ir::Function& function : module.functions) collectLoopConditions(function, conditions);
+  if (conditions.empty()) return;
+  std::vector<ir::Id> callees;
+  for (ir::Id id : ir::backwardSlice(module, uses, conditions).instructions) {
+    protect.insert(id);
+    const ir::Instruction* definition = uses.def(id);
+    if (definition && definition->opcode == spv::OpFunctionCall)
+      callees.push_back(definition->operands[0]);
   }
   std::set<ir::Id> visited;
   while (!callees.empty()) {
@@ -108,8 +115,7 @@ void protectLoopConditions(const ir::Module& module, const ir::DefUse& uses,
 std::unordered_set<ir::Id> protectedValues(const ir::Module& module, const ir::DefUse& uses,
                                            Stage stage) {
   std::unordered_set<ir::Id> protect;
-  for (const ir::Function& function : module.functions)
-    protectLoopConditions(module, uses, function, protect);
+  protectLoopConditions(module, uses, protect);
   if (stage == Stage::kVertex) {
     std::unordered_set<ir::Id> position = vertexPositionSources(module, uses);
     protect.insert(position.begin(), position.end());

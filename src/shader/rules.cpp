@@ -393,21 +393,22 @@ std::unordered_set<ir::Id> vertexPositionSources(const ir::Module& module, const
       definition = uses.def(definition->operands[0]);
     return definition ? definition->result_id : ir::kNoId;
   };
+  std::vector<ir::Id> stored;  // values stored into the position, sliced together
   for (const ir::Function& function : module.functions)
     for (const ir::Block& block : function.blocks)
       for (const ir::Instruction& instruction : block.instructions)
         if (instruction.opcode == spv::OpStore &&
-            position_variables.count(basePointer(instruction.operands[0]))) {
-          ir::ValueSources slice = ir::backwardSlice(module, uses, instruction.operands[1]);
-          sources.insert(slice.instructions.begin(), slice.instructions.end());
-          // The slice stops at calls (it summarises callees): a position computed in a function
-          // (HLSL's entry point returns it in a struct that main copies out) keeps that whole
-          // function, and what it calls, as it is.
-          for (ir::Id id : slice.instructions)
-            if (const ir::Instruction* call = uses.def(id);
-                call && call->opcode == spv::OpFunctionCall)
-              addFunctionResults(module, call->operands[0], sources, whole_functions);
-        }
+            position_variables.count(basePointer(instruction.operands[0])))
+          stored.push_back(instruction.operands[1]);
+  if (stored.empty()) return sources;
+  ir::ValueSources slice = ir::backwardSlice(module, uses, stored);
+  sources.insert(slice.instructions.begin(), slice.instructions.end());
+  // The slice stops at calls (it summarises callees): a position computed in a function (HLSL's
+  // entry point returns it in a struct that main copies out) keeps that whole function, and what
+  // it calls, as it is.
+  for (ir::Id id : slice.instructions)
+    if (const ir::Instruction* call = uses.def(id); call && call->opcode == spv::OpFunctionCall)
+      addFunctionResults(module, call->operands[0], sources, whole_functions);
   return sources;
 }
 
