@@ -454,6 +454,68 @@ void main() {
   EXPECT_EQ(hlsl.exit_code, 0) << hlsl.err;
 }
 
+// Vulkan's usual layout, set 0 per frame and set 1 per material both from binding 0, cannot be
+// taken as it is: OpenGL has no sets, so Material would read Frame's data. Refused with both
+// blocks named, within one module and across the vertex and fragment modules; distinct bindings
+// across the sets are taken. It was taken silently, and rendered with the wrong data.
+TEST(CliShaderTest, SpirvDescriptorSetsThatMeetInOneOpenGlBindingAreRefused) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const std::string validator = "/usr/bin/glslangValidator";
+  if (!fs::exists(validator))
+    GTEST_SKIP() << "SKIPPED: " << validator
+                 << " is missing (Debian glslang-tools; scripts/setup.sh installs it)";
+  const fs::path dir = test::scratchDir("cli_shader_descriptor_sets");
+  const std::string frame = R"(uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+)";
+  const std::string material = R"(uniform Material {
+  vec4 uBaseColorFactor; vec4 uEmissiveFactor; vec4 uMaterialParams; vec4 uTextureFlags;
+  vec4 uTextureFlags2;
+};
+)";
+  std::ofstream(dir / "frame.vert") << "#version 450\nlayout(location = 0) in vec3 inPosition;\n"
+                                    << "layout(set = 0, binding = 0, std140) " << frame << R"(
+void main() { gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0))); }
+)";
+  auto fragment = [&](const std::string& name, const std::string& blocks) {
+    std::ofstream(dir / name) << "#version 450\n"
+                              << blocks << R"(layout(location = 0) out vec4 outColor;
+void main() { outColor = vec4(uBaseColorFactor.rgb, 1.0); }
+)";
+  };
+  fragment("both.frag", "layout(set = 0, binding = 0, std140) " + frame +
+                            "layout(set = 1, binding = 0, std140) " + material);
+  fragment("material.frag", "layout(set = 1, binding = 0, std140) " + material);
+  fragment("distinct.frag", "layout(set = 1, binding = 1, std140) " + material);
+  for (const char* name : {"frame.vert", "both.frag", "material.frag", "distinct.frag"}) {
+    test::CommandRun compiled = test::runCommand(
+        validator,
+        {"-V", "-o", (dir / (std::string(name) + ".spv")).string(), (dir / name).string()});
+    ASSERT_EQ(compiled.exit_code, 0) << name << compiled.out << compiled.err;
+  }
+  auto run = [&](const char* fragment_name) {
+    return runCli({"error", spot, spot, "--pixels", "16", "--supersample", "1", "--vert",
+                   (dir / "frame.vert.spv").string(), "--frag",
+                   (dir / (std::string(fragment_name) + ".spv")).string()});
+  };
+  test::CommandRun both = run("both.frag");
+  EXPECT_EQ(both.exit_code, 1) << both.err;
+  EXPECT_TRUE(test::contains(both.err,
+                             "both.frag.spv: uniform blocks 'Material' (set 1) and "
+                             "'Frame' (set 0) both take binding 0"))
+      << both.err;
+  test::CommandRun across = run("material.frag");
+  EXPECT_EQ(across.exit_code, 1) << across.err;
+  EXPECT_TRUE(test::contains(across.err, "frame.vert.spv: uniform blocks 'Frame' (set 0) and " +
+                                             (dir / "material.frag.spv").string() +
+                                             "'s 'Material' (set 1) both take binding 0"))
+      << across.err;
+  test::CommandRun distinct = run("distinct.frag");
+  EXPECT_EQ(distinct.exit_code, 0) << distinct.err;
+}
+
 // A UTF-8 byte-order mark (Visual Studio saves HLSL with one) is not a token: the files compile
 // as without it. It was "'<bad token>' : unexpected token" at line 1.
 TEST(CliShaderTest, AByteOrderMarkIsNotAToken) {

@@ -198,6 +198,7 @@ struct ShadingFlags {
       if (!bound) return bound.error();
       const std::map<std::string, uint32_t> input_locations =
           render::hlslVertexInputLocations(*bound);
+      std::vector<std::pair<std::string, std::vector<uint32_t>>> spirv_modules;
       auto read = [&](const std::string& path, shader::Stage stage,
                       const std::string& entry) -> core::Result<std::string> {
         auto bytes = io::readFileBytes(path);  // names a missing file or a folder
@@ -211,8 +212,10 @@ struct ShadingFlags {
           // Without --vert-entry/--frag-entry: the module's first entry point of the stage.
           const CLI::Option* chosen =
               stage == shader::Stage::kVertex ? vert_entry_option : frag_entry_option;
-          return shader::spirvToGlsl(words, stage, path,
-                                     chosen && chosen->count() > 0 ? entry : std::string());
+          auto glsl = shader::spirvToGlsl(words, stage, path,
+                                          chosen && chosen->count() > 0 ? entry : std::string());
+          if (glsl) spirv_modules.emplace_back(path, std::move(words));
+          return glsl;
         }
         std::string text(core::withoutByteOrderMark(
             {reinterpret_cast<const char*>(bytes->data()), bytes->size()}));
@@ -251,6 +254,8 @@ struct ShadingFlags {
       if (!v) return v.error();
       auto f = read(frag, shader::Stage::kFragment, frag_entry);
       if (!f) return f.error();
+      if (auto distinct = shader::checkBindingsAcrossSets(spirv_modules); !distinct)
+        return distinct.error();
       return render::GlslSource{*v, *f, name(vert), name(frag)};
     }
     return render::loadShaderPair(shader);

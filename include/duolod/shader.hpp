@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "duolod/core.hpp"
@@ -102,6 +103,14 @@ core::Result<GlslPair> hlslPairToGlsl(const std::string& vertex_source,
 core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
                                       const std::string& file_name,
                                       const std::string& entry_point = "");
+
+// SPIR-V modules (file name, words) used together as one OpenGL program, each valid: an error
+// naming both when two resources of one kind (uniform blocks, storage blocks, textures, images)
+// in different descriptor sets take one binding, which OpenGL, having no sets, would make one
+// binding point. spirvToGlsl checks each module on its own; this checks a vertex module against
+// its fragment module.
+core::Status checkBindingsAcrossSets(
+    const std::vector<std::pair<std::string, std::vector<uint32_t>>>& modules);
 
 // Checks a vertex + fragment pair against what duolod feeds it (shaders/INTERFACE.md, moved by
 // `bindings`). An error for what cannot render right: a fragment input that no vertex output at

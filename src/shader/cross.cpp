@@ -197,6 +197,51 @@ spv::ExecutionModel executionModelOf(Stage stage) {
   return spv::ExecutionModelVertex;
 }
 
+// OpenGL has no descriptor sets: the GLSL keeps each resource's binding and drops its set, so
+// two resources of one kind in different sets at one binding (Vulkan's usual set 0 per frame, set
+// 1 per material, both from binding 0) would share a binding point and one would read the
+// other's data, silently. Refused with both named, not guessed apart. One resource seen by both
+// stages (one set and binding) is one resource.
+struct BoundResource {
+  uint32_t set;
+  std::string name, file;
+};
+using BindingsOfKind = std::map<std::string, std::map<uint32_t, BoundResource>>;
+
+core::Status addBindings(const spirv_cross::Compiler& compiler,
+                         const spirv_cross::ShaderResources& resources,
+                         const std::string& file_name, BindingsOfKind& seen) {
+  struct Kind {
+    const char* name;
+    std::vector<const spirv_cross::SmallVector<spirv_cross::Resource>*> lists;
+  };
+  for (const Kind& kind :
+       {Kind{"uniform blocks", {&resources.uniform_buffers}},
+        Kind{"storage blocks", {&resources.storage_buffers}},
+        Kind{"textures", {&resources.sampled_images, &resources.separate_images}},
+        Kind{"images", {&resources.storage_images}}}) {
+    std::map<uint32_t, BoundResource>& first_at = seen[kind.name];
+    for (const auto* list : kind.lists)
+      for (const spirv_cross::Resource& resource : *list) {
+        if (!compiler.has_decoration(resource.id, spv::DecorationBinding)) continue;
+        const uint32_t binding = compiler.get_decoration(resource.id, spv::DecorationBinding);
+        const uint32_t set = compiler.get_decoration(resource.id, spv::DecorationDescriptorSet);
+        auto [found, added] =
+            first_at.emplace(binding, BoundResource{set, resource.name, file_name});
+        if (added || found->second.set == set) continue;
+        const BoundResource& first = found->second;
+        return Error{first.file + ": " + kind.name + " '" + first.name + "' (set " +
+                     std::to_string(first.set) + ") and " +
+                     (first.file == file_name ? std::string() : file_name + "'s ") + "'" +
+                     resource.name + "' (set " + std::to_string(set) + ") both take binding " +
+                     std::to_string(binding) +
+                     "; OpenGL has no descriptor sets, so one would read the other's data: "
+                     "compile the shaders with bindings that differ across their sets"};
+      }
+  }
+  return core::okStatus();
+}
+
 }  // namespace
 
 core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage stage,
@@ -252,6 +297,9 @@ core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage 
         // takes, past every binding a bindings file can give Frame or Material (0-31), so that
         // it reads zeros (the interface check says so) instead of another block's data.
         const spirv_cross::ShaderResources resources = compiler.get_shader_resources();
+        BindingsOfKind seen;
+        if (auto distinct = addBindings(compiler, resources, file_name, seen); !distinct)
+          return distinct.error();
         std::set<uint32_t> taken;
         for (const spirv_cross::Resource& block : resources.uniform_buffers)
           taken.insert(compiler.get_decoration(block.id, spv::DecorationBinding));
@@ -282,6 +330,22 @@ core::Result<std::string> spirvToGlsl(const std::vector<uint32_t>& words, Stage 
   } catch (const std::exception& error) {
     return Error{file_name + ": SPIRV-Cross (GLSL 450): " + error.what()};
   }
+}
+
+core::Status checkBindingsAcrossSets(
+    const std::vector<std::pair<std::string, std::vector<uint32_t>>>& modules) {
+  BindingsOfKind seen;
+  for (const auto& [file_name, words] : modules) {
+    try {
+      spirv_cross::Compiler compiler(words);
+      if (auto distinct = addBindings(compiler, compiler.get_shader_resources(), file_name, seen);
+          !distinct)
+        return distinct;
+    } catch (const std::exception& error) {
+      return Error{file_name + ": SPIRV-Cross: " + error.what()};
+    }
+  }
+  return core::okStatus();
 }
 
 namespace {
