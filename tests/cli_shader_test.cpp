@@ -561,7 +561,7 @@ TEST(CliShaderTest, AShaderWithoutAlphaIsRefused) {
                                  "--search", "greedy", "--steps", "2", "--candidates", "4",
                                  "--no-timing", "--out", (dir / "out").string()});
   EXPECT_EQ(run.exit_code, 1) << run.out;
-  EXPECT_TRUE(test::contains(run.err, "alpha is 0 wherever the object is")) << run.err;
+  EXPECT_TRUE(test::contains(run.err, "alpha is 0 in every pixel of its")) << run.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 

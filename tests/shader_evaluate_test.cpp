@@ -276,6 +276,34 @@ TEST_F(EvaluatorTest, BrokenVariantsFailOnceWithAMessage) {
   EXPECT_FALSE(shader::VariantEvaluator::create(nullptr, asset_id_, asset_.mesh, original, {}));
 }
 
+// A one-sided square facing away from the first view: the one predicting view sees nothing, so
+// the errors are predicted from the whole domain (which sees its front from the opposite view),
+// not refused as "alpha 0" (a flat glTF of many primitives failed `duolod shader` so).
+TEST_F(EvaluatorTest, PredictingViewsThatMissTheObjectGiveWayToTheWholeDomain) {
+  const core::Vec3 first_eye = render::domainSamples(core::Sphere{{0, 0, 0}, 1}, 12.0f).front().eye;
+  const core::Vec3 n = core::normalize(first_eye) * -1.0f;
+  const core::Vec3 u = core::normalize(
+      core::cross(n, std::abs(n.x) < 0.9f ? core::Vec3{1, 0, 0} : core::Vec3{0, 1, 0}));
+  const core::Vec3 w = core::cross(n, u);  // (u, w, n) right-handed: the square faces n
+  core::Asset square;
+  square.source_path = "square";
+  square.mesh.positions = {u * -1.0f - w, u - w, u + w, w - u};
+  square.mesh.normals.assign(4, n);
+  square.mesh.indices = {0, 1, 2, 0, 2, 3};
+  square.mesh.submeshes = {{0, 6, 0}};
+  square.materials = {core::Material{}};
+  auto id = renderer_->uploadAsset(square);
+  ASSERT_TRUE(id) << id.error().message;
+  auto cache = std::make_shared<shader::EvaluationCache>(*renderer_);
+  shader::EvaluationConfig config = smallConfig();
+  config.predicted_views = 1;
+  auto evaluator =
+      shader::VariantEvaluator::create(cache, *id, square.mesh, shaderVariant("constant"), config);
+  ASSERT_TRUE(evaluator) << evaluator.error().message;
+  EXPECT_EQ((*evaluator)->predictedSampleCount(), 100) << "20 views x 5 lights";
+  renderer_->releaseAsset(*id);
+}
+
 // The procedural shader against two simplifications: fewer noise octaves (a textual edit), and
 // its lightest stone colour as a constant. Rendered and predicted errors rank them alike.
 TEST_F(EvaluatorTest, NoiseShaderSimplificationsRankAlikeRenderedAndPredicted) {

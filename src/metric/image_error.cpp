@@ -81,10 +81,11 @@ core::Status checkReferenceCoverage(const render::ImageBatchF& reference) {
     if (reference.pixels[i] > 0) return core::okStatus();
   if (reference.count == 0) return core::okStatus();
   return core::Error{
-      "the original shader's alpha is 0 wherever the object is: duolod counts the object's "
-      "pixels by the output's alpha (shaders/INTERFACE.md: `out vec4 outColor`, alpha 1 where "
-      "the object is), so every error would be 0. Write alpha 1 (a vec3 output leaves it "
-      "undefined)"};
+      "the original's alpha is 0 in every pixel of its " + std::to_string(reference.count) +
+      " images: duolod counts the object's pixels by the output's alpha (shaders/INTERFACE.md: "
+      "`out vec4 outColor`, alpha 1 where the object is), so every error would be 0. Write "
+      "alpha 1 (a vec3 output leaves it undefined); or no view sees the object's front faces "
+      "(a one-sided surface: make its material double-sided)"};
 }
 
 double perPixelBound(const BoundConfig& config, double distance) {

@@ -390,6 +390,15 @@ struct ChunkDrawer {
     core::Material fallback;
     const core::Material& m =
         material_index < asset.materials.size() ? asset.materials[material_index] : fallback;
+    // glTF's doubleSided: back faces drawn too (the shaders light them with the front's normal;
+    // the flip the glTF specification asks for is not made). Set per material, since every draw
+    // path binds its material here.
+    if (m.double_sided) {
+      glDisable(GL_CULL_FACE);
+    } else {
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_BACK);
+    }
     auto texture = [&](int index, GLuint missing) {
       const std::vector<GLuint>& ids = asset.textures->ids;
       return index >= 0 && index < static_cast<int>(ids.size()) && ids[index] ? ids[index]

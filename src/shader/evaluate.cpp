@@ -163,6 +163,17 @@ core::Result<std::unique_ptr<VariantEvaluator>> VariantEvaluator::create(
   auto predicted = e.renderReference(e.predicted_samples_, e.predicted_resolution_);
   if (!predicted) return predicted.error();
   e.predicted_reference_ = std::move(predicted.value());
+  if (!metric::checkReferenceCoverage(e.predicted_reference_) &&
+      e.predicted_samples_.size() < e.samples_.size()) {
+    // The few predicting views can all miss an object the domain sees (a one-sided plane seen
+    // from behind or edge-on by each): an error predicted from them would be 0 for every
+    // variant. Predict from the whole domain instead.
+    e.predicted_samples_ = e.samples_;
+    e.predicted_configuration_key_ = mixValue(e.predicted_configuration_key_, e.samples_.size());
+    predicted = e.renderReference(e.predicted_samples_, e.predicted_resolution_);
+    if (!predicted) return predicted.error();
+    e.predicted_reference_ = std::move(predicted.value());
+  }
   if (auto covered = metric::checkReferenceCoverage(e.predicted_reference_); !covered)
     return covered.error();
   return evaluator;
