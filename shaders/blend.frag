@@ -185,6 +185,8 @@ void main() {
   vec3 tangentNormal = vec3(macroNormal.xy + detailNormal.xy, macroNormal.z * detailNormal.z);
   vec3 normal = normalize(tangentNormal.x * vWorldTangent + tangentNormal.y * vWorldBitangent +
                           tangentNormal.z * normalize(vWorldNormal));
+  // glTF double-sided materials: back faces are lit with the normal reversed (see pbr.frag).
+  normal *= gl_FrontFacing ? 1.0 : -1.0;
 
   // --- Blinn-Phong: diffuse n.l, specular (n.h)^shininess, normalised by (n + 8) / 8 so the
   // highlight keeps its energy as it narrows; PI folded into the light (see the pbr shader) ---

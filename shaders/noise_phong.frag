@@ -221,6 +221,8 @@ void main() {
   vec3 surfaceGradient = heightGradient - dot(heightGradient, objectNormal) * objectNormal;
   vec3 bumpedObjectNormal = normalize(objectNormal - surfaceGradient);
   vec3 normal = normalize(mat3(uNormalMatrix) * bumpedObjectNormal);
+  // glTF double-sided materials: back faces are lit with the normal reversed (see pbr.frag).
+  normal *= gl_FrontFacing ? 1.0 : -1.0;
 
   // --- Phong (1975): diffuse n.l, specular (r.v)^shininess with r the mirrored light ---
   vec3 viewDir = normalize(uCameraPosition.xyz - vWorldPosition);

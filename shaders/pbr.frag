@@ -141,6 +141,9 @@ void main() {
   vec3 geometricNormal = normalize(vWorldNormal);
   vec3 normal = normalize(tangentNormal.x * vWorldTangent + tangentNormal.y * vWorldBitangent +
                           tangentNormal.z * geometricNormal);
+  // A back face is drawn only for a double-sided material (single-sided ones are culled); glTF
+  // lights it with its normal reversed (glTF 2.0 §3.9.5, double sided).
+  normal *= gl_FrontFacing ? 1.0 : -1.0;
 
   // --- directions ---
   vec3 viewDir = normalize(uCameraPosition.xyz - vWorldPosition);

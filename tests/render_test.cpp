@@ -121,6 +121,45 @@ TEST_F(RendererTest, DoubleSidedMaterialsShowTheirBackFaces) {
   }
 }
 
+// glTF asks for a double-sided material's back faces to be lit with their normal reversed. Seen
+// and lit from behind, the flat square must then look as it does seen and lit from the front (the
+// two pictures are mirror images). Before, the back face kept the front's normal, facing away from
+// the light: only the ambient term lit it (mean red of 255: pbr 45 against 199, blend 21 against
+// 250).
+TEST_F(RendererTest, DoubleSidedBackFacesAreLitWithTheirNormalReversed) {
+  render::Sample behind = frontSample(4.0f);
+  behind.eye = {0, 0, -4};
+  behind.light = behind.eye;
+  behind.view = core::lookAt(behind.eye, {0, 0, 0}, {0, 1, 0});
+  const render::Sample sides[] = {frontSample(4.0f), behind};
+  core::Asset square = squareAsset({0.8f, 0.6f, 0.4f, 1});
+  square.materials[0].double_sided = true;
+  auto asset = renderer_->uploadAsset(square);
+  ASSERT_TRUE(asset) << asset.error().message;
+  for (const char* shader : {"pbr", "blend"}) {
+    auto source = render::loadShaderPair(test::sourcePath(std::string("shaders/") + shader));
+    ASSERT_TRUE(source) << source.error().message;
+    auto program = renderer_->compileProgram(*source);
+    ASSERT_TRUE(program) << program.error().message;
+    auto batch = renderer_->render(*asset, *program, sides, {.resolution = 64});
+    ASSERT_TRUE(batch) << batch.error().message;
+    double mean_red[2] = {0, 0};
+    for (int side = 0; side < 2; ++side) {
+      int covered = 0;
+      for (int p = 0; p < 64 * 64; ++p) {
+        if (batch->tile(side)[p * 4 + 3] <= 0) continue;
+        ++covered;
+        mean_red[side] += batch->tile(side)[p * 4];
+      }
+      ASSERT_EQ(covered, 32 * 32) << shader << " side " << side;
+      mean_red[side] /= covered;
+    }
+    EXPECT_GT(mean_red[0], 150) << shader << ": the lit front is bright (of 255)";
+    EXPECT_NEAR(mean_red[1], mean_red[0], 1.0) << shader << ": the back, lit from behind";
+  }
+  renderer_->releaseAsset(*asset);
+}
+
 // Coverage of the square scaled by `scale` with the camera scaled along (the same picture).
 // Returns -1 and the message when the render is refused.
 int scaledSquareCoverage(render::Renderer& renderer, render::Renderer::ProgramId program,

@@ -390,9 +390,9 @@ struct ChunkDrawer {
     core::Material fallback;
     const core::Material& m =
         material_index < asset.materials.size() ? asset.materials[material_index] : fallback;
-    // glTF's doubleSided: back faces drawn too (the shaders light them with the front's normal;
-    // the flip the glTF specification asks for is not made). Set per material, since every draw
-    // path binds its material here.
+    // glTF's doubleSided: back faces drawn too (the shader reverses their normal by
+    // gl_FrontFacing: shaders/INTERFACE.md). Set per material, since every draw path binds its
+    // material here.
     if (m.double_sided) {
       glDisable(GL_CULL_FACE);
     } else {
