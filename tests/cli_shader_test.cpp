@@ -53,6 +53,7 @@ TEST(CliShaderTest, GeneticSearchWritesLevelsAutoLodAndSummary) {
   EXPECT_TRUE(test::contains(run.out, "rules applied")) << run.out;
   EXPECT_TRUE(test::contains(run.out, "original")) << run.out;
   EXPECT_TRUE(test::contains(run.out, "autoLOD")) << run.out;
+  EXPECT_TRUE(test::contains(run.err, "duolod: generation 1 of 1: ")) << run.err;  // progress
 
   nlohmann::json summary = nlohmann::json::parse(test::readText(out / "summary.json"));
   const nlohmann::json& levels = summary["levels"];
@@ -153,6 +154,9 @@ TEST(CliShaderTest, GreedySearchRecordsItsSteps) {
   const nlohmann::json& levels = summary["levels"];
   ASSERT_EQ(levels.size(), 3u);  // the original + 2 steps
   for (size_t k = 0; k < levels.size(); ++k) EXPECT_EQ(levels[k]["rules"].size(), k);
+  // Each step is reported as it ends (a step scores many variants: tens of seconds on llvmpipe).
+  EXPECT_TRUE(test::contains(run.err, "duolod: step 1 of at most 2: ")) << run.err;
+  EXPECT_TRUE(test::contains(run.err, "duolod: step 2 of at most 2: ")) << run.err;
   // Again into the same folder with one step: level02's files of the first run are removed, so
   // the folder holds this result only.
   EXPECT_TRUE(fs::exists(out / "level02.frag.glsl"));

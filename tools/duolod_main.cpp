@@ -1525,9 +1525,20 @@ int runShader(ShaderFlags& flags) {
   options.genetic.seed = flags.seed;
   options.genetic.generations = flags.generations;
   options.genetic.population_size = flags.population;
-  options.genetic.on_generation = [](int generation, const shader::SearchCounters& counters) {
-    std::fprintf(stderr, "duolod: generation %d: %d variants predicted, %d genomes\n", generation,
-                 counters.variants_predicted, counters.genomes_evaluated);
+  // Progress on stderr: a line per generation or greedy step (a greedy step scores up to
+  // --candidates variants, each a compile and renders: tens of seconds on llvmpipe).
+  const auto search_start = std::chrono::steady_clock::now();
+  const auto elapsed = [search_start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - search_start).count();
+  };
+  options.genetic.on_generation = [&](int generation, const shader::SearchCounters& counters) {
+    std::fprintf(stderr, "duolod: generation %d of %d: %d variants predicted, %d genomes, %.0f s\n",
+                 generation, flags.generations, counters.variants_predicted,
+                 counters.genomes_evaluated, elapsed());
+  };
+  options.greedy.on_step = [&](int step, const shader::SearchCounters& counters) {
+    std::fprintf(stderr, "duolod: step %d of at most %d: %d variants predicted, %.0f s\n", step,
+                 flags.greedy_steps, counters.variants_predicted, elapsed());
   };
   options.greedy.max_steps = flags.greedy_steps;
   options.greedy.max_candidates_per_step = flags.greedy_candidates;
