@@ -120,28 +120,33 @@ TEST(CliShaderTest, GeneticSearchWritesLevelsAutoLodAndSummary) {
   EXPECT_EQ(fs::last_write_time(out / "summary.json"), before);
 }
 
-// The worker that compiles the GP's coming variants on a second GL context only warms caches:
-// the levels are the same with and without it, and it did compile some of them.
+// The workers that compile the coming variants (the GP's offspring, the greedy step's candidates)
+// on other GL contexts only warm caches: the levels are the same with and without them, and they
+// did compile some of them.
 TEST(CliShaderTest, CompilingAheadChangesNoResult) {
   DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
-  fs::path dir = test::scratchDir("cli_shader_ahead");
-  std::vector<std::string> ahead = smallSearch(spot, (dir / "ahead").string(), "gp");
-  std::vector<std::string> inline_only = smallSearch(spot, (dir / "inline").string(), "gp");
-  inline_only.push_back("--no-compile-ahead");
-  for (auto* args : {&ahead, &inline_only}) {  // two generations: the worker gets two batches
-    (*args)[std::find(args->begin(), args->end(), "--generations") - args->begin() + 1] = "2";
-    test::CommandRun run = runCli(*args);
-    ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  for (std::string method : {"gp", "greedy"}) {
+    SCOPED_TRACE(method);
+    fs::path dir = test::scratchDir("cli_shader_ahead_" + method);
+    std::vector<std::string> ahead = smallSearch(spot, (dir / "ahead").string(), method);
+    std::vector<std::string> inline_only = smallSearch(spot, (dir / "inline").string(), method);
+    inline_only.push_back("--no-compile-ahead");
+    for (auto* args : {&ahead, &inline_only}) {
+      if (method == "gp")  // two generations: the workers get two batches (greedy: two steps)
+        (*args)[std::find(args->begin(), args->end(), "--generations") - args->begin() + 1] = "2";
+      test::CommandRun run = runCli(*args);
+      ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+    }
+    nlohmann::json with = nlohmann::json::parse(test::readText(dir / "ahead" / "summary.json"));
+    nlohmann::json without = nlohmann::json::parse(test::readText(dir / "inline" / "summary.json"));
+    EXPECT_GT(with["timing_dependent"]["compiled_ahead"].get<int>(), 0);
+    EXPECT_EQ(without["timing_dependent"]["compiled_ahead"].get<int>(), 0);
+    EXPECT_EQ(with["counters"]["variants_predicted"], without["counters"]["variants_predicted"]);
+    ASSERT_EQ(with["levels"].size(), without["levels"].size());
+    for (size_t k = 0; k < with["levels"].size(); ++k)
+      for (const char* field : {"rules", "predicted_cost", "predicted_error", "rendered_error"})
+        EXPECT_EQ(with["levels"][k][field], without["levels"][k][field]) << k << " " << field;
   }
-  nlohmann::json with = nlohmann::json::parse(test::readText(dir / "ahead" / "summary.json"));
-  nlohmann::json without = nlohmann::json::parse(test::readText(dir / "inline" / "summary.json"));
-  EXPECT_GT(with["timing_dependent"]["compiled_ahead"].get<int>(), 0);
-  EXPECT_EQ(without["timing_dependent"]["compiled_ahead"].get<int>(), 0);
-  EXPECT_EQ(with["counters"]["variants_predicted"], without["counters"]["variants_predicted"]);
-  ASSERT_EQ(with["levels"].size(), without["levels"].size());
-  for (size_t k = 0; k < with["levels"].size(); ++k)
-    for (const char* field : {"rules", "predicted_cost", "predicted_error", "rendered_error"})
-      EXPECT_EQ(with["levels"][k][field], without["levels"][k][field]) << k << " " << field;
 }
 
 TEST(CliShaderTest, GreedySearchRecordsItsSteps) {

@@ -1444,9 +1444,11 @@ struct ShaderFlags {
             ->check(atLeast(0))
             ->capture_default_str());
     command->add_flag("--no-timing", no_timing, "skip the wall-clock timing of the variants");
-    command->add_flag("--no-compile-ahead", no_compile_ahead,
-                      "compile the GP's variants only when scored (default: a worker thread with "
-                      "its own GL context compiles the coming ones on the other core; same results)");
+    command->add_flag(
+        "--no-compile-ahead", no_compile_ahead,
+        "compile the variants only when scored (default: worker threads with their own "
+        "GL contexts compile the coming ones, the GP's offspring or the greedy step's "
+        "candidates, on the other cores; same results)");
     command->add_option("--out", out, "folder for the variants, the autoLOD shader and summary.json")
         ->required();
     command->add_flag("--force", force, "write into --out even if it holds files");
