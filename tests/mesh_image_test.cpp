@@ -2,8 +2,10 @@
 // constant shader, where only silhouettes can change the image.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <vector>
 
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
@@ -61,10 +63,19 @@ TEST_F(ImageSimplifyTest, FarAwayHalvesWithLittleImageChangeAndTracksItsError) {
   mesh::ImageSimplifyOptions options;
   options.target_triangles = 2560;
   options.distance = distance;
+  std::vector<size_t> progress;
+  options.progress = [&](size_t triangles) { progress.push_back(triangles); };
   mesh::ImageSimplifyStats stats;
   auto result = mesh::simplifyImage(*renderer_, asset_, shader_, options, &stats);
   ASSERT_TRUE(result) << result.error().message;
   EXPECT_LE(result->mesh.triangleCount(), 2560u);
+  // Progress: reported as it goes (at least once per refined batch), never growing, ending at
+  // the result's count.
+  EXPECT_GE(progress.size(), stats.refine_batches);
+  ASSERT_FALSE(progress.empty());
+  EXPECT_TRUE(std::is_sorted(progress.rbegin(), progress.rend()));
+  EXPECT_EQ(progress.front(), asset_.mesh.triangleCount());  // after the first priced batch
+  EXPECT_EQ(progress.back(), result->mesh.triangleCount());
   EXPECT_GT(stats.rendered_evaluations, 0u);
   // The image error moves by a small fraction of the aliasing the original already has.
   EXPECT_LT(std::abs(stats.final_error - stats.initial_error), 0.5 * stats.initial_error)

@@ -962,15 +962,40 @@ int runSimplify(SimplifyFlags& flags) {
   } else {
     auto source = flags.shading.source();
     if (!source) return fail(source.error().message);
-    auto simplified = mesh::simplifyImage(*session.renderer, *shaded, *source,
-                                          {.target_triangles = target_triangles,
-                                           .target_error = target_error,
-                                           .distance = distance,
-                                           .display = flags.shading.display(),
-                                           .domain = {.views = flags.shading.viewSet()},
-                                           .lock_border = flags.lock_border,
-                                           .record = false},
-                                          &image_stats);
+    // On a terminal, a line updated five times a second: the image-driven mode renders for each
+    // collapse, minutes on large meshes.
+    const size_t input_triangles = input.triangleCount();
+    const auto progress_start = std::chrono::steady_clock::now();
+    auto last_shown = progress_start;
+    bool shown = false;
+    auto show_progress = [&](size_t triangles) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_shown < std::chrono::milliseconds(200)) return;
+      last_shown = now;
+      shown = true;
+      const double seconds = std::chrono::duration<double>(now - progress_start).count();
+      if (target_triangles > 0 && input_triangles > target_triangles)
+        std::fprintf(stderr, "\r  image-driven: %zu -> %zu triangles (%.0f%%), %.1f s   ",
+                     triangles, target_triangles,
+                     100.0 * double(input_triangles - triangles) /
+                         double(input_triangles - target_triangles),
+                     seconds);
+      else
+        std::fprintf(stderr, "\r  image-driven: %zu triangles, %.1f s   ", triangles, seconds);
+      std::fflush(stderr);
+    };
+    auto simplified = mesh::simplifyImage(
+        *session.renderer, *shaded, *source,
+        {.target_triangles = target_triangles,
+         .target_error = target_error,
+         .distance = distance,
+         .display = flags.shading.display(),
+         .domain = {.views = flags.shading.viewSet()},
+         .lock_border = flags.lock_border,
+         .record = false,
+         .progress = isatty(fileno(stderr)) ? std::function<void(size_t)>(show_progress) : nullptr},
+        &image_stats);
+    if (shown) std::fprintf(stderr, "\n");
     if (!simplified) return fail(simplified.error().message);
     result = std::move(*simplified);
     std::snprintf(text, sizeof text,

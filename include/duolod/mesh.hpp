@@ -138,6 +138,9 @@ struct ImageSimplifyOptions {
   // f̄ already rendered for this distance (render::domainSamples of the original's bounding
   // sphere with `domain`, the footprint of `display`, `supersample`): saves rendering it again.
   const render::ImageBatchF* reference = nullptr;
+  // Optional: called with the triangle count as the simplification proceeds (after each batch of
+  // rendered prices and each applied collapse: often; throttle what it prints).
+  std::function<void(size_t triangles)> progress = nullptr;
 };
 
 struct ImageSimplifyStats {

@@ -1011,10 +1011,11 @@ void Engine::runGreedy() {
       if (isStale(entry) || isForbidden(entry, cost)) continue;
       if (!entry.exact && model_.refineBatchSize() > 0) {
         refineTop(entry);
+        if (options_.progress) options_.progress(state_.live_triangles);
         continue;
       }
       if (double(entry.error) > options_.target_error) continue;
-      tryCollapse(entry, cost);
+      if (tryCollapse(entry, cost) && options_.progress) options_.progress(state_.live_triangles);
     }
     if (pass_rejections_ == 0) break;
   }

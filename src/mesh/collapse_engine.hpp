@@ -33,6 +33,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <span>
 #include <vector>
@@ -268,6 +269,10 @@ struct EngineOptions {
   // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
   // distance), and the queue over a mesh that small is cheap. See greedyTailTriangles.
   size_t greedy_tail_triangles = 2000;
+  // Optional: called with the live triangle count after each batch of refined prices and each
+  // applied collapse of the greedy queue (the image-driven mode's order, where collapses wait on
+  // renders), so that a caller can show progress.
+  std::function<void(size_t)> progress = nullptr;
 };
 
 // kPasses: how many triangles above `target` the passes stop, for the greedy queue to do the

@@ -111,6 +111,7 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   // their rendered cost, slightly stale (their pixels changed a little), which costs no quality
   // measurably and saves most of the rendering (see bench/RESULTS.md).
   engine_options.invalidation_ring = 1;
+  engine_options.progress = options.progress;
   SimplifyResult result = runCollapseEngine(prepared_asset.mesh, model, engine_options);
 
   // The result's error, rendered whole: the model's running sum is only refreshed lazily.
