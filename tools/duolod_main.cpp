@@ -977,8 +977,8 @@ int runSimplify(SimplifyFlags& flags) {
       if (target_triangles > 0 && input_triangles > target_triangles)
         std::fprintf(stderr, "\r  image-driven: %zu -> %zu triangles (%.0f%%), %.1f s   ",
                      triangles, target_triangles,
-                     100.0 * double(input_triangles - triangles) /
-                         double(input_triangles - target_triangles),
+                     100.0 * (double(input_triangles) - double(triangles)) /
+                         (double(input_triangles) - double(target_triangles)),
                      seconds);
       else
         std::fprintf(stderr, "\r  image-driven: %zu triangles, %.1f s   ", triangles, seconds);
