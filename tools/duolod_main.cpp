@@ -964,7 +964,6 @@ int runSimplify(SimplifyFlags& flags) {
     if (!source) return fail(source.error().message);
     // On a terminal, a line updated five times a second: the image-driven mode renders for each
     // collapse, minutes on large meshes.
-    const size_t input_triangles = input.triangleCount();
     const auto progress_start = std::chrono::steady_clock::now();
     auto last_shown = progress_start;
     bool shown = false;
@@ -973,7 +972,7 @@ int runSimplify(SimplifyFlags& flags) {
       if (now - last_shown < std::chrono::milliseconds(200)) return;
       last_shown = now;
       shown = true;
-      const double seconds = std::chrono::duration<double>(now - progress_start).count();
+      const double seconds = secondsSince(progress_start);
       if (target_triangles > 0 && input_triangles > target_triangles)
         std::fprintf(stderr, "\r  image-driven: %zu -> %zu triangles (%.0f%%), %.1f s   ",
                      triangles, target_triangles,
@@ -1555,9 +1554,7 @@ int runShader(ShaderFlags& flags) {
   // Progress on stderr: a line per generation or greedy step (a greedy step scores up to
   // --candidates variants, each a compile and renders: tens of seconds on llvmpipe).
   const auto search_start = std::chrono::steady_clock::now();
-  const auto elapsed = [search_start] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - search_start).count();
-  };
+  const auto elapsed = [search_start] { return secondsSince(search_start); };
   options.genetic.on_generation = [&](int generation, const shader::SearchCounters& counters) {
     std::fprintf(stderr, "duolod: generation %d of %d: %d variants predicted, %d genomes, %.0f s\n",
                  generation, flags.generations, counters.variants_predicted,
