@@ -16,9 +16,7 @@ namespace duolod {
 namespace {
 namespace fs = std::filesystem;
 
-test::CommandRun runCli(const std::vector<std::string>& args) {
-  return test::runCommand(DUOLOD_CLI, args);
-}
+using test::runCli;
 
 // Spot is ~2 units across: at distance 30 it spans ~50 px on a 1080 px display, so a variant's
 // renders are cheap.

@@ -19,11 +19,7 @@ namespace duolod {
 namespace {
 namespace fs = std::filesystem;
 
-
-test::CommandRun runCli(const std::vector<std::string>& args) {
-  return test::runCommand(DUOLOD_CLI, args);
-}
-
+using test::runCli;
 
 // The line of `text` starting with `prefix` ("" when there is none).
 std::string lineStarting(const std::string& text, const std::string& prefix) {

@@ -22,10 +22,7 @@ namespace fs = std::filesystem;
 
 
 // Runs `duolod ARGS...` and captures its output.
-test::CommandRun runCli(const std::vector<std::string>& args) {
-  return test::runCommand(DUOLOD_CLI, args);
-}
-
+using test::runCli;
 
 // A small quad written as a .glb into `dir`: a cheap input for tests that do not need a real asset.
 std::string writeQuad(const fs::path& dir) {

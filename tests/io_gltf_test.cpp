@@ -43,15 +43,7 @@ std::string base64(const std::vector<uint8_t>& bytes) {
   return out;
 }
 
-std::vector<uint8_t> fileBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void writeBytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream(path, std::ios::binary)
-      .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-}
+using test::writeBytes;
 
 // A hand-made glTF: one binary buffer built view by view, and the JSON document around it.
 struct HandGltf {
@@ -166,11 +158,7 @@ void expectLoadError(const std::string& path, const std::string& fragment = "") 
   }
 }
 
-bool hasWarningContaining(const core::Asset& asset, const std::string& fragment) {
-  for (const std::string& warning : asset.warnings)
-    if (warning.find(fragment) != std::string::npos) return true;
-  return false;
-}
+using test::hasWarningContaining;
 
 // ---------------------------------------------------------------------------------------------
 // Real assets.
@@ -256,12 +244,12 @@ TEST(GltfRoundTrip, WaterBottleThroughGltfAndGlb) {
   ASSERT_TRUE(original) << original.error().message;
 
   // The writer refuses the file the asset came from, however it is spelled, and leaves it alone.
-  std::vector<uint8_t> input_bytes = fileBytes(input);
+  std::vector<uint8_t> input_bytes = test::readBytes(input);
   auto over_source = io::writeGltf(*original, original->source_path);
   EXPECT_FALSE(over_source);
   auto over_alias = io::writeGltf(*original, (copy / ".." / "copy" / "WaterBottle.gltf").string());
   EXPECT_FALSE(over_alias);
-  EXPECT_EQ(fileBytes(input), input_bytes);
+  EXPECT_EQ(test::readBytes(input), input_bytes);
 
   fs::path out = test::scratchDir("out");
   for (const char* name : {"bottle.gltf", "bottle.glb"}) {
@@ -304,11 +292,11 @@ TEST(GltfWriter, RefusesSourcePathOfHandMadeFileAndBadExtension) {
   std::string path = oneTriangle().write(dir, "tri");
   auto asset = io::loadAsset(path);
   ASSERT_TRUE(asset) << asset.error().message;
-  std::vector<uint8_t> before = fileBytes(path);
+  std::vector<uint8_t> before = test::readBytes(path);
   auto refused = io::writeGltf(*asset, path);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("tri.gltf"), std::string::npos) << refused.error().message;
-  EXPECT_EQ(fileBytes(path), before);
+  EXPECT_EQ(test::readBytes(path), before);
   EXPECT_FALSE(io::writeGltf(*asset, (dir / "tri.obj").string()));
   auto no_folder = io::writeGltf(*asset, (dir / "missing" / "x.glb").string());
   EXPECT_FALSE(no_folder);
@@ -671,7 +659,7 @@ TEST(GltfReader, TextureTransformIsAWarning) {
 TEST(GltfMalformed, TruncatedJson) {
   fs::path dir = test::scratchDir("m");
   std::string path = oneTriangle().write(dir, "cut");
-  std::vector<uint8_t> bytes = fileBytes(path);
+  std::vector<uint8_t> bytes = test::readBytes(path);
   bytes.resize(bytes.size() / 2);
   writeBytes(path, bytes);
   expectLoadError(path);
@@ -991,7 +979,7 @@ TEST(GltfMalformed, UnknownExtensionAndFolder) {
 std::vector<uint8_t> quadGlb(const fs::path& dir) {
   std::string path = (dir / "quad_source.glb").string();
   EXPECT_TRUE(io::writeGltf(quadAsset(), path));
-  return fileBytes(path);
+  return test::readBytes(path);
 }
 
 uint32_t read32(const std::vector<uint8_t>& bytes, size_t offset) {
@@ -1097,7 +1085,7 @@ TEST(GltfMalformed, GlbImageBufferViewPastTheEnd) {
   std::string source = (dir / "textured.glb").string();
   ASSERT_TRUE(io::writeGltf(asset, source));
   ASSERT_TRUE(io::loadAsset(source));
-  std::vector<uint8_t> out = rebuildGlb(fileBytes(source), [](json& doc) {
+  std::vector<uint8_t> out = rebuildGlb(test::readBytes(source), [](json& doc) {
     int image_view = doc["images"][0]["bufferView"];
     doc["bufferViews"][image_view]["byteLength"] = 100000;
   });

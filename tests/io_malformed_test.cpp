@@ -16,11 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 using test::writeScratchFile;
 
-io::LoadOptions noTextures() {
-  io::LoadOptions options;
-  options.load_textures = false;
-  return options;
-}
+using test::noTextures;
 
 std::string extensionOf(const std::string& path) {
   std::string ext = fs::path(path).extension().string();

@@ -12,13 +12,9 @@ namespace {
 
 using test::writeScratchFile;
 
-io::LoadOptions noTextures() {
-  io::LoadOptions options;
-  options.load_textures = false;
-  return options;
-}
+using test::noTextures;
 
-core::Asset readOk(const std::string& path, const io::LoadOptions& options = noTextures()) {
+core::Asset readObjOk(const std::string& path, const io::LoadOptions& options = noTextures()) {
   auto asset = io::readObj(path, options);
   EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
   if (!asset.ok()) return {};
@@ -26,12 +22,7 @@ core::Asset readOk(const std::string& path, const io::LoadOptions& options = noT
   return std::move(asset).value();
 }
 
-bool hasWarningContaining(const core::Asset& asset, const std::string& text) {
-  for (const std::string& warning : asset.warnings) {
-    if (warning.find(text) != std::string::npos) return true;
-  }
-  return false;
-}
+using test::hasWarningContaining;
 
 const char* kQuad =
     "# a unit quad in z = 0\n"
@@ -43,7 +34,7 @@ const char* kQuad =
 
 TEST(ObjReader, QuadIsFanTriangulated) {
   std::string path = writeScratchFile("quad.obj", kQuad);
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.source_path, path);
   ASSERT_EQ(asset.mesh.vertexCount(), 4u);
   EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
@@ -68,7 +59,7 @@ TEST(ObjReader, NegativeIndicesCountBackFromTheLastVertex) {
                                       "f -4 -3 -2 -1\n"
                                       "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
                                       "f -4 -3 -2 -1\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   ASSERT_EQ(asset.mesh.vertexCount(), 8u);
   EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7}));
   EXPECT_EQ(asset.mesh.positions[4], (core::Vec3{0, 0, 1}));
@@ -87,7 +78,7 @@ TEST(ObjReader, CubeWithPerFaceNormalsHas24Corners) {
                        "f 4//4 8//4 7//4 3//4\n"
                        "f 1//5 5//5 8//5 4//5\n"
                        "f 2//6 3//6 7//6 6//6\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.mesh.vertexCount(), 24u);
   EXPECT_EQ(asset.mesh.triangleCount(), 12u);
   ASSERT_EQ(asset.mesh.normals.size(), 24u);
@@ -104,7 +95,7 @@ TEST(ObjReader, SharedCornersAreMergedAndVIsFlipped) {
                                       "vt 0 0\nvt 1 0\nvt 1 1\nvt 0.25 0.75\n"
                                       "f 1/1 2/2 3/3\n"
                                       "f 1/1 3/3 4/4\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   ASSERT_EQ(asset.mesh.vertexCount(), 4u);
   ASSERT_EQ(asset.mesh.uv0.size(), 4u);
   // OBJ's v points up; ours down: (0.25, 0.75) becomes (0.25, 0.25).
@@ -120,7 +111,7 @@ TEST(ObjReader, SameVertexWithTwoTexcoordsIsSplit) {
                                       "vt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 0.5\n"
                                       "f 1/1 2/2 3/3\n"
                                       "f 1/4 3/3 2/2\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.mesh.vertexCount(), 4u);
   EXPECT_EQ(asset.mesh.positions[3], asset.mesh.positions[0]);
 }
@@ -131,7 +122,7 @@ TEST(ObjReader, MissingTexcoordsOrNormalsOnSomeCorners) {
                                       "vt 0.5 0.5\nvn 0 0 1\n"
                                       "f 1/1/1 2/1/1 3/1/1\n"
                                       "f 1 3 4\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   // UVs kept ((0, 0) where missing); normals dropped entirely, as an incomplete stream would be
   // wrong and loadAsset regenerates them.
   EXPECT_EQ(asset.mesh.uv0.size(), asset.mesh.vertexCount());
@@ -150,7 +141,7 @@ TEST(ObjReader, VertexColorsAndTrailingComments) {
                                       "v 1 0 0 0 1 0\n"
                                       "v 1 1 0 0 0 1\n"
                                       "f 1 2 3 # one triangle\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   ASSERT_EQ(asset.mesh.colors.size(), 3u);
   EXPECT_EQ(asset.mesh.colors[0].x, 1.0f);
   EXPECT_EQ(asset.mesh.colors[0].w, 1.0f);
@@ -162,7 +153,7 @@ TEST(ObjReader, CrlfLinesAndContinuations) {
   std::string path = writeScratchFile("crlf.obj",
                                       "v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\n"
                                       "f 1 2 \\\r\n 3 4\r\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.mesh.triangleCount(), 2u);
 }
 
@@ -189,7 +180,7 @@ TEST(ObjReader, MaterialsGroupTrianglesIntoContiguousSubmeshes) {
                                      "f 2 3 4\n"
                                      "usemtl unknown\n"
                                      "f 1 2 4\n";
-  core::Asset asset = readOk((dir / "mats.obj").string());
+  core::Asset asset = readObjOk((dir / "mats.obj").string());
   ASSERT_EQ(asset.materials.size(), 3u);
   EXPECT_EQ(asset.materials[0].name, "red");
   EXPECT_EQ(asset.materials[1].name, "shiny blue");
@@ -231,7 +222,7 @@ TEST(ObjReader, MtlTexturesWithoutDecoding) {
                                     "bump normal.png\n";
   std::ofstream(dir / "tex.obj") << "mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
                                     "usemtl a\nf 1 2 3\nusemtl b\nf 3 2 1\n";
-  core::Asset asset = readOk((dir / "tex.obj").string());
+  core::Asset asset = readObjOk((dir / "tex.obj").string());
   ASSERT_EQ(asset.materials.size(), 2u);
   const core::Material& a = asset.materials[0];
   const core::Material& b = asset.materials[1];
@@ -309,7 +300,7 @@ TEST(ObjReader, MissingMtlFileIsAWarning) {
   std::string path = writeScratchFile("nomtl.obj",
                                       "mtllib does_not_exist.mtl\n"
                                       "v 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl stone\nf 1 2 3\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_TRUE(hasWarningContaining(asset, "does_not_exist.mtl"));
   EXPECT_TRUE(hasWarningContaining(asset, "nomtl.obj:1:"));
   ASSERT_EQ(asset.materials.size(), 1u);
@@ -322,7 +313,7 @@ TEST(ObjReader, PointsLinesAndFreeFormAreSkipped) {
                                       "o thing\ng part\ns 1\n"
                                       "v 0 0 0\nv 1 0 0\nv 1 1 0\n"
                                       "l 1 2\np 3\nf 1 2 3\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.mesh.triangleCount(), 1u);
   EXPECT_TRUE(hasWarningContaining(asset, "(p, l) ignored"));
 }
@@ -338,7 +329,7 @@ TEST(ObjReader, NoFacesIsNotAnErrorHere) {
 
 TEST(ObjReader, SpotHasExactCounts) {
   DUOLOD_REQUIRE_ASSET(path, "obj/spot/spot.obj");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.mesh.triangleCount(), 5856u);
   // Every vertex is a distinct (position, texcoord) pair: at least the 3,225 texcoords and the
   // 2,930 positions are all used.
@@ -387,12 +378,12 @@ TEST(ObjWriter, RoundTripKeepsGeometryAndMaterials) {
                                    "vn 0 0 1\n"
                                    "usemtl red\nf 1/1/1 2/2/1 3/3/1\n"
                                    "usemtl blue\nf 1/1/1 3/3/1 4/4/1\n";
-  core::Asset in = readOk((dir / "in.obj").string());
+  core::Asset in = readObjOk((dir / "in.obj").string());
   std::string out_path = (dir / "out.obj").string();
   auto written = io::writeObj(in, out_path);
   ASSERT_TRUE(written.ok()) << written.error().message;
   EXPECT_TRUE(std::filesystem::exists(dir / "out.mtl"));
-  core::Asset out = readOk(out_path);
+  core::Asset out = readObjOk(out_path);
 
   EXPECT_EQ(out.mesh.positions.size(), in.mesh.positions.size());
   for (size_t i = 0; i < in.mesh.positions.size(); ++i) {
@@ -452,7 +443,7 @@ TEST(ObjWriter, TexturesAreWrittenAsPngAndReadBack) {
 
 TEST(ObjWriter, RefusesToOverwriteItsSource) {
   std::string path = writeScratchFile("source.obj", kQuad);
-  core::Asset asset = readOk(path);
+  core::Asset asset = readObjOk(path);
   auto written = io::writeObj(asset, path);
   ASSERT_FALSE(written.ok());
   EXPECT_NE(written.error().message.find("source.obj"), std::string::npos);

@@ -11,7 +11,7 @@ namespace {
 
 using test::writeScratchFile;
 
-core::Asset readOk(const std::string& path) {
+core::Asset readPlyOk(const std::string& path) {
   auto asset = io::readPly(path, io::LoadOptions{});
   EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
   if (!asset.ok()) return {};
@@ -146,7 +146,7 @@ void expectTestMesh(const core::Asset& asset) {
   EXPECT_EQ(mesh.submeshes[0].index_count, 9u);
 }
 
-void expectSameMesh(const core::Mesh& a, const core::Mesh& b) {
+void expectSameVertexAttributes(const core::Mesh& a, const core::Mesh& b) {
   ASSERT_EQ(a.vertexCount(), b.vertexCount());
   for (size_t i = 0; i < a.vertexCount(); ++i) {
     EXPECT_EQ(a.positions[i], b.positions[i]);
@@ -163,19 +163,19 @@ void expectSameMesh(const core::Mesh& a, const core::Mesh& b) {
 
 TEST(PlyReader, Ascii) {
   std::string path = writeScratchFile("mesh_ascii.ply", asciiPly());
-  core::Asset asset = readOk(path);
+  core::Asset asset = readPlyOk(path);
   EXPECT_EQ(asset.source_path, path);
   expectTestMesh(asset);
 }
 
 TEST(PlyReader, BinaryLittleAndBigEndianMatchAscii) {
-  core::Asset ascii = readOk(writeScratchFile("mesh_ascii.ply", asciiPly()));
-  core::Asset little = readOk(writeScratchFile("mesh_le.ply", binaryPly(false)));
-  core::Asset big = readOk(writeScratchFile("mesh_be.ply", binaryPly(true)));
+  core::Asset ascii = readPlyOk(writeScratchFile("mesh_ascii.ply", asciiPly()));
+  core::Asset little = readPlyOk(writeScratchFile("mesh_le.ply", binaryPly(false)));
+  core::Asset big = readPlyOk(writeScratchFile("mesh_be.ply", binaryPly(true)));
   expectTestMesh(little);
   expectTestMesh(big);
-  expectSameMesh(ascii.mesh, little.mesh);
-  expectSameMesh(ascii.mesh, big.mesh);
+  expectSameVertexAttributes(ascii.mesh, little.mesh);
+  expectSameVertexAttributes(ascii.mesh, big.mesh);
   // Nothing left over: every skipped property had the right size.
   for (const std::string& warning : little.warnings) {
     EXPECT_EQ(warning.find("bytes after"), std::string::npos) << warning;
@@ -200,7 +200,7 @@ TEST(PlyReader, SizedTypeNamesFloatColorsAndVertexIndex) {
                                       "1 0 0 1 0 0 1 0 1\r\n"
                                       "0 1 0 0 1 1 0 0 1\r\n"
                                       "3 0 1 2\r\n");
-  core::Asset asset = readOk(path);
+  core::Asset asset = readPlyOk(path);
   ASSERT_EQ(asset.mesh.triangleCount(), 1u);
   ASSERT_EQ(asset.mesh.colors.size(), 3u);
   EXPECT_EQ(asset.mesh.colors[0].z, 1.0f);
@@ -211,7 +211,7 @@ TEST(PlyReader, SizedTypeNamesFloatColorsAndVertexIndex) {
 }
 
 TEST(PlyReader, PointCloudHasNoTriangles) {
-  core::Asset asset = readOk(writeScratchFile(
+  core::Asset asset = readPlyOk(writeScratchFile(
       "points.ply",
       "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
       "property float z\nend_header\n0 0 0\n1 1 1\n"));
@@ -233,7 +233,7 @@ TEST(PlyReader, UnknownBinaryElementWithListIsSkipped) {
   for (double v : {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0}) out.put(v);
   out.put(static_cast<int32_t>(3));
   for (uint32_t i : {0u, 1u, 2u}) out.put(i);
-  core::Asset asset = readOk(writeScratchFile("skip.ply", header + out.bytes()));
+  core::Asset asset = readPlyOk(writeScratchFile("skip.ply", header + out.bytes()));
   ASSERT_EQ(asset.mesh.vertexCount(), 3u);
   EXPECT_EQ(asset.mesh.positions[1], (core::Vec3{1, 0, 0}));
   EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2}));

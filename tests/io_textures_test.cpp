@@ -21,15 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-std::vector<uint8_t> fileBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void writeBytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-}
+using test::writeBytes;
 
 void appendTo(void* context, void* data, int size) {
   auto* sink = static_cast<std::vector<uint8_t>*>(context);
@@ -125,8 +117,8 @@ TEST(TextureFiles, UnchangedTexturesAreWrittenAsTheirSourceBytes) {
   fs::path out = test::scratchDir("textures_out");
   // .gltf: the files beside it are the sources' bytes, the JPEG keeps its format.
   ASSERT_TRUE(io::writeGltf(*asset, (out / "a.gltf").string()));
-  EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
-  EXPECT_EQ(fileBytes(out / "a_texture1.jpg"), jpg);
+  EXPECT_EQ(test::readBytes(out / "a_texture0.png"), png);
+  EXPECT_EQ(test::readBytes(out / "a_texture1.jpg"), jpg);
   EXPECT_FALSE(fs::exists(out / "a_texture1.png"));
   // .glb: the embedded images are the sources' bytes with their MIME types, and decode as before.
   ASSERT_TRUE(io::writeGltf(*asset, (out / "a.glb").string()));
@@ -143,8 +135,8 @@ TEST(TextureFiles, UnchangedTexturesAreWrittenAsTheirSourceBytes) {
   }
   // .obj: the same files beside the .mtl, which names them.
   ASSERT_TRUE(io::writeObj(*asset, (out / "b.obj").string()));
-  EXPECT_EQ(fileBytes(out / "b_texture0.png"), png);
-  EXPECT_EQ(fileBytes(out / "b_texture1.jpg"), jpg);
+  EXPECT_EQ(test::readBytes(out / "b_texture0.png"), png);
+  EXPECT_EQ(test::readBytes(out / "b_texture1.jpg"), jpg);
   std::ifstream mtl(out / "b.mtl");
   std::string mtl_text{std::istreambuf_iterator<char>(mtl), std::istreambuf_iterator<char>()};
   EXPECT_NE(mtl_text.find("b_texture1.jpg"), std::string::npos) << mtl_text;
@@ -157,11 +149,11 @@ TEST(TextureFiles, UnchangedTexturesAreWrittenAsTheirSourceBytes) {
   core::Asset edited = *asset;
   edited.textures[0].image.pixels[0] ^= 0xff;
   ASSERT_TRUE(io::writeGltf(edited, (out / "c.gltf").string()));
-  EXPECT_NE(fileBytes(out / "c_texture0.png"), png);
+  EXPECT_NE(test::readBytes(out / "c_texture0.png"), png);
   auto reread = io::readImage((out / "c_texture0.png").string());
   ASSERT_TRUE(reread) << reread.error().message;
   EXPECT_EQ(reread->pixels, edited.textures[0].image.pixels);
-  EXPECT_EQ(fileBytes(out / "c_texture1.jpg"), jpg);
+  EXPECT_EQ(test::readBytes(out / "c_texture1.jpg"), jpg);
   // And so is one resized to another shape with the same bytes.
   edited = *asset;
   std::swap(edited.textures[0].image.width, edited.textures[0].image.height);
@@ -195,8 +187,8 @@ TEST(TextureFiles, UndecodedTexturesAreSizedAndWrittenBack) {
   }
   fs::path out = test::scratchDir("undecoded_out");
   ASSERT_TRUE(io::writeGltf(*asset, (out / "a.gltf").string()));
-  EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
-  EXPECT_EQ(fileBytes(out / "a_texture1.jpg"), jpg);
+  EXPECT_EQ(test::readBytes(out / "a_texture0.png"), png);
+  EXPECT_EQ(test::readBytes(out / "a_texture1.jpg"), jpg);
   ASSERT_TRUE(io::writeGltf(*asset, (out / "a.glb").string()));
   auto glb = io::loadAsset((out / "a.glb").string());  // decoded: the same pixels as the source's
   auto decoded = io::loadAsset(gltf);
@@ -205,8 +197,8 @@ TEST(TextureFiles, UndecodedTexturesAreSizedAndWrittenBack) {
   for (size_t t = 0; t < 2; ++t)
     EXPECT_EQ(glb->textures[t].image.pixels, decoded->textures[t].image.pixels) << t;
   ASSERT_TRUE(io::writeObj(*asset, (out / "b.obj").string()));
-  EXPECT_EQ(fileBytes(out / "b_texture0.png"), png);
-  EXPECT_EQ(fileBytes(out / "b_texture1.jpg"), jpg);
+  EXPECT_EQ(test::readBytes(out / "b_texture0.png"), png);
+  EXPECT_EQ(test::readBytes(out / "b_texture1.jpg"), jpg);
   // The OBJ path (MTL textures) keeps them undecoded too.
   auto obj = io::loadAsset((out / "b.obj").string(), {.decode_textures = false});
   ASSERT_TRUE(obj) << obj.error().message;
@@ -362,14 +354,14 @@ TEST(TextureFiles, AnImageSharedByTexturesIsWrittenOnce) {
     ASSERT_EQ(written["textures"].size(), 2u);
     EXPECT_EQ(written["textures"][0]["source"], 0);
     EXPECT_EQ(written["textures"][1]["source"], 0);
-    EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
+    EXPECT_EQ(test::readBytes(out / "a_texture0.png"), png);
     EXPECT_FALSE(fs::exists(out / "a_texture1.png"));
     ASSERT_TRUE(io::writeGltf(*asset, (out / "a.glb").string()));
     auto glb = io::loadAsset((out / "a.glb").string());
     ASSERT_TRUE(glb) << glb.error().message;
     ASSERT_EQ(glb->textures.size(), 2u);
     EXPECT_EQ(glb->textures[0].image.pixels, glb->textures[1].image.pixels);
-    const std::vector<uint8_t> glb_bytes = fileBytes(out / "a.glb");  // glTF 2.0 §4.4
+    const std::vector<uint8_t> glb_bytes = test::readBytes(out / "a.glb");  // glTF 2.0 §4.4
     ASSERT_GT(glb_bytes.size(), 20u);
     uint32_t json_length = 0;
     std::memcpy(&json_length, glb_bytes.data() + 12, 4);
@@ -378,7 +370,7 @@ TEST(TextureFiles, AnImageSharedByTexturesIsWrittenOnce) {
     EXPECT_EQ(glb_json["images"].size(), 1u);
     EXPECT_EQ(glb_json["textures"][1]["source"], 0);
     ASSERT_TRUE(io::writeObj(*asset, (out / "b.obj").string()));
-    EXPECT_EQ(fileBytes(out / "b_texture0.png"), png);
+    EXPECT_EQ(test::readBytes(out / "b_texture0.png"), png);
     EXPECT_FALSE(fs::exists(out / "b_texture1.png"));
     std::ifstream mtl(out / "b.mtl");
     const std::string mtl_text((std::istreambuf_iterator<char>(mtl)), {});
@@ -394,7 +386,7 @@ TEST(TextureFiles, AnImageSharedByTexturesIsWrittenOnce) {
   json written = json::parse(std::ifstream(out / "a.gltf"));
   EXPECT_EQ(written["images"].size(), 2u);
   EXPECT_EQ(written["textures"][1]["source"], 1);
-  EXPECT_EQ(fileBytes(out / "a_texture0.png"), png);
+  EXPECT_EQ(test::readBytes(out / "a_texture0.png"), png);
   EXPECT_TRUE(fs::exists(out / "a_texture1.png"));
   // .obj files are numbered as written: textures 0 and 1 share one file, an edited third copy
   // is the second file, not _texture2.
@@ -403,7 +395,7 @@ TEST(TextureFiles, AnImageSharedByTexturesIsWrittenOnce) {
   three->textures.push_back(three->textures[0]);
   three->textures[2].image.pixels[0] ^= 0xff;
   ASSERT_TRUE(io::writeObj(*three, (out / "b.obj").string()));
-  EXPECT_EQ(fileBytes(out / "b_texture0.png"), png);
+  EXPECT_EQ(test::readBytes(out / "b_texture0.png"), png);
   EXPECT_TRUE(fs::exists(out / "b_texture1.png"));
   EXPECT_FALSE(fs::exists(out / "b_texture2.png"));
 }
@@ -470,7 +462,7 @@ TEST(TextureFiles, OutputTexturesDoNotReplaceTheSources) {
       EXPECT_NE(refused.error().message.find("first_texture0.png: is a file the asset was read from"),
                 std::string::npos)
           << refused.error().message;
-      EXPECT_EQ(fileBytes(dir / "first_texture0.png"), png);
+      EXPECT_EQ(test::readBytes(dir / "first_texture0.png"), png);
     }
     // Nor the .mtl it was read from (lib.mtl), nor the .obj itself.
     EXPECT_FALSE(io::writeObj(edited, (dir / "lib.obj").string()));
@@ -491,14 +483,15 @@ TEST(TextureFiles, WaterBottleTexturesAreCopied) {
   size_t source_bytes = 0;
   for (const auto& entry : fs::directory_iterator(fs::path(source).parent_path()))
     if (entry.path().extension() == ".png") {
-      sources.push_back(fileBytes(entry.path()));
+      sources.push_back(test::readBytes(entry.path()));
       source_bytes += sources.back().size();
     }
   ASSERT_EQ(sources.size(), 4u);
   fs::path out = test::scratchDir("bottle_textures");
   ASSERT_TRUE(io::writeGltf(*asset, (out / "bottle.gltf").string()));
   for (int t = 0; t < 4; ++t) {
-    std::vector<uint8_t> written = fileBytes(out / ("bottle_texture" + std::to_string(t) + ".png"));
+    std::vector<uint8_t> written =
+        test::readBytes(out / ("bottle_texture" + std::to_string(t) + ".png"));
     EXPECT_NE(std::find(sources.begin(), sources.end(), written), sources.end())
         << "bottle_texture" << t << ".png is not one of the source PNGs";
   }

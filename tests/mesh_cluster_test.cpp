@@ -15,10 +15,12 @@ namespace {
 using core::Mesh;
 using core::Vec3;
 
-float bumps(float x, float y) { return 0.1f * std::sin(6.0f * x + 0.3f) * std::cos(5.0f * y); }
+float roughBumps(float x, float y) {
+  return 0.1f * std::sin(6.0f * x + 0.3f) * std::cos(5.0f * y);
+}
 
 TEST(SimplifyCluster, GridReducesAndStaysWithinOneCell) {
-  Mesh grid = test::gridMesh(40, 1.0f, bumps);
+  Mesh grid = test::gridMesh(40, 1.0f, roughBumps);
   const int resolution = 8;
   auto result = mesh::simplifyCluster(grid, {.grid_resolution = resolution});
   const Mesh& out = result.mesh;
@@ -64,7 +66,7 @@ TEST(SimplifyCluster, NoDegenerateOrRepeatedTriangles) {
 // With keep_attribute_seams a cell on the seam yields one vertex per side: no triangle mixes the
 // charts' UVs. Without it the two sides average into one vertex.
 TEST(SimplifyCluster, KeepsUvSeams) {
-  Mesh seamed = test::seamGrid(32, bumps);
+  Mesh seamed = test::seamGrid(32, roughBumps);
   auto kept = mesh::simplifyCluster(seamed, {.grid_resolution = 7, .keep_attribute_seams = true});
   ASSERT_EQ(kept.mesh.uv0.size(), kept.mesh.vertexCount());
   for (size_t t = 0; t < kept.mesh.triangleCount(); ++t) {
@@ -81,7 +83,7 @@ TEST(SimplifyCluster, KeepsUvSeams) {
 
 TEST(SimplifyCluster, BadInput) {
   EXPECT_EQ(mesh::simplifyCluster(Mesh{}, {}).mesh.triangleCount(), 0u);
-  Mesh grid = test::gridMesh(10, 1.0f, bumps);
+  Mesh grid = test::gridMesh(10, 1.0f, roughBumps);
   grid.positions[5].x = std::numeric_limits<float>::quiet_NaN();
   grid.indices.insert(grid.indices.end(), {0, 0, 1, 0, 1, 2, 3, 4, 12345});
   grid.submeshes = {{0, uint32_t(grid.indices.size()), 0}};

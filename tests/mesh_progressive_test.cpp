@@ -14,7 +14,9 @@ namespace duolod {
 namespace {
 using core::Mesh;
 
-float bumps(float x, float y) { return 0.05f * std::sin(6.0f * x + 0.3f) * std::cos(5.0f * y); }
+float gentleBumps(float x, float y) {
+  return 0.05f * std::sin(6.0f * x + 0.3f) * std::cos(5.0f * y);
+}
 
 void expectSameMesh(const Mesh& a, const Mesh& b) {
   ASSERT_EQ(a.vertexCount(), b.vertexCount());
@@ -38,7 +40,8 @@ void expectSameMesh(const Mesh& a, const Mesh& b) {
 }
 
 TEST(ProgressiveRecord, FullReplayIsTheResultAndEmptyReplayIsTheInput) {
-  for (const Mesh& input : {test::icosphere(3, 1.0f, test::lumps), test::seamGrid(16, bumps)}) {
+  for (const Mesh& input :
+       {test::icosphere(3, 1.0f, test::lumps), test::seamGrid(16, gentleBumps)}) {
     auto result = mesh::simplifyQuadric(input, {.target_triangles = input.triangleCount() / 8});
     const auto& record = result.record;
     ASSERT_FALSE(record.steps.empty());
@@ -67,7 +70,7 @@ TEST(ProgressiveRecord, PrefixTriangleCountsMatchTheSteps) {
 }
 
 TEST(ProgressiveRecord, ExtractMeshesEqualsExtractMesh) {
-  Mesh input = test::seamGrid(20, bumps);
+  Mesh input = test::seamGrid(20, gentleBumps);
   auto result = mesh::simplifyQuadric(input, {.target_triangles = 20});
   const auto& record = result.record;
   std::vector<size_t> counts = {0, 1, 2, 5, record.steps.size() / 3, record.steps.size() / 2,
@@ -83,7 +86,7 @@ TEST(ProgressiveRecord, ExtractMeshesEqualsExtractMesh) {
 // A seam collapse takes one step per wedge; a prefix ending inside it is rounded up, so the two
 // sides of the seam never disagree on a position (which would open a crack).
 TEST(ProgressiveRecord, SeamCollapsesAreNeverSplit) {
-  Mesh input = test::seamGrid(16, bumps);
+  Mesh input = test::seamGrid(16, gentleBumps);
   auto result = mesh::simplifyQuadric(input, {.target_triangles = 30});
   const auto& record = result.record;
   size_t split = 0;

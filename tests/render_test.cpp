@@ -961,12 +961,7 @@ TEST(RendererDevices, ChoosesAnEglDeviceOrSaysHowManyExist) {
 // parameter block (binding 2), what setProgramUniforms and setParameterBlock give a simplified
 // shader, and from gl_FragCoord.x: a tile in the second column of a layer is drawn 64 or more
 // pixels to the right, so its blue channel tells which column it was drawn in.
-constexpr const char* kFrameBlock = R"(
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
-)";
+using test::kFrameBlock;
 constexpr const char* kTintedVertex = R"(
 layout(location = 0) in vec3 inPosition;
 layout(location = 1) in vec3 inNormal;

@@ -13,23 +13,17 @@
 namespace duolod::shader {
 namespace {
 
-constexpr const char* kFrame = R"(
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
-)";
-
 std::string vertexSource(const std::string& extra_declarations, const std::string& extra_code) {
-  return std::string("#version 450 core\nlayout(location = 0) in vec3 inPosition;\n") + kFrame +
-         "layout(location = 0) out vec3 vObjectPosition;\n" + extra_declarations +
-         "void main() {\n  vObjectPosition = inPosition;\n" + extra_code +
+  return std::string("#version 450 core\nlayout(location = 0) in vec3 inPosition;\n") +
+         test::kFrameBlock + "layout(location = 0) out vec3 vObjectPosition;\n" +
+         extra_declarations + "void main() {\n  vObjectPosition = inPosition;\n" + extra_code +
          "  gl_Position = uProjection * (uView * (uModel * vec4(inPosition, 1.0)));\n}\n";
 }
 
 std::string fragmentSource(const std::string& declarations, const std::string& body) {
-  return std::string("#version 450 core\n") + kFrame +
-         "layout(location = 0) in vec3 vObjectPosition;\nlayout(location = 0) out vec4 outColor;\n" +
+  return std::string("#version 450 core\n") + test::kFrameBlock +
+         "layout(location = 0) in vec3 vObjectPosition;\nlayout(location = 0) out vec4 "
+         "outColor;\n" +
          declarations + "void main() {\n" + body + "}\n";
 }
 

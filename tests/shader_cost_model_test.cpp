@@ -26,12 +26,7 @@ ir::Module compileModule(const std::string& source, Stage stage, const std::stri
   return module.ok() ? *module : ir::Module{};
 }
 
-std::string readShader(const std::string& file) {
-  std::ifstream in(test::sourcePath("shaders/" + file));
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using test::readShader;
 
 double at(const OpClassCounts& counts, OpClass op_class) {
   return counts[static_cast<int>(op_class)];
@@ -266,7 +261,7 @@ TEST(ShaderCostModel, PredictionIsTheWeightedSum) {
 
 // The 2×2 square z = 0 seen head-on so that it covers exactly the middle half of the image side:
 // at 64 px, 32 × 32 = 1024 covered pixels, half of them at object x < 0.
-core::Asset squareAsset() {
+core::Asset unitSquare() {
   core::Asset asset;
   asset.source_path = "square";
   asset.mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
@@ -314,7 +309,7 @@ void main() {
 TEST(ShaderCostProfile, LoopAndBranchCountsPerInvocation) {
   auto renderer = render::Renderer::create();
   if (!renderer.ok()) GTEST_SKIP() << "SKIPPED: no OpenGL context: " << renderer.error().message;
-  auto asset = (*renderer)->uploadAsset(squareAsset());
+  auto asset = (*renderer)->uploadAsset(unitSquare());
   ASSERT_TRUE(asset.ok()) << asset.error().message;
   ir::Module vertex = compileModule(kPositionVertexShader, Stage::kVertex, "position.vert");
   ir::Module fragment = compileModule(kLoopBranchShader, Stage::kFragment, "loop.frag");
@@ -391,7 +386,7 @@ TEST(ShaderCostProfile, AShadersOwnStorageBlockIsNotTheCounters) {
 
   auto renderer = render::Renderer::create();
   if (!renderer.ok()) GTEST_SKIP() << "SKIPPED: no OpenGL context: " << renderer.error().message;
-  auto asset = (*renderer)->uploadAsset(squareAsset());
+  auto asset = (*renderer)->uploadAsset(unitSquare());
   ASSERT_TRUE(asset.ok()) << asset.error().message;
   std::vector<render::Sample> samples{headOnSample()};
   auto profile = profileBlockCounts(**renderer, *asset, vertex, fragment, samples, 64);

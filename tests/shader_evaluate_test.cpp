@@ -48,12 +48,7 @@ TEST(Median, OddEvenEmpty) {
 
 // ---- The evaluator ----
 
-constexpr const char* kFrameBlock = R"(
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
-)";
+using test::kFrameBlock;
 // The colour of the constant shader, moved to a plain uniform (location 0) or to a parameter
 // block (binding 2): what "moving to parameter" produces.
 constexpr const char* kUniformFragment = R"(#version 450 core

@@ -11,16 +11,9 @@
 namespace duolod::shader {
 namespace {
 
-const char* kFrame = R"(
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
-)";
-
 std::string vertexStage(const std::string& extra_inputs = "") {
   return std::string("#version 450 core\nlayout(location = 0) in vec3 inPosition;\n") +
-         extra_inputs + kFrame + R"(
+         extra_inputs + test::kFrameBlock + R"(
 layout(location = 0) out vec3 vA;
 layout(location = 1) out vec2 vB;
 void main() {
@@ -155,7 +148,8 @@ TEST(ShaderInterfaceCheck, PairsThatCannotRenderRightAreErrors) {
 // units, each compared.
 TEST(ShaderInterfaceCheck, WhatOpenGLAcceptsPasses) {
   const std::string vertex =
-      std::string("#version 450 core\nlayout(location = 0) in vec3 inPosition;\n") + kFrame + R"(
+      std::string("#version 450 core\nlayout(location = 0) in vec3 inPosition;\n") +
+      test::kFrameBlock + R"(
 layout(location = 0) out vec3 vA;
 layout(location = 1, component = 0) out vec2 vLow;
 layout(location = 1, component = 2) out vec2 vHigh;

@@ -14,12 +14,7 @@
 namespace duolod::shader {
 namespace {
 
-std::string readShader(const std::string& file) {
-  std::ifstream in(test::sourcePath("shaders/" + file));
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using test::readShader;
 
 std::vector<uint32_t> compileOrDie(const std::string& source, Stage stage, const std::string& name) {
   auto words = compileToSpirv(source, stage, name);

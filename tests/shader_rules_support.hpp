@@ -20,12 +20,7 @@
 namespace duolod::shader::test_rules {
 
 // The Frame block of shaders/INTERFACE.md, for hand-written test stages.
-inline const char* kFrameBlock = R"(
-layout(std140, binding = 0) uniform Frame {
-  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
-  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
-};
-)";
+using ::duolod::test::kFrameBlock;
 
 // Passes the object-space normal (location 0) and uv (location 1) on.
 inline std::string passThroughVertex() {

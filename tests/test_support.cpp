@@ -41,6 +41,32 @@ std::string readText(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+std::vector<uint8_t> readBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+std::string readShader(const std::string& file) {
+  return readText(sourcePath("shaders/" + file));
+}
+
+io::LoadOptions noTextures() {
+  io::LoadOptions options;
+  options.load_textures = false;
+  return options;
+}
+
+bool hasWarningContaining(const core::Asset& asset, const std::string& fragment) {
+  for (const std::string& warning : asset.warnings)
+    if (warning.find(fragment) != std::string::npos) return true;
+  return false;
+}
+
 namespace {
 std::string shellQuoted(const std::string& argument) {
   std::string out = "'";
@@ -61,6 +87,10 @@ CommandRun runCommand(const std::string& binary, const std::vector<std::string>&
   run.out = readText(dir / "stdout");
   run.err = readText(dir / "stderr");
   return run;
+}
+
+CommandRun runCli(const std::vector<std::string>& args) {
+  return runCommand(DUOLOD_CLI, args);
 }
 
 render::Renderer* createRenderer(std::string& failure) {

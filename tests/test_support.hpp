@@ -3,10 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "duolod/io.hpp"
 #include "duolod/render.hpp"
 
 namespace duolod::test {
@@ -26,7 +28,24 @@ struct CommandRun {
   std::string out, err;
 };
 CommandRun runCommand(const std::string& binary, const std::vector<std::string>& args);
+// Runs the built `duolod` binary (DUOLOD_CLI) with ARGS.
+CommandRun runCli(const std::vector<std::string>& args);
 std::string readText(const std::filesystem::path& path);
+std::vector<uint8_t> readBytes(const std::filesystem::path& path);
+void writeBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
+// The source of a reference shader (shaders/FILE).
+std::string readShader(const std::string& file);
+// Load options that leave textures unread, for tests of geometry.
+io::LoadOptions noTextures();
+bool hasWarningContaining(const core::Asset& asset, const std::string& fragment);
+
+// The renderer's per-frame block (shaders/INTERFACE.md), for hand-written test shaders.
+inline constexpr const char* kFrameBlock = R"(
+layout(std140, binding = 0) uniform Frame {
+  mat4 uModel; mat4 uView; mat4 uProjection; mat4 uNormalMatrix;
+  vec4 uCameraPosition; vec4 uLightPosition; vec4 uLightColor; vec4 uAmbientColor; vec4 uObjectInfo;
+};
+)";
 // A renderer for a test suite's SetUpTestSuite (the caller owns it), or nullptr with the reason in
 // `failure` when there is no OpenGL 4.5 context.
 render::Renderer* createRenderer(std::string& failure);

@@ -22,7 +22,7 @@ core::Mat4 translation(Vec3 t) {
 }
 
 // A unit square in the z = 0 plane facing +z, one material of colour `rgb`.
-core::Asset squareAsset(Vec3 rgb) {
+core::Asset coloredSquare(Vec3 rgb) {
   core::Asset asset;
   asset.mesh.positions = {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0.5f, 0.5f, 0}, {-0.5f, 0.5f, 0}};
   asset.mesh.normals.assign(4, Vec3{0, 0, 1});
@@ -42,8 +42,8 @@ TEST(Walkthrough, SceneFrameDrawsEachInstanceWhereItsModelPutsIt) {
   ASSERT_TRUE(shader) << shader.error().message;
   auto program = renderer->compileProgram(*shader);
   ASSERT_TRUE(program) << program.error().message;
-  auto red = renderer->uploadAsset(squareAsset({1, 0, 0}));
-  auto green = renderer->uploadAsset(squareAsset({0, 1, 0}));
+  auto red = renderer->uploadAsset(coloredSquare({1, 0, 0}));
+  auto green = renderer->uploadAsset(coloredSquare({0, 1, 0}));
   ASSERT_TRUE(red && green);
 
   // Camera at z = 4 seeing 4 units across 64 pixels: 16 pixels per unit at z = 0.
@@ -94,7 +94,7 @@ TEST(Walkthrough, SceneFrameDrawsEachInstanceWhereItsModelPutsIt) {
 }
 
 TEST(Walkthrough, SceneIsSeededAndLevelsFollowDistance) {
-  core::Asset square = squareAsset({1, 1, 1});
+  core::Asset square = coloredSquare({1, 1, 1});
   const core::Mesh* kinds[] = {&square.mesh};
   runtime::WalkSceneOptions options{.objects = 49, .seed = 7, .frames = 5};
   const runtime::WalkScene scene = runtime::buildWalkScene(kinds, options);
@@ -150,7 +150,7 @@ TEST(Walkthrough, SceneIsSeededAndLevelsFollowDistance) {
 // Table 4's scene: every grid point holds one model of every kind, its parts on a ring around the
 // point (so each part is its own instance, with its own level); --objects counts models.
 TEST(Walkthrough, CompoundModelsHoldEveryKindAroundTheirGridPoint) {
-  core::Asset square = squareAsset({1, 1, 1}), other = squareAsset({1, 0, 0});
+  core::Asset square = coloredSquare({1, 1, 1}), other = coloredSquare({1, 0, 0});
   const core::Mesh* kinds[] = {&square.mesh, &other.mesh, &square.mesh};
   runtime::WalkSceneOptions options{.objects = 16, .seed = 3, .frames = 2};
   options.compound = true;
