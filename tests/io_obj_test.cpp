@@ -15,11 +15,7 @@ using test::writeScratchFile;
 using test::noTextures;
 
 core::Asset readObjOk(const std::string& path, const io::LoadOptions& options = noTextures()) {
-  auto asset = io::readObj(path, options);
-  EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
-  if (!asset.ok()) return {};
-  EXPECT_TRUE(core::validateMesh(asset->mesh).ok());
-  return std::move(asset).value();
+  return test::readOk(io::readObj, path, options);
 }
 
 using test::hasWarningContaining;

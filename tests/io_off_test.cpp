@@ -9,11 +9,7 @@ namespace {
 using test::writeScratchFile;
 
 core::Asset readOffOk(const std::string& path) {
-  auto asset = io::readOff(path, io::LoadOptions{});
-  EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
-  if (!asset.ok()) return {};
-  EXPECT_TRUE(core::validateMesh(asset->mesh).ok());
-  return std::move(asset).value();
+  return test::readOk(io::readOff, path);
 }
 
 TEST(OffReader, CubeOfQuads) {

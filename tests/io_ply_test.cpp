@@ -12,11 +12,7 @@ namespace {
 using test::writeScratchFile;
 
 core::Asset readPlyOk(const std::string& path) {
-  auto asset = io::readPly(path, io::LoadOptions{});
-  EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
-  if (!asset.ok()) return {};
-  EXPECT_TRUE(core::validateMesh(asset->mesh).ok());
-  return std::move(asset).value();
+  return test::readOk(io::readPly, path);
 }
 
 // Builds binary PLY bodies value by value in either byte order.

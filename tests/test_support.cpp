@@ -61,6 +61,14 @@ io::LoadOptions noTextures() {
   return options;
 }
 
+core::Asset readOk(AssetReader reader, const std::string& path, const io::LoadOptions& options) {
+  auto asset = reader(path, options);
+  EXPECT_TRUE(asset.ok()) << (asset.ok() ? "" : asset.error().message);
+  if (!asset.ok()) return {};
+  EXPECT_TRUE(core::validateMesh(asset->mesh).ok());
+  return std::move(asset).value();
+}
+
 bool hasWarningContaining(const core::Asset& asset, const std::string& fragment) {
   for (const std::string& warning : asset.warnings)
     if (warning.find(fragment) != std::string::npos) return true;

@@ -37,6 +37,11 @@ void writeBytes(const std::filesystem::path& path, const std::vector<uint8_t>& b
 std::string readShader(const std::string& file);
 // Load options that leave textures unread, for tests of geometry.
 io::LoadOptions noTextures();
+// Reads PATH with one of io's readers (io::readObj, readPly, readOff: no post-processing),
+// expecting success and a valid mesh; an empty asset after a failed expectation.
+using AssetReader = core::Result<core::Asset> (*)(const std::string&, const io::LoadOptions&);
+core::Asset readOk(AssetReader reader, const std::string& path,
+                   const io::LoadOptions& options = {});
 bool hasWarningContaining(const core::Asset& asset, const std::string& fragment);
 
 // The renderer's per-frame block (shaders/INTERFACE.md), for hand-written test shaders.
