@@ -313,6 +313,32 @@ TEST(Cli, OutOfMemoryIsAnError) {
 #endif
 }
 
+// A long GPU request is explained on stderr (DUOLOD_SLOW_NOTICE_SECONDS, here 0.2 s: the 100
+// references of 128 px at 4x4 take longer than that), again as the wait doubles; a bad value is
+// warned about and the default (30 s) kept, so the same run says nothing.
+TEST(Cli, LongGpuRequestsAreExplained) {
+  const std::string quad = writeQuad(test::scratchDir("cli_slow_notice"));
+  const std::vector<std::string> error_run = {DUOLOD_CLI, "error", quad, quad, "--pixels", "128"};
+  auto withNotice = [&](const std::string& setting) {
+    std::vector<std::string> args = {"DUOLOD_SLOW_NOTICE_SECONDS=" + setting};
+    args.insert(args.end(), error_run.begin(), error_run.end());
+    return test::runCommand("env", args);
+  };
+  test::CommandRun noted = withNotice("0.2");
+  EXPECT_EQ(noted.exit_code, 0) << noted.err;
+  EXPECT_TRUE(test::contains(noted.err, "duolod: note: one GPU request has taken")) << noted.err;
+  EXPECT_TRUE(test::contains(noted.err,
+                             "so far: rendering 100 references of 128 px (4x4 supersampled) with "))
+      << noted.err;
+  EXPECT_TRUE(test::contains(noted.err, "Still waiting (Ctrl-C stops")) << noted.err;
+
+  test::CommandRun bad = withNotice("soon");
+  EXPECT_EQ(bad.exit_code, 0) << bad.err;
+  EXPECT_TRUE(test::contains(bad.err, "DUOLOD_SLOW_NOTICE_SECONDS='soon' is not a number"))
+      << bad.err;
+  EXPECT_FALSE(test::contains(bad.err, "duolod: note:")) << bad.err;
+}
+
 // The bound's distances default to generate's (where the object spans --near-pixels 256 and
 // --far-pixels 16), not to 1 and 10 asset units, which gave a bound of 0 at every distance for
 // an asset larger than a few units; --d-near and --near-pixels together are refused as generate

@@ -5,14 +5,17 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <mutex>
 
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/shader.hpp"
 #include "mesh_test_meshes.hpp"
+#include "render/slow_requests.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -1168,6 +1171,109 @@ TEST(RendererDrawingThreads, ProgramsAndAssetsReleasedBetweenCallsAreNotUsedAgai
     renderer.releaseProgram(programs->region);
     renderer.releaseAsset(*id);
   }
+}
+
+// A request still running at the threshold is reported once, then again each time its time
+// doubles, never after it ended, and not at all with the sink off. The clock is the test's own:
+// reportSlowRequests is given the time to report at (the monitor thread's real-time polls find
+// nothing due within the test's few milliseconds).
+TEST(SlowRequests, ReportedAtTheThresholdThenEachTimeItDoubles) {
+  using std::chrono::seconds;
+  std::mutex mutex;
+  std::vector<render::SlowRequest> reports;
+  render::setSlowRequestSink(30, [&](const render::SlowRequest& request) {
+    std::lock_guard lock(mutex);
+    reports.push_back(request);
+  });
+  auto reportCount = [&] {
+    std::lock_guard lock(mutex);
+    return reports.size();
+  };
+  std::chrono::steady_clock::time_point began;
+  {
+    const render::internal::SlowRequestWatch watch(true, "rendering %d images of %d px", 7, 64);
+    began = std::chrono::steady_clock::now();
+    render::internal::reportSlowRequests(began + seconds(29));
+    EXPECT_EQ(reportCount(), 0u);
+    render::internal::reportSlowRequests(began + seconds(31));
+    ASSERT_EQ(reportCount(), 1u);
+    EXPECT_EQ(reports[0].what, "rendering 7 images of 64 px");
+    EXPECT_TRUE(reports[0].first_draw);
+    EXPECT_EQ(reports[0].report, 0);
+    EXPECT_GE(reports[0].seconds, 31.0);
+    EXPECT_LT(reports[0].seconds, 32.0);
+    // Not again until 60 s, then 120 s.
+    render::internal::reportSlowRequests(began + seconds(35));
+    render::internal::reportSlowRequests(began + seconds(59));
+    EXPECT_EQ(reportCount(), 1u);
+    render::internal::reportSlowRequests(began + seconds(61));
+    ASSERT_EQ(reportCount(), 2u);
+    EXPECT_EQ(reports[1].report, 1);
+    render::internal::reportSlowRequests(began + seconds(100));
+    EXPECT_EQ(reportCount(), 2u);
+    render::internal::reportSlowRequests(began + seconds(121));
+    ASSERT_EQ(reportCount(), 3u);
+    EXPECT_EQ(reports[2].report, 2);
+    // A second request beside it is its own.
+    const render::internal::SlowRequestWatch other(false, "timing");
+    render::internal::reportSlowRequests(std::chrono::steady_clock::now() + seconds(31));
+    ASSERT_EQ(reportCount(), 4u);
+    EXPECT_EQ(reports[3].what, "timing");
+    EXPECT_FALSE(reports[3].first_draw);
+  }
+  // Ended: nothing more.
+  render::internal::reportSlowRequests(began + seconds(1000));
+  EXPECT_EQ(reportCount(), 4u);
+  // Off: a request is not even marked.
+  render::setSlowRequestSink(30, {});
+  {
+    const render::internal::SlowRequestWatch watch(true, "unseen");
+    render::internal::reportSlowRequests(std::chrono::steady_clock::now() + seconds(1000));
+  }
+  EXPECT_EQ(reportCount(), 4u);
+}
+
+// The renderer marks its requests with what they draw: a render slower than the threshold (here
+// 1 µs, reported at the monitor's next poll) is reported with its program's name, as a first
+// draw the first time the program draws and not the next.
+TEST_F(RendererTest, SlowRendersAreReportedWithTheirProgram) {
+  std::mutex mutex;
+  std::vector<render::SlowRequest> reports;
+  render::setSlowRequestSink(1e-6, [&](const render::SlowRequest& request) {
+    std::lock_guard lock(mutex);
+    reports.push_back(request);
+  });
+  auto asset = renderer_->uploadAsset(squareAsset({0.25f, 0.5f, 0.75f, 1}));
+  ASSERT_TRUE(asset) << asset.error().message;
+  auto source = render::loadShaderPair(test::sourcePath("shaders/constant"));
+  ASSERT_TRUE(source) << source.error().message;
+  source->vertex_name = "slow_test.vert";
+  source->fragment_name = "slow_test.frag";
+  auto program = renderer_->compileProgram(*source);
+  ASSERT_TRUE(program) << program.error().message;
+  // Each render lasts until the monitor has reported it: many samples, drawn again and again.
+  const std::vector<render::Sample> samples(200, frontSample(4.0f));
+  auto renderUntilReported = [&](size_t already) {
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      auto batch = renderer_->render(*asset, *program, samples, {.resolution = 256});
+      EXPECT_TRUE(batch) << batch.error().message;
+      std::lock_guard lock(mutex);
+      if (reports.size() > already) return;
+    }
+  };
+  renderUntilReported(0);
+  render::setSlowRequestSink(30, {});
+  std::lock_guard lock(mutex);
+  ASSERT_FALSE(reports.empty()) << "no render was reported in 200 attempts";
+  const render::SlowRequest first = reports.front();
+  EXPECT_EQ(first.what, "rendering 200 images of 256 px with slow_test.vert + slow_test.frag");
+  // Only the first attempt holds the program's first draw: the reports that say so come first.
+  const auto firstDraws = std::partition_point(
+      reports.begin(), reports.end(), [](const render::SlowRequest& r) { return r.first_draw; });
+  EXPECT_TRUE(std::none_of(firstDraws, reports.end(),
+                           [](const render::SlowRequest& r) { return r.first_draw; }));
+  renderer_->releaseProgram(*program);
+  renderer_->releaseAsset(*asset);
 }
 
 }  // namespace

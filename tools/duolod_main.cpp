@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -82,6 +83,42 @@ std::string withFlagHints(std::string message) {
 int fail(const std::string& message) {
   std::fprintf(stderr, "duolod: error: %s\n", withFlagHints(message).c_str());
   return 1;
+}
+
+// A wait on the GPU that is not explained looks like a hang: a note when one request has taken
+// DUOLOD_SLOW_NOTICE_SECONDS (default 30; 0 or "off": never), and again each time it doubles
+// (render.hpp, SlowRequest).
+void reportSlowGpuRequests() {
+  double first_after = 30;
+  if (const char* text = std::getenv("DUOLOD_SLOW_NOTICE_SECONDS")) {
+    char* end = nullptr;
+    const double seconds = std::strtod(text, &end);
+    if (std::string_view(text) == "off" || (end != text && *end == '\0' && seconds == 0)) return;
+    if (end == text || *end != '\0' || !(seconds > 0) || !std::isfinite(seconds))
+      std::fprintf(stderr,
+                   "duolod: warning: DUOLOD_SLOW_NOTICE_SECONDS='%s' is not a number of seconds "
+                   "(or 0, or off); using 30\n",
+                   text);
+    else
+      first_after = seconds;
+  }
+  render::setSlowRequestSink(first_after, [](const render::SlowRequest& request) {
+    if (request.report > 0) {
+      std::fprintf(stderr, "duolod: note: still waiting on the GPU after %.0f s: %s\n",
+                   request.seconds, request.what.c_str());
+      return;
+    }
+    std::fprintf(
+        stderr,
+        "duolod: note: one GPU request has taken %.0f s so far: %s. %s Still waiting "
+        "(Ctrl-C stops, removing unfinished output).\n",
+        request.seconds, request.what.c_str(),
+        request.first_draw
+            ? "It holds the program's first draw, which includes the driver's compile of it: on "
+              "llvmpipe a fragment stage with many loops whose trip counts are not constants "
+              "compiles slowly (16 such loops: over a minute; each more: 2-3x as long)."
+            : "Large footprints, supersampling and many samples take long on a CPU rasterizer.");
+  });
 }
 
 std::string lowerExtension(const std::string& path) {
@@ -1717,6 +1754,7 @@ int main(int argc, char** argv) {
   // A request larger than memory ends as an error, not an abort: the commands' unfinished
   // outputs are removed as the stack unwinds (`error --pixels 4095` asked for 100 float images
   // of 4095² pixels, 27 GB, and ended in "terminate called ... std::bad_alloc", exit 134).
+  reportSlowGpuRequests();
   try {
     if (*info) return runInfo(info_path);
     if (*render_cmd)

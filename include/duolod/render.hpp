@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <span>
@@ -389,5 +390,22 @@ class Renderer {
   Renderer();
   std::unique_ptr<State> state_;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Requests that keep the device busy for long. On llvmpipe the first draw with a program includes
+// LLVM's compile of it, and for some shaders that takes minutes: a fragment stage with sequential
+// loops whose trip counts are not constants compiled in 0.2 s with 8 such loops, 1.8 s with 12,
+// 8 s with 14 and 76 s with 16 (LLVM's scalar evolution; bench/RESULTS.md, session 38). A process
+// that says why it waits is better than one that looks hung, so a sink set here is told about
+// every renderer request still running `first_after_seconds` after it began, and again each time
+// its time doubles. The sink runs on a monitor thread of its own.
+struct SlowRequest {
+  std::string what;         // e.g. "rendering 100 images of 64 px with constant.vert + loops.frag"
+  double seconds = 0;       // since the request began
+  bool first_draw = false;  // the request holds the program's first draw of its kind (a compile)
+  int report = 0;           // 0 for the first report of this request, then 1, 2, ...
+};
+// An empty sink (the default) turns the reports off. first_after_seconds must be > 0.
+void setSlowRequestSink(double first_after_seconds, std::function<void(const SlowRequest&)> sink);
 
 }  // namespace duolod::render

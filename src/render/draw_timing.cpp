@@ -39,8 +39,16 @@ core::Result<std::vector<DrawTime>> Renderer::measureDrawTimes(AssetId asset_id,
 
   // The GL programs to time, then 0: the clear-only baseline.
   std::vector<GLuint> entries;
-  for (ProgramId program : programs) entries.push_back(s.programs[program]);
+  bool first_draw = false;
+  for (ProgramId program : programs) {
+    entries.push_back(s.programs[program]);
+    first_draw = s.firstDraw(s.programs[program], State::kTimingRequest) || first_draw;
+  }
   entries.push_back(0);
+  const SlowRequestWatch watch(first_draw, "timing %zu program%s over %d image%s of %d px (%s%s)",
+                               programs.size(), programs.size() == 1 ? "" : "s", count,
+                               count == 1 ? "" : "s", tile, s.programName(entries.front()),
+                               programs.size() > 1 ? ", ..." : "");
 
   // One pass: every chunk of the domain cleared and drawn once.
   auto drawPass = [&](GLuint program) {

@@ -570,6 +570,11 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   const RegionRequest request{&*s.assets[asset_id], s.programs[program_id],       samples,
                               lights_per_view,      view_resolution,             tile_size};
   const std::vector<uint8_t> columns = columnsOf(tileRange(0, tile_count));
+  const internal::SlowRequestWatch watch(s.firstDraw(request.program, State::kRegionRequest),
+                                         "rendering %d region%s of %d px, %d light%s each, with %s",
+                                         tile_count, tile_count == 1 ? "" : "s", tile_size,
+                                         lights_per_view, lights_per_view == 1 ? "" : "s",
+                                         s.programName(request.program));
   // With a second drawing context (State::drawing_threads), the views go in two runs of about
   // equal work, one drawn here and one on the helper's thread at the same time, with its own copy
   // of the region program. A tile's pixels depend on its own triangles, view, light and column

@@ -526,6 +526,7 @@ core::Result<Renderer::ProgramId> Renderer::compileProgram(const GlslSource& sou
   auto program = buildProgram(source);
   if (!program) return program.error();
   state_->programs.push_back(*program);
+  state_->program_names[*program] = source.vertex_name + " + " + source.fragment_name;
   return static_cast<ProgramId>(state_->programs.size() - 1);
 }
 
@@ -628,6 +629,7 @@ void Renderer::releaseProgram(ProgramId program) {
     // A region program's copy in the helper's context goes with it, deleted there.
     const GLuint id = s.programs[program];
     s.declared_uniforms.erase(id);
+    s.forgetProgram(id);
     if (s.region_programs.erase(id) > 0 && s.region_helper) {
       s.region_helper->run([id](internal::RegionHelper::Context& helper) {
         if (auto copy = helper.programs.find(id); copy != helper.programs.end()) {
@@ -775,6 +777,10 @@ core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_i
   GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
   ChunkDrawer drawer{s, asset, s.programs[program_id]};
   drawer.uploadFrames(samples, stride);
+  const GLuint program = s.programs[program_id];
+  const internal::SlowRequestWatch watch(s.firstDraw(program, State::kRenderRequest),
+                                         "rendering %d image%s of %d px with %s", count,
+                                         count == 1 ? "" : "s", tile, s.programName(program));
 
   ImageBatch8 batch;
   batch.width = batch.height = tile;
@@ -836,6 +842,11 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
   GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
   ChunkDrawer drawer{s, asset, s.programs[program_id]};
   drawer.uploadFrames(samples, stride);
+  const GLuint program = s.programs[program_id];
+  const internal::SlowRequestWatch watch(
+      s.firstDraw(program, State::kReferenceRequest),
+      "rendering %d reference%s of %d px (%dx%d supersampled) with %s", count,
+      count == 1 ? "" : "s", tile, k, k, s.programName(program));
 
   ImageBatchF batch;
   batch.width = batch.height = tile;

@@ -2,6 +2,7 @@
 // region_renderer.cpp: local re-rendering). Not part of the public API.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <cstring>
 #include <exception>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <thread>
@@ -18,6 +20,7 @@
 
 #include "duolod/render.hpp"
 #include "render/gl_context.hpp"
+#include "render/slow_requests.hpp"
 
 namespace duolod::render {
 namespace internal {
@@ -235,6 +238,11 @@ struct Renderer::State {
   internal::WorkQueries work_queries;
   GLuint parameter_ubo = 0;  // setParameterBlock(); bound with every draw's inputs
   int parameter_binding = -1;
+  // For the slow-request reports (SlowRequestWatch): programs' names ("a.vert + b.frag"), and
+  // the (program, kind of request) pairs drawn before: llvmpipe compiles a program for each kind
+  // of target at its first draw there.
+  std::map<GLuint, std::string> program_names;
+  std::set<std::pair<GLuint, int>> drawn;
 
   ~State() {
     // First the helper's thread: its context shares these objects.
@@ -265,6 +273,21 @@ struct Renderer::State {
       work_queries.destroy();
       if (parameter_ubo) glDeleteBuffers(1, &parameter_ubo);
     }
+  }
+
+  // Kinds of request, for `drawn`.
+  enum RequestKind { kRenderRequest, kReferenceRequest, kRegionRequest, kTimingRequest };
+  // Whether a request of `kind` holds `program`'s first draw of that kind (and marks it drawn).
+  bool firstDraw(GLuint program, RequestKind kind) { return drawn.insert({program, kind}).second; }
+  const char* programName(GLuint program) const {
+    auto it = program_names.find(program);
+    return it == program_names.end() ? "a SPIR-V program" : it->second.c_str();
+  }
+  // A released program's name may come back for another program.
+  void forgetProgram(GLuint program) {
+    program_names.erase(program);
+    for (auto it = drawn.lower_bound({program, 0}); it != drawn.end() && it->first == program;)
+      it = drawn.erase(it);
   }
 
   static void release(internal::GpuAsset& asset) {
