@@ -1,7 +1,6 @@
 // Image-driven simplification (the paper's mode, §4.2) against quadric simplification at the same
 // triangle count, at one distance: time, and the image error of eq. (6) of both results against
 // the same supersampled reference over the 20 views × 5 lights.
-#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -12,6 +11,7 @@
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 
@@ -26,22 +26,19 @@ std::string defaultMesh() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod image-driven vs quadric simplification at one distance"};
+  duolod::bench::Options app{"duolod image-driven vs quadric simplification at one distance"};
   std::string mesh_path = defaultMesh(), shader_name = "noise_phong";
   int pixels = 128;
   double ratio = 0.25;
   int supersample = 4;
   size_t refine_batch = 32;
-  app.add_option("--refine-batch", refine_batch, "candidates priced per rendering batch")
-      ->capture_default_str();
-  app.add_option("--mesh", mesh_path, "mesh file (scripts/fetch-bench-data.sh fetches the default)")
-      ->capture_default_str();
-  app.add_option("--shader", shader_name)->capture_default_str();
-  app.add_option("--pixels", pixels, "footprint s_d: the object spans this many pixels")
-      ->capture_default_str();
-  app.add_option("--ratio", ratio, "target fraction of the triangles")->capture_default_str();
-  app.add_option("--supersample", supersample)->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.add("--refine-batch", refine_batch, "candidates priced per rendering batch");
+  app.add("--mesh", mesh_path, "mesh file (scripts/fetch-bench-data.sh fetches the default)");
+  app.add("--shader", shader_name);
+  app.add("--pixels", pixels, "footprint s_d: the object spans this many pixels");
+  app.add("--ratio", ratio, "target fraction of the triangles");
+  app.add("--supersample", supersample);
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   if (!std::filesystem::exists(mesh_path)) {
     std::fprintf(stderr, "%s not found: run scripts/fetch-bench-data.sh first\n", mesh_path.c_str());

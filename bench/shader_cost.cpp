@@ -12,7 +12,6 @@
 // compiled with glslang and cleaned up by SPIRV-Tools' performance passes (the form the search
 // compiles and times). Times: Renderer::measureDrawTimes (wall clock around glFinish, median of
 // interleaved repeats minus a clear-only pass; never GL_TIME_ELAPSED, DESIGN.md "Measuring cost").
-#include <CLI/CLI.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -26,6 +25,7 @@
 #include "shader/cost_model.hpp"
 #include "shader/instrument.hpp"
 #include "shader/rules.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 namespace ir = duolod::shader::ir;
@@ -321,30 +321,29 @@ int fail(const std::string& message) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod shader cost model: predicted cost vs measured llvmpipe time"};
+  duolod::bench::Options app{"duolod shader cost model: predicted cost vs measured llvmpipe time"};
   std::vector<int> resolutions = {128, 64};
   int repeats = 7;
   double min_repeat_seconds = 0.04;
   int views = 20;
   std::string only;
-  app.add_option("--resolutions", resolutions, "footprints s_d in pixels (one configuration each)")
-      ->capture_default_str();
-  app.add_option("--repeats", repeats, "timed repeats per program (median)")->capture_default_str();
-  app.add_option("--min-repeat-seconds", min_repeat_seconds)->capture_default_str();
-  app.add_option("--views", views, "views of the dodecahedron domain (centre light each)")
-      ->capture_default_str();
-  app.add_option("--only", only, "run one shader (pbr, noise_phong, blend)");
+  app.add("--resolutions", resolutions, "footprints s_d in pixels (one configuration each)");
+  app.add("--repeats", repeats, "timed repeats per program (median)");
+  app.add("--min-repeat-seconds", min_repeat_seconds);
+  app.add("--views", views, "views of the dodecahedron domain (centre light each)");
+  app.add("--only", only, "run one shader (pbr, noise_phong, blend)");
   std::vector<std::string> per_vertex_values;
-  app.add_option("--per-vertex", per_vertex_values,
-                 "also time variants with these fragment values (by source name) moved per vertex "
-                 "by the per-vertex rule, one each, in every shader that has them");
+  app.add("--per-vertex", per_vertex_values,
+          "also time variants with these fragment values (by source name) moved per vertex "
+          "by the per-vertex rule, one each, in every shader that has them");
   std::vector<double> try_scales = {1.0};
-  app.add_option("--vertex-op-scales", try_scales, "also rank with the stored weights at these "
-                 "vertex-op scales")->capture_default_str();
+  app.add("--vertex-op-scales", try_scales,
+          "also rank with the stored weights at these "
+          "vertex-op scales");
   std::string noise_asset;
-  app.add_option("--noise-phong-asset", noise_asset,
-                 "mesh for the noise_phong variants (default: Spot), e.g. the Dragon of the GP bench");
-  CLI11_PARSE(app, argc, argv);
+  app.add("--noise-phong-asset", noise_asset,
+          "mesh for the noise_phong variants (default: Spot), e.g. the Dragon of the GP bench");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   const std::string assets = DUOLOD_ASSET_DIR;
   std::vector<ShaderCase> cases{

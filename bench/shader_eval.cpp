@@ -5,7 +5,6 @@
 // and each variant's measured draw time and fragment work at the footprint.
 // Variants for now: textual GLSL edits of noise_phong (octaves, bump, veins, shininess), the
 // constant shader, pbr, and colours moved to a uniform; the SPIR-V rules will replace them.
-#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -15,6 +14,7 @@
 #include "duolod/io.hpp"
 #include "duolod/shader.hpp"
 #include "shader/evaluate.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 
@@ -106,22 +106,20 @@ std::string defaultMesh() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod shader-variant evaluation throughput, prediction quality and draw cost"};
+  duolod::bench::Options app{
+      "duolod shader-variant evaluation throughput, prediction quality and draw cost"};
   std::string mesh_path = defaultMesh();
   int pixels = 128, repeats = 5;
-  app.add_option("--mesh", mesh_path, "mesh (scripts/fetch-bench-data.sh fetches the default)")
-      ->capture_default_str();
-  app.add_option("--pixels", pixels, "footprint s_d in pixels")->capture_default_str();
-  app.add_option("--repeats", repeats, "draw-time repeats (median); 0 = no draw timing")
-      ->capture_default_str();
+  app.add("--mesh", mesh_path, "mesh (scripts/fetch-bench-data.sh fetches the default)");
+  app.add("--pixels", pixels, "footprint s_d in pixels");
+  app.add("--repeats", repeats, "draw-time repeats (median); 0 = no draw timing");
   shader::EvaluationConfig config;
-  app.add_option("--predicted-views", config.predicted_views)->capture_default_str();
-  app.add_option("--predicted-lights", config.predicted_lights)->capture_default_str();
-  app.add_option("--predicted-scale", config.predicted_resolution_scale,
-                 "predicted resolution / footprint")->capture_default_str();
-  app.add_option("--predicted-min", config.predicted_min_resolution,
-                 "predicted resolution floor (px)")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.add("--predicted-views", config.predicted_views);
+  app.add("--predicted-lights", config.predicted_lights);
+  app.add("--predicted-scale", config.predicted_resolution_scale,
+          "predicted resolution / footprint");
+  app.add("--predicted-min", config.predicted_min_resolution, "predicted resolution floor (px)");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
   if (!std::filesystem::exists(mesh_path))
     return std::fprintf(stderr, "%s not found: run scripts/fetch-bench-data.sh\n",
                         mesh_path.c_str()), 1;

@@ -5,7 +5,6 @@
 // least 2x cheaper than the original by MEASURED llvmpipe time. Prints the front (rules, predicted
 // cost, measured time ratio, rendered error), the search time, and how many variants were
 // generated, predicted, rendered and compiled.
-#include <CLI/CLI.hpp>
 
 #include <array>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "duolod/io.hpp"
 #include "duolod/render.hpp"
 #include "shader/lod_search.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 
@@ -72,7 +72,8 @@ int sweepFootprints(const core::Asset& asset, const render::GlslSource& source,
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod shader search benchmark: GP Pareto front of noise_phong at a far distance"};
+  duolod::bench::Options app{
+      "duolod shader search benchmark: GP Pareto front of noise_phong at a far distance"};
   std::string asset_path = std::string(DUOLOD_ASSET_DIR) + "/obj/spot/spot.obj";
   std::string shader = "noise_phong";
   std::string method = "gp";
@@ -82,32 +83,29 @@ int main(int argc, char** argv) {
   double e_max = 0.1;
   std::vector<int> sweep;
   int repeats = 7;
-  app.add_option("--asset", asset_path)->capture_default_str();
-  app.add_option("--shader", shader)->capture_default_str();
-  app.add_option("--search", method, "gp or greedy")->capture_default_str();
-  app.add_option("--footprint", footprint_px, "pixels across the object: the far distance")
-      ->capture_default_str();
-  app.add_option("--generations", generations)->capture_default_str();
-  app.add_option("--population", population)->capture_default_str();
-  app.add_option("--seed", seed)->capture_default_str();
-  app.add_option("--e-max", e_max, "per-pixel error bound at d_far (metric::BoundConfig)")
-      ->capture_default_str();
-  app.add_option("--sweep", sweep,
-                 "instead of a search: time the shader against the constant shader at these "
-                 "footprints (what any variant can gain there)");
-  app.add_option("--repeats", repeats, "timing repeats (median)")->capture_default_str();
+  app.add("--asset", asset_path);
+  app.add("--shader", shader);
+  app.add("--search", method, "gp or greedy");
+  app.add("--footprint", footprint_px, "pixels across the object: the far distance");
+  app.add("--generations", generations);
+  app.add("--population", population);
+  app.add("--seed", seed);
+  app.add("--e-max", e_max, "per-pixel error bound at d_far (metric::BoundConfig)");
+  app.add("--sweep", sweep,
+          "instead of a search: time the shader against the constant shader at these "
+          "footprints (what any variant can gain there)");
+  app.add("--repeats", repeats, "timing repeats (median)");
   bool uniform_sites = false;
-  app.add_flag("--uniform-sites", uniform_sites,
-               "GP mutations draw sites uniformly (default: a rule kind first, then a site)");
+  app.flag("--uniform-sites", uniform_sites,
+           "GP mutations draw sites uniformly (default: a rule kind first, then a site)");
   bool no_seeds = false, no_parameters = false;
-  app.add_flag("--no-seeds", no_seeds,
-               "GP starts from the original's one-site mutants only (no aggressive seed genomes)");
-  app.add_flag("--no-move-to-parameter", no_parameters,
-               "do not offer moving to parameter (no instrumented averaging renders)");
+  app.flag("--no-seeds", no_seeds,
+           "GP starts from the original's one-site mutants only (no aggressive seed genomes)");
+  app.flag("--no-move-to-parameter", no_parameters,
+           "do not offer moving to parameter (no instrumented averaging renders)");
   double burst = 0.1;
-  app.add_option("--burst", burst, "probability that an append mutation adds a burst of sites")
-      ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.add("--burst", burst, "probability that an append mutation adds a burst of sites");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   auto asset = io::loadAsset(asset_path);
   if (!asset) return std::fprintf(stderr, "%s\n", asset.error().message.c_str()), 1;

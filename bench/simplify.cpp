@@ -21,7 +21,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -38,6 +37,7 @@
 #include "bench_support.hpp"
 #include "duolod/io.hpp"
 #include "duolod/mesh.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 using bench::median;
@@ -209,7 +209,8 @@ core::Mesh shuffledMesh(const core::Mesh& mesh, uint64_t seed) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod simplification benchmark: quadric vs meshopt_simplify 0.18 and gltfpack"};
+  duolod::bench::Options app{
+      "duolod simplification benchmark: quadric vs meshopt_simplify 0.18 and gltfpack"};
   std::vector<std::string> meshes;
   std::string data_dir;
   if (const char* env = std::getenv("DUOLOD_DATA_DIR")) data_dir = env;
@@ -224,36 +225,29 @@ int main(int argc, char** argv) {
   std::string gltfpack = "/usr/bin/gltfpack";
   int orders = 0;
   bool digest = false;
-  app.add_option("meshes", meshes,
-                 "mesh files (.off .obj .ply .gltf .glb); default: CGAL + shared");
-  app.add_option("--data-dir", data_dir, "folder given to scripts/fetch-bench-data.sh")
-      ->capture_default_str();
-  app.add_option("--ratios", ratios, "target triangle ratios")->capture_default_str();
-  app.add_option("--repeats", repeats, "timed repeats per cell (median)")->capture_default_str();
-  app.add_option("--samples", samples, "surface samples per mesh and direction (0: no distances)")
-      ->capture_default_str();
-  app.add_flag("--endpoint", endpoint, "duolod with Placement::kEndpoint (like meshopt 0.18)");
-  app.add_option("--rows", rows,
-                 "for files with attributes: 'both' rows, only the 'default' (attribute-aware) "
-                 "one, or only the 'positions' one (for profiling one configuration)")
-      ->check(CLI::IsMember({"both", "default", "positions"}))
-      ->capture_default_str();
-  app.add_flag("!--no-progressive", progressive,
-               "skip the progressive-record table (for profiling the simplifiers alone)");
-  app.add_option("--attribute-weight", attribute_weight, "duolod SimplifyOptions::attribute_weight")
-      ->capture_default_str();
-  app.add_option("--gltfpack", gltfpack, "gltfpack binary (\"\" to skip it)")
-      ->capture_default_str();
-  app.add_option("--orders", orders,
-                 "also run each cell on K reorderings of the input's vertices and triangles "
-                 "(same surface, seeds 1..K) and print the error ratios' median over the K + 1 "
-                 "orders")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_flag("--digest", digest,
-               "print a hash of duolod's output mesh per cell to stderr (to check that a speed "
-               "change keeps the output bit for bit)");
-  CLI11_PARSE(app, argc, argv);
+  app.add("meshes", meshes, "mesh files (.off .obj .ply .gltf .glb); default: CGAL + shared");
+  app.add("--data-dir", data_dir, "folder given to scripts/fetch-bench-data.sh");
+  app.add("--ratios", ratios, "target triangle ratios");
+  app.add("--repeats", repeats, "timed repeats per cell (median)");
+  app.add("--samples", samples, "surface samples per mesh and direction (0: no distances)");
+  app.flag("--endpoint", endpoint, "duolod with Placement::kEndpoint (like meshopt 0.18)");
+  app.add("--rows", rows,
+          "for files with attributes: 'both' rows, only the 'default' (attribute-aware) "
+          "one, or only the 'positions' one (for profiling one configuration)")
+      .choices({"both", "default", "positions"});
+  app.flag("!--no-progressive", progressive,
+           "skip the progressive-record table (for profiling the simplifiers alone)");
+  app.add("--attribute-weight", attribute_weight, "duolod SimplifyOptions::attribute_weight");
+  app.add("--gltfpack", gltfpack, "gltfpack binary (\"\" to skip it)");
+  app.add("--orders", orders,
+          "also run each cell on K reorderings of the input's vertices and triangles "
+          "(same surface, seeds 1..K) and print the error ratios' median over the K + 1 "
+          "orders")
+      .nonNegative();
+  app.flag("--digest", digest,
+           "print a hash of duolod's output mesh per cell to stderr (to check that a speed "
+           "change keeps the output bit for bit)");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   if (!gltfpack.empty() && access(gltfpack.c_str(), X_OK) != 0) {
     std::fprintf(stderr, "%s: not found or not executable; gltfpack columns left empty\n",

@@ -3,29 +3,28 @@
 // For a smooth shader the error is edge aliasing only and vanishes with the footprint; for a
 // high-frequency shader (procedural noise) the per-pixel error grows as more of the pattern falls
 // inside each pixel — the reason the paper measures against a supersampled reference.
-#include <CLI/CLI.hpp>
 
 #include <cstdio>
 
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod supersampling benchmark: 1x1 vs kxk error against distance"};
+  duolod::bench::Options app{"duolod supersampling benchmark: 1x1 vs kxk error against distance"};
   std::string asset_path = std::string(DUOLOD_ASSET_DIR) + "/obj/spot/spot.obj";
   std::vector<std::string> shaders = {"constant", "pbr", "noise_phong"};
   std::vector<int> footprints = {256, 128, 64, 32, 16};
   int supersample = 4;
   render::Display display;
-  app.add_option("--asset", asset_path)->capture_default_str();
-  app.add_option("--shaders", shaders)->capture_default_str();
-  app.add_option("--footprints", footprints, "s_d values (pixels across the bounding sphere)")
-      ->capture_default_str();
-  app.add_option("--supersample", supersample)->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.add("--asset", asset_path);
+  app.add("--shaders", shaders);
+  app.add("--footprints", footprints, "s_d values (pixels across the bounding sphere)");
+  app.add("--supersample", supersample);
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   auto asset = io::loadAsset(asset_path);
   if (!asset) return std::fprintf(stderr, "%s\n", asset.error().message.c_str()), 1;

@@ -2,7 +2,6 @@
 // second the renderer sustains at a footprint s_d, for plain renders and for 4×4 supersampled
 // references. Wall clock around the whole call (which ends in a blocking readback, so the GPU has
 // finished), median of repeats. This number bounds every optimizer later on.
-#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +12,7 @@
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 using bench::median;
@@ -24,17 +24,18 @@ namespace {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod throughput benchmark: renders and error evaluations per second"};
+  duolod::bench::Options app{
+      "duolod throughput benchmark: renders and error evaluations per second"};
   std::string asset_path = std::string(DUOLOD_ASSET_DIR) + "/gltf/WaterBottle/WaterBottle.gltf";
   std::string shader_name = "pbr";
   std::vector<int> footprints = {64, 128, 256};
   int repeats = 5, supersample = 4;
-  app.add_option("--asset", asset_path, "asset to render")->capture_default_str();
-  app.add_option("--shader", shader_name, "duolod shader name")->capture_default_str();
-  app.add_option("--footprints", footprints, "s_d values in pixels")->capture_default_str();
-  app.add_option("--repeats", repeats, "timed repeats per cell (median)")->capture_default_str();
-  app.add_option("--supersample", supersample, "reference k")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.add("--asset", asset_path, "asset to render");
+  app.add("--shader", shader_name, "duolod shader name");
+  app.add("--footprints", footprints, "s_d values in pixels");
+  app.add("--repeats", repeats, "timed repeats per cell (median)");
+  app.add("--supersample", supersample, "reference k");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   auto asset = io::loadAsset(asset_path);
   if (!asset) return std::fprintf(stderr, "%s\n", asset.error().message.c_str()), 1;

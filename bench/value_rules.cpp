@@ -5,7 +5,6 @@
 // against the original rendered the same way (1×1, so only the rule's change is measured), over
 // the paper's 20 views × 5 lights. Moving to parameter also reports the averaging time (one
 // instrumented compile + render of the domain per component).
-#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 
@@ -15,6 +14,7 @@
 #include "duolod/shader.hpp"
 #include "shader/rules_internal.hpp"
 #include "shader/value_average.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 using shader::RuleSite;
@@ -36,20 +36,20 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod value-rule benchmark: per-vertex and moving to parameter on a real asset"};
+  duolod::bench::Options app{
+      "duolod value-rule benchmark: per-vertex and moving to parameter on a real asset"};
   std::string asset_path = std::string(DUOLOD_ASSET_DIR) + "/obj/spot/spot.obj";
   std::string shader_name = "noise_phong";
   std::vector<std::string> values = {"q",        "turbulence", "albedo",   "normal",   "viewDir",
                                      "lightDir", "diffuse",    "specular", "radiance", "outColor"};
   int resolution = 64;
   float distance_radii = 3;
-  app.add_option("--asset", asset_path)->capture_default_str();
-  app.add_option("--shader", shader_name)->capture_default_str();
-  app.add_option("--values", values, "GLSL names of the values to move")->capture_default_str();
-  app.add_option("--resolution", resolution)->capture_default_str();
-  app.add_option("--distance", distance_radii, "camera distance in bounding radii")
-      ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.add("--asset", asset_path);
+  app.add("--shader", shader_name);
+  app.add("--values", values, "GLSL names of the values to move");
+  app.add("--resolution", resolution);
+  app.add("--distance", distance_radii, "camera distance in bounding radii");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   auto asset = io::loadAsset(asset_path);
   if (!asset) return std::fprintf(stderr, "%s\n", asset.error().message.c_str()), 1;

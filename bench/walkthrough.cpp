@@ -17,7 +17,8 @@
 // default, `--optimizer interleaved`); several --object flags make a mixed scene. --quick (few
 // objects, small display, few frames) generates Spot's four folders itself when no --object is
 // given and checks only deterministic facts: it is the ctest test walkthrough_quick.
-#include <CLI/CLI.hpp>
+
+#include "runtime/walkthrough.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,7 +32,7 @@
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
 #include "duolod/render.hpp"
-#include "runtime/walkthrough.hpp"
+#include "support/options.hpp"
 
 using namespace duolod;
 namespace fs = std::filesystem;
@@ -232,7 +233,7 @@ struct FrameRecord {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"duolod walk-through benchmark (Liang et al. §7.2.2, Table 2)"};
+  duolod::bench::Options app{"duolod walk-through benchmark (Liang et al. §7.2.2, Table 2)"};
   std::vector<std::string> object_texts;
   std::string out_dir = "out/walkthrough", scene_name;
   runtime::WalkSceneOptions scene_options;
@@ -241,43 +242,36 @@ int main(int argc, char** argv) {
   float fov_y_deg = 45;
   bool quick = false;
   std::vector<int> dump_frames;
-  app.add_option("--object", object_texts,
-                 "FOLDER_PREFIX:SHADER[:ASSET]: reads PREFIX-mesh, -shader, -sep, -int "
-                 "(repeat for a mixed scene)");
-  app.add_option("--name", scene_name, "scene name in the table (default: the prefixes)");
-  app.add_option("--out", out_dir, "folder for walkthrough.md, frames.csv, strip.png")
-      ->capture_default_str();
-  app.add_option("--objects", scene_options.objects)->capture_default_str();
-  app.add_option("--frames", scene_options.frames, "camera poses on the path")
-      ->capture_default_str();
-  app.add_option("--seed", scene_options.seed)->capture_default_str();
-  app.add_option("--spacing", scene_options.spacing, "grid step in object radii")
-      ->capture_default_str();
-  app.add_flag("--compound", scene_options.compound,
-               "each grid point holds one model made of every --object, as parts on a ring "
-               "around it, each part with its own LOD (the paper's Table 4, the Trooper); "
-               "--objects counts models");
-  app.add_option("--width", width)->capture_default_str();
-  app.add_option("--height", height)->capture_default_str();
-  app.add_option("--fov", fov_y_deg, "vertical field of view, degrees")->capture_default_str();
-  app.add_option("--repeats", repeats, "timed passes over the path per configuration")
-      ->capture_default_str();
-  app.add_option("--error-every", error_every, "image error at every Nth frame (0: none)")
-      ->capture_default_str();
-  app.add_option("--reference-supersample", reference_supersample,
-                 "the image error's reference: no LOD rendered K×K larger and box-filtered (the "
-                 "anti-aliased f̄ the bound is defined against); 1 = the plain no-LOD frame")
-      ->capture_default_str();
-  app.add_option("--strip-frames", strip_frames)->capture_default_str();
-  app.add_option("--strip-reduce", strip_reduce, "strip images are 1/N of the display")
-      ->capture_default_str();
-  app.add_option("--dump-frames", dump_frames,
-                 "also write these frames of every configuration at full size, as "
-                 "frame-F-C.png (C: 0 no LOD ... 4 interleaved)");
-  app.add_flag("--quick", quick,
-               "36 objects, 320x180, 8 frames, 1 repeat; generates Spot's folders when no "
-               "--object; exits 1 when a deterministic check fails");
-  CLI11_PARSE(app, argc, argv);
+  app.add("--object", object_texts,
+          "FOLDER_PREFIX:SHADER[:ASSET]: reads PREFIX-mesh, -shader, -sep, -int "
+          "(repeat for a mixed scene)");
+  app.add("--name", scene_name, "scene name in the table (default: the prefixes)");
+  app.add("--out", out_dir, "folder for walkthrough.md, frames.csv, strip.png");
+  app.add("--objects", scene_options.objects);
+  app.add("--frames", scene_options.frames, "camera poses on the path");
+  app.add("--seed", scene_options.seed);
+  app.add("--spacing", scene_options.spacing, "grid step in object radii");
+  app.flag("--compound", scene_options.compound,
+           "each grid point holds one model made of every --object, as parts on a ring "
+           "around it, each part with its own LOD (the paper's Table 4, the Trooper); "
+           "--objects counts models");
+  app.add("--width", width);
+  app.add("--height", height);
+  app.add("--fov", fov_y_deg, "vertical field of view, degrees");
+  app.add("--repeats", repeats, "timed passes over the path per configuration");
+  app.add("--error-every", error_every, "image error at every Nth frame (0: none)");
+  app.add("--reference-supersample", reference_supersample,
+          "the image error's reference: no LOD rendered K×K larger and box-filtered (the "
+          "anti-aliased f̄ the bound is defined against); 1 = the plain no-LOD frame");
+  app.add("--strip-frames", strip_frames);
+  app.add("--strip-reduce", strip_reduce, "strip images are 1/N of the display");
+  app.add("--dump-frames", dump_frames,
+          "also write these frames of every configuration at full size, as "
+          "frame-F-C.png (C: 0 no LOD ... 4 interleaved)");
+  app.flag("--quick", quick,
+           "36 objects, 320x180, 8 frames, 1 repeat; generates Spot's folders when no "
+           "--object; exits 1 when a deterministic check fails");
+  if (auto exit_code = app.parse(argc, argv)) return *exit_code;
   if (quick) {
     scene_options.objects = 36;
     scene_options.frames = 8;
