@@ -314,11 +314,11 @@ TEST(Cli, OutOfMemoryIsAnError) {
 }
 
 // A long GPU request is explained on stderr (DUOLOD_SLOW_NOTICE_SECONDS, here 0.2 s: the 100
-// references of 128 px at 4x4 take longer than that), again as the wait doubles; a bad value is
-// warned about and the default (30 s) kept, so the same run says nothing.
+// references of 192 px at 4x4 take longer than that, ~1 s here); a bad value is warned about and
+// the default (30 s) kept, so the same run says nothing.
 TEST(Cli, LongGpuRequestsAreExplained) {
   const std::string quad = writeQuad(test::scratchDir("cli_slow_notice"));
-  const std::vector<std::string> error_run = {DUOLOD_CLI, "error", quad, quad, "--pixels", "128"};
+  const std::vector<std::string> error_run = {DUOLOD_CLI, "error", quad, quad, "--pixels", "192"};
   auto withNotice = [&](const std::string& setting) {
     std::vector<std::string> args = {"DUOLOD_SLOW_NOTICE_SECONDS=" + setting};
     args.insert(args.end(), error_run.begin(), error_run.end());
@@ -328,7 +328,7 @@ TEST(Cli, LongGpuRequestsAreExplained) {
   EXPECT_EQ(noted.exit_code, 0) << noted.err;
   EXPECT_TRUE(test::contains(noted.err, "duolod: note: one GPU request has taken")) << noted.err;
   EXPECT_TRUE(test::contains(noted.err,
-                             "so far: rendering 100 references of 128 px (4x4 supersampled) with "))
+                             "so far: rendering 100 references of 192 px (4x4 supersampled) with "))
       << noted.err;
   EXPECT_TRUE(test::contains(noted.err, "Still waiting (Ctrl-C stops")) << noted.err;
 
