@@ -405,7 +405,8 @@ struct SlowRequest {
   bool first_draw = false;  // the request holds the program's first draw of its kind (a compile)
   int report = 0;           // 0 for the first report of this request, then 1, 2, ...
 };
-// An empty sink (the default) turns the reports off. first_after_seconds must be > 0.
+// An empty sink (the default) turns the reports off. first_after_seconds must be > 0. Once this
+// returns, the sink it replaced is not running and will not run again; a sink must not call it.
 void setSlowRequestSink(double first_after_seconds, std::function<void(const SlowRequest&)> sink);
 
 }  // namespace duolod::render

@@ -32,6 +32,10 @@ struct Slot {
 
 struct Monitor {
   std::atomic<bool> enabled{false};
+  // Held while the sink runs, and to replace it: once setSlowRequestSink returns, the old sink
+  // is not running and never will again (a test's sink refers to its locals). Taken before
+  // `mutex`.
+  std::mutex calling;
   std::mutex mutex;  // guards everything below
   double first_after_seconds = 30;
   std::function<void(const SlowRequest&)> sink;
@@ -49,6 +53,7 @@ Monitor& monitor() {
 
 void setSlowRequestSink(double first_after_seconds, std::function<void(const SlowRequest&)> sink) {
   Monitor& m = monitor();
+  std::lock_guard calling(m.calling);
   std::lock_guard lock(m.mutex);
   m.first_after_seconds = first_after_seconds > 0 ? first_after_seconds : 30;
   m.sink = std::move(sink);
@@ -97,6 +102,7 @@ SlowRequestWatch::~SlowRequestWatch() {
 void reportSlowRequests(std::chrono::steady_clock::time_point now) {
   Monitor& m = monitor();
   if (!m.enabled.load(std::memory_order_relaxed)) return;
+  std::lock_guard calling(m.calling);
   std::vector<SlowRequest> due;
   std::function<void(const SlowRequest&)> sink;
   {
@@ -112,7 +118,7 @@ void reportSlowRequests(std::chrono::steady_clock::time_point now) {
     }
     if (!due.empty()) sink = m.sink;
   }
-  // Outside the lock: the sink may take its time (or mark a request itself).
+  // Outside `mutex`: the sink may take its time, and requests may be marked meanwhile.
   for (const SlowRequest& request : due) sink(request);
 }
 
