@@ -107,6 +107,7 @@ void reportSlowRequests(std::chrono::steady_clock::time_point now) {
   std::function<void(const SlowRequest&)> sink;
   {
     std::lock_guard lock(m.mutex);
+    if (!m.sink) return;  // turned off since the check above
     for (Slot& slot : m.slots) {
       if (!slot.used) continue;
       const double seconds = std::chrono::duration<double>(now - slot.start).count();
