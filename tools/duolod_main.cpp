@@ -1751,10 +1751,10 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  reportSlowGpuRequests();
   // A request larger than memory ends as an error, not an abort: the commands' unfinished
   // outputs are removed as the stack unwinds (`error --pixels 4095` asked for 100 float images
   // of 4095² pixels, 27 GB, and ended in "terminate called ... std::bad_alloc", exit 134).
-  reportSlowGpuRequests();
   try {
     if (*info) return runInfo(info_path);
     if (*render_cmd)

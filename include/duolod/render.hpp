@@ -393,9 +393,10 @@ class Renderer {
 
 // ---------------------------------------------------------------------------------------------
 // Requests that keep the device busy for long. On llvmpipe the first draw with a program includes
-// LLVM's compile of it, and for some shaders that takes minutes: a fragment stage with sequential
-// loops whose trip counts are not constants compiled in 0.2 s with 8 such loops, 1.8 s with 12,
-// 8 s with 14 and 76 s with 16 (LLVM's scalar evolution; bench/RESULTS.md, session 38). A process
+// LLVM's compile of it, and for some shaders that takes minutes: with a fragment stage of
+// sequential loops whose trip counts are not constants, a one-image render run took 0.9 s with 8
+// such loops, 1.8 s with 12, 8 s with 14 and 77 s with 16 (LLVM's scalar evolution;
+// bench/RESULTS.md, session 38). A process
 // that says why it waits is better than one that looks hung, so a sink set here is told about
 // every renderer request still running `first_after_seconds` after it began, and again each time
 // its time doubles. The sink runs on a monitor thread of its own.

@@ -46,8 +46,8 @@ core::Result<std::vector<DrawTime>> Renderer::measureDrawTimes(AssetId asset_id,
   }
   entries.push_back(0);
   const SlowRequestWatch watch(first_draw, "timing %zu program%s over %d image%s of %d px (%s%s)",
-                               programs.size(), programs.size() == 1 ? "" : "s", count,
-                               count == 1 ? "" : "s", tile, s.programName(entries.front()),
+                               programs.size(), pluralS(long(programs.size())), count,
+                               pluralS(count), tile, s.programName(entries.front()),
                                programs.size() > 1 ? ", ..." : "");
 
   // One pass: every chunk of the domain cleared and drawn once.

@@ -572,8 +572,8 @@ core::Result<ImageBatch8> Renderer::renderRegions(AssetId asset_id, ProgramId pr
   const std::vector<uint8_t> columns = columnsOf(tileRange(0, tile_count));
   const internal::SlowRequestWatch watch(s.firstDraw(request.program, State::kRegionRequest),
                                          "rendering %d region%s of %d px, %d light%s each, with %s",
-                                         tile_count, tile_count == 1 ? "" : "s", tile_size,
-                                         lights_per_view, lights_per_view == 1 ? "" : "s",
+                                         tile_count, internal::pluralS(tile_count), tile_size,
+                                         lights_per_view, internal::pluralS(lights_per_view),
                                          s.programName(request.program));
   // With a second drawing context (State::drawing_threads), the views go in two runs of about
   // equal work, one drawn here and one on the helper's thread at the same time, with its own copy

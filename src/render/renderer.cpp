@@ -775,12 +775,12 @@ core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_i
   int count = static_cast<int>(samples.size());
   AtlasLayout layout = planAtlas(count, tile, s.max_size, options.msaa_samples);
   GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
-  ChunkDrawer drawer{s, asset, s.programs[program_id]};
-  drawer.uploadFrames(samples, stride);
   const GLuint program = s.programs[program_id];
+  ChunkDrawer drawer{s, asset, program};
+  drawer.uploadFrames(samples, stride);
   const internal::SlowRequestWatch watch(s.firstDraw(program, State::kRenderRequest),
                                          "rendering %d image%s of %d px with %s", count,
-                                         count == 1 ? "" : "s", tile, s.programName(program));
+                                         pluralS(count), tile, s.programName(program));
 
   ImageBatch8 batch;
   batch.width = batch.height = tile;
@@ -840,13 +840,13 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
   int count = static_cast<int>(samples.size());
   AtlasLayout layout = planAtlas(count, big_tile, s.max_size, options.msaa_samples);
   GLsizeiptr stride = roundUp(sizeof(FrameBlock), s.ubo_alignment);
-  ChunkDrawer drawer{s, asset, s.programs[program_id]};
-  drawer.uploadFrames(samples, stride);
   const GLuint program = s.programs[program_id];
+  ChunkDrawer drawer{s, asset, program};
+  drawer.uploadFrames(samples, stride);
   const internal::SlowRequestWatch watch(
       s.firstDraw(program, State::kReferenceRequest),
-      "rendering %d reference%s of %d px (%dx%d supersampled) with %s", count,
-      count == 1 ? "" : "s", tile, k, k, s.programName(program));
+      "rendering %d reference%s of %d px (%dx%d supersampled) with %s", count, pluralS(count), tile,
+      k, k, s.programName(program));
 
   ImageBatchF batch;
   batch.width = batch.height = tile;

@@ -1,8 +1,8 @@
 // Reports of renderer requests that keep the device busy for long (render.hpp, SlowRequest).
 //
 // Why a table of fixed slots: a request is marked on every render call, on the main thread and on
-// the worker threads (compile-ahead, the second drawing context), some of which must not allocate
-// (a failed allocation there stops only that worker). Marking takes a lock and copies at most
+// worker threads with renderers of their own (compile-ahead), which must not allocate where a
+// failed allocation would end more than that worker. Marking takes a lock and copies at most
 // kWhatSize characters; with no sink set it is one atomic load.
 #include "render/slow_requests.hpp"
 

@@ -19,6 +19,11 @@ class SlowRequestWatch {
  private:
   int slot_ = -1;
 };
+// "s" unless n is 1, for the requests' descriptions ("1 image", "100 images").
+inline const char* pluralS(long n) {
+  return n == 1 ? "" : "s";
+}
+
 // Reports the marked requests due at `now` to the sink (the monitor thread calls it four times a
 // second; tests call it with a time of their choosing).
 void reportSlowRequests(std::chrono::steady_clock::time_point now);
