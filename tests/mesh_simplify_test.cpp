@@ -390,6 +390,35 @@ TEST(SimplifyQuadric, PassesFinishFromTheirRest) {
   EXPECT_TRUE(core::validateMesh(engine.mesh).ok());
 }
 
+// A plane tilted out of the axis planes, its inner vertices jittered in the plane, with one half
+// bent up (z += 0.2 (x - 0.5)² for x > 0.5): the flat half's collapses are free, but the fast path
+// prices in float, and there their costs come out as rounding noise (half of them clamped to
+// exactly 0). A pass takes every collapse below kFreeCollapseError (simplify_positions.cpp) as
+// cheap, whatever noise its goal rank holds: to 50% in 2 passes. When only the costs up to 1.5
+// times the goal rank's noise were cheap, it took 5. No collapse of the bent half (whose costs
+// are real, errors of 1e-4 and more) is taken for free.
+TEST(SimplifyQuadric, FreeCollapsesAreAllCheapInAPass) {
+  Mesh bent = test::gridMesh(100);
+  uint32_t state = 12345;
+  auto jitter = [&] {  // a fixed LCG: the same mesh on every platform
+    state = state * 1664525u + 1013904223u;
+    return 0.004f * (float(state >> 8) / float(1 << 24) - 0.5f);
+  };
+  for (Vec3& p : bent.positions) {
+    if (p.x > 0 && p.x < 1 && p.y > 0 && p.y < 1) {
+      p.x += jitter();
+      p.y += jitter();
+    }
+    p.z = 0.37f * p.x + 0.61f * p.y + (p.x > 0.5f ? 0.2f * (p.x - 0.5f) * (p.x - 0.5f) : 0.0f);
+  }
+  ASSERT_EQ(bent.triangleCount(), 20000u);
+  auto result = mesh::simplifyQuadric(bent, {.target_triangles = 10000});
+  EXPECT_EQ(result.stats.passes, 2u);
+  EXPECT_EQ(result.mesh.triangleCount(), 10000u);
+  EXPECT_LT(result.error, 1e-5);
+  EXPECT_TRUE(core::validateMesh(result.mesh).ok());
+}
+
 // What prepareMesh cleans, built into a clean mesh: vertices split into copies (one of them at
 // -0 where the original is at +0), a duplicate triangle (rotated) and a reversed one, a
 // degenerate one, one out of range; optionally an unused vertex far away (the used vertices'
