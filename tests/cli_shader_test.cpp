@@ -173,6 +173,55 @@ TEST(CliShaderTest, GreedySearchRecordsItsSteps) {
     EXPECT_FALSE(fs::exists(out / ("level02" + std::string(extension)))) << extension;
 }
 
+// A search pays each variant's compile, so when the original's first draw is slow the note about
+// it says what the search will compile and which flags compile fewer. The slow compile: twelve
+// loops whose trip counts are not constants (about a second each on llvmpipe, with Mesa's shader
+// cache off so that it is not skipped on a second run).
+TEST(CliShaderTest, ASlowCompileSaysWhatTheSearchWillCompile) {
+  DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
+  const fs::path dir = test::scratchDir("cli_shader_slow_compile");
+  std::string frag = test::readText(test::sourcePath("shaders/constant.frag"));
+  std::string loops = "  float c = uBaseColorFactor.r;\n";
+  for (int k = 1; k <= 12; ++k) {
+    const std::string n = std::to_string(k);
+    loops += "  for (int i = 0; i < int(uMaterialParams.x * " + n +
+             ".0 + 2.0); ++i) c = fract(c * 1." + n + " + 0." + n + ");\n";
+  }
+  const std::string body = "  outColor = vec4(uBaseColorFactor.rgb, 1.0);";
+  ASSERT_NE(frag.find(body), std::string::npos);
+  frag.replace(frag.find(body), body.size(),
+               loops + "  outColor = vec4(uBaseColorFactor.rgb * c, 1.0);");
+  const fs::path slow = dir / "slow.frag";
+  std::ofstream(slow) << frag;
+  test::CommandRun run = test::runCommand("env", {"MESA_SHADER_CACHE_DISABLE=true",
+                                                  "DUOLOD_SLOW_NOTICE_SECONDS=0.3",
+                                                  DUOLOD_CLI,
+                                                  "shader",
+                                                  spot,
+                                                  "--vert",
+                                                  test::sourcePath("shaders/constant.vert"),
+                                                  "--frag",
+                                                  slow.string(),
+                                                  "--distance",
+                                                  "30",
+                                                  "--search",
+                                                  "greedy",
+                                                  "--steps",
+                                                  "1",
+                                                  "--candidates",
+                                                  "1",
+                                                  "--no-timing",
+                                                  "--out",
+                                                  (dir / "out").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(test::contains(run.err, "It holds the program's first draw")) << run.err;
+  EXPECT_TRUE(test::contains(run.err,
+                             "The search compiles a program for each variant it "
+                             "renders, most of them about as slowly: fewer --steps and "
+                             "--candidates compile fewer."))
+      << run.err;
+}
+
 // An HLSL shader pair goes through the whole search and comes out as every kind of file, HLSL
 // included; an entry point the file lacks is an error naming it.
 TEST(CliShaderTest, HlslShadersAreSimplifiedToo) {

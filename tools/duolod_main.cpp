@@ -85,6 +85,10 @@ int fail(const std::string& message) {
   return 1;
 }
 
+// What a slow first draw means for the command running, appended to the note (set by `shader`
+// and `generate` before their first GPU request; read by the monitor thread only afterwards).
+std::string slow_first_draw_consequence;
+
 // A wait on the GPU that is not explained looks like a hang: a note when one request has taken
 // DUOLOD_SLOW_NOTICE_SECONDS (default 30; 0 or "off": never), and again each time it doubles
 // (render.hpp, SlowRequest).
@@ -103,21 +107,25 @@ void reportSlowGpuRequests() {
       first_after = seconds;
   }
   render::setSlowRequestSink(first_after, [](const render::SlowRequest& request) {
+    // Tenths below 10 s (a short DUOLOD_SLOW_NOTICE_SECONDS printed "taken 0 s").
+    const int decimals = request.seconds < 10 ? 1 : 0;
     if (request.report > 0) {
-      std::fprintf(stderr, "duolod: note: still waiting on the GPU after %.0f s: %s\n",
+      std::fprintf(stderr, "duolod: note: still waiting on the GPU after %.*f s: %s\n", decimals,
                    request.seconds, request.what.c_str());
       return;
     }
-    std::fprintf(
-        stderr,
-        "duolod: note: one GPU request has taken %.0f s so far: %s. %s Still waiting "
-        "(Ctrl-C stops, removing unfinished output).\n",
-        request.seconds, request.what.c_str(),
+    std::string why =
         request.first_draw
             ? "It holds the program's first draw, which includes the driver's compile of it: on "
               "llvmpipe a fragment stage with many loops whose trip counts are not constants "
               "compiles slowly (16 such loops: over a minute; each more: 2-3x as long)."
-            : "Large footprints, supersampling and many samples take long on a CPU rasterizer.");
+            : "Large footprints, supersampling and many samples take long on a CPU rasterizer.";
+    if (request.first_draw && !slow_first_draw_consequence.empty())
+      why += " " + slow_first_draw_consequence;
+    std::fprintf(stderr,
+                 "duolod: note: one GPU request has taken %.*f s so far: %s. %s Still waiting "
+                 "(Ctrl-C stops, removing unfinished output).\n",
+                 decimals, request.seconds, request.what.c_str(), why.c_str());
   });
 }
 
@@ -1329,6 +1337,10 @@ core::Status checkNearestLevel(const GenerateFlags& flags, const core::Asset& as
 int runGenerate(GenerateFlags& flags) {
   auto start = std::chrono::steady_clock::now();
   if (auto valid = flags.check(); !valid) return fail(valid.error().message);
+  slow_first_draw_consequence =
+      "The shader searches compile a program for each variant they render, most of them about as "
+      "slowly: fewer --shader-levels, --shader-meshes, --generations and --population compile "
+      "fewer.";
   // Refuse a bad output folder before the long work, not after.
   if (auto ok = checkOutputFolder(
           flags.out, flags.force,
@@ -1558,6 +1570,12 @@ int runShader(ShaderFlags& flags) {
   if (!(flags.shading.distance > 0) && !(flags.shading.pixels > 0))
     return fail("shader: give --distance D (> 0) or --pixels N");
   if (auto ok = flags.check(); !ok) return fail(ok.error().message);
+  slow_first_draw_consequence =
+      flags.search == "gp"
+          ? "The search compiles a program for each variant it renders, most of them about as "
+            "slowly: fewer --generations and --population compile fewer."
+          : "The search compiles a program for each variant it renders, most of them about as "
+            "slowly: fewer --steps and --candidates compile fewer.";
   // Refuse a bad output folder before the long work, not after.
   if (auto ok = checkOutputFolder(
           flags.out, flags.force,
