@@ -29,6 +29,7 @@
 #include <thread>
 #include <tuple>
 
+#include "core/clock.hpp"
 #include "duolod/io.hpp"
 #include "duolod/lod.hpp"
 #include "duolod/mesh.hpp"
@@ -58,9 +59,7 @@ std::string shortNumber(double value) {
   return text;
 }
 
-double secondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using core::internal::secondsSince;
 
 // How a GP configuration scores variants: at `distance`, on the run's display and supersampling.
 shader::EvaluationConfig evaluationConfig(const GenerateOptions& options, float distance) {

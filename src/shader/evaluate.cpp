@@ -7,6 +7,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include "core/clock.hpp"
+
 namespace duolod::shader {
 namespace {
 using core::Error;
@@ -57,9 +59,7 @@ std::vector<render::Sample> reducedDomain(const std::vector<render::Sample>& sam
   return reduced;
 }
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using core::internal::secondsSince;
 
 }  // namespace
 

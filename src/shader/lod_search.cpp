@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "core/clock.hpp"
 #include "duolod/io.hpp"
 #include "duolod/shader.hpp"
 #include "shader/scoring.hpp"
@@ -17,9 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using core::internal::secondsSince;
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/clock.hpp"
 #include "shader/nsga2.hpp"
 
 namespace duolod::shader {
@@ -34,9 +35,7 @@ struct KeyHash {
   }
 };
 
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using core::internal::secondsSince;
 
 // Materialised genomes are whole programs (both modules): past this many the prefix cache starts
 // afresh, bounding memory on long searches (a re-materialisation costs a few applyRule calls).
