@@ -76,38 +76,8 @@ struct Topology {
   bool operator==(const Topology&) const = default;
 };
 Topology topologyOf(const core::Mesh& m) {
-  std::map<std::array<float, 3>, uint32_t> welded_id;  // equal positions (+0 == -0): one vertex
-  std::vector<uint32_t> weld(m.vertexCount());
-  uint32_t welded = 0;
-  for (size_t v = 0; v < m.vertexCount(); ++v) {
-    const core::Vec3 p = m.positions[v];
-    if (!core::isFinite(p)) {  // (no order among NaNs: such a vertex stays on its own)
-      weld[v] = welded++;
-      continue;
-    }
-    const std::array<float, 3> key = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};  // -0 + 0 is +0
-    const auto [it, added] = welded_id.emplace(key, welded);
-    welded += added;
-    weld[v] = it->second;
-  }
-  std::unordered_map<uint64_t, uint32_t> edge_triangles;
-  std::vector<uint8_t> used(welded, 0);
-  long long faces = 0;
-  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-    const uint32_t v[3] = {weld[m.indices[t]], weld[m.indices[t + 1]], weld[m.indices[t + 2]]};
-    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
-    ++faces;
-    for (int k = 0; k < 3; ++k) {
-      used[v[k]] = 1;
-      const uint32_t a = std::min(v[k], v[(k + 1) % 3]), b = std::max(v[k], v[(k + 1) % 3]);
-      ++edge_triangles[uint64_t(a) << 32 | b];
-    }
-  }
-  Topology topology;
-  for (const auto& [edge, count] : edge_triangles) topology.non_manifold_edges += count > 2;
-  const long long vertices = std::count(used.begin(), used.end(), 1);
-  topology.euler = vertices - (long long)edge_triangles.size() + faces;
-  return topology;
+  const mesh::SurfaceTopology topology = mesh::surfaceTopology(m);
+  return {topology.eulerCharacteristic(), topology.non_manifold_edges};
 }
 
 // gltfpack run as a separate process on one input at one ratio.

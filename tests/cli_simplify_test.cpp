@@ -191,6 +191,20 @@ TEST(CliSimplify, UnreachableTargetSaysWhy) {
   auto output = io::loadAsset(out);
   ASSERT_TRUE(output) << output.error().message;
   EXPECT_EQ(output->mesh.triangleCount(), 2u);
+  EXPECT_FALSE(test::contains(run.out, "misoriented")) << run.out;
+
+  // The same square with its second triangle turned round: the diagonal is run the same way by
+  // both triangles, and the line names that as what holds its vertices.
+  const std::string turned = (dir / "turned.obj").string();
+  std::ofstream(turned) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 4 3\n";
+  test::CommandRun misoriented =
+      runCli({"simplify", turned, (dir / "turned_out.glb").string(), "--triangles", "1"});
+  ASSERT_EQ(misoriented.exit_code, 0) << misoriented.err;
+  EXPECT_TRUE(
+      test::contains(lineStarting(misoriented.out, "simplify"),
+                     "; the input has 1 misoriented and 0 non-manifold edges (duolod info), "
+                     "whose vertices never move"))
+      << misoriented.out;
 }
 
 TEST(CliSimplify, RefusesToOverwriteItsInput) {

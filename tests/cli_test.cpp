@@ -75,6 +75,10 @@ TEST(Cli, InfoOnWaterBottle) {
   ASSERT_EQ(info.exit_code, 0) << info.err;
   EXPECT_TRUE(test::contains(info.out, "triangles   4510")) << info.out;
   EXPECT_TRUE(test::contains(info.out, "BottleMat")) << info.out;
+  EXPECT_TRUE(test::contains(info.out,
+                             "topology    6897 edges: 264 border, 0 non-manifold, 0 misoriented "
+                             "(two triangles running the same way); Euler characteristic -2"))
+      << info.out;
 }
 
 TEST(Cli, InfoOnMissingAndGarbageFiles) {

@@ -419,6 +419,42 @@ TEST(SimplifyQuadric, FreeCollapsesAreAllCheapInAPass) {
   EXPECT_TRUE(core::validateMesh(result.mesh).ok());
 }
 
+// surfaceTopology counts by position: a cube is closed (8 vertices, 18 edges, 12 triangles, Euler
+// characteristic 2) even with one corner split into a copy for one triangle; a 3 x 3 grid
+// has its 12 outer edges on the border; an inner triangle turned round makes its three edges
+// misoriented; a third triangle on an edge makes it non-manifold; a degenerate triangle and one
+// with an index out of range are not counted.
+TEST(SurfaceTopology, CountsByPosition) {
+  Mesh cube = test::cubeMesh();
+  mesh::SurfaceTopology closed = mesh::surfaceTopology(cube);
+  EXPECT_EQ(closed, (mesh::SurfaceTopology{.vertices = 8, .edges = 18, .triangles = 12}));
+  EXPECT_EQ(closed.eulerCharacteristic(), 2);
+  cube.positions.push_back(cube.positions[cube.indices[0]]);
+  cube.indices[0] = uint32_t(cube.positions.size() - 1);
+  EXPECT_EQ(mesh::surfaceTopology(cube), closed);
+
+  Mesh grid = test::gridMesh(3);  // 16 vertices, 18 triangles, 33 edges
+  mesh::SurfaceTopology open = mesh::surfaceTopology(grid);
+  EXPECT_EQ(open, (mesh::SurfaceTopology{
+                      .vertices = 16, .edges = 33, .triangles = 18, .border_edges = 12}));
+  EXPECT_EQ(open.eulerCharacteristic(), 1);
+  Mesh turned = grid;
+  std::swap(turned.indices[8 * 3 + 1], turned.indices[8 * 3 + 2]);  // cell (1, 1): inner
+  mesh::SurfaceTopology misoriented = open;
+  misoriented.misoriented_edges = 3;
+  EXPECT_EQ(mesh::surfaceTopology(turned), misoriented);
+
+  Mesh fin = grid;  // a triangle standing on the inner edge (1, 1)-(2, 1), off the plane
+  fin.positions.push_back({0.5f, 0.33f, 1.0f});
+  fin.indices.insert(fin.indices.end(), {5, 6, uint32_t(fin.positions.size() - 1)});
+  fin.indices.insert(fin.indices.end(), {0, 0, 1, 0, 1, 1000});  // degenerate, out of range
+  mesh::SurfaceTopology finned = mesh::surfaceTopology(fin);
+  EXPECT_EQ(finned.non_manifold_edges, 1u);
+  EXPECT_EQ(finned.border_edges, 14u);  // the fin's other two edges
+  EXPECT_EQ(finned.triangles, 19u);
+  EXPECT_EQ(finned.vertices, 17u);
+}
+
 // What prepareMesh cleans, built into a clean mesh: vertices split into copies (one of them at
 // -0 where the original is at +0), a duplicate triangle (rotated) and a reversed one, a
 // degenerate one, one out of range; optionally an unused vertex far away (the used vertices'

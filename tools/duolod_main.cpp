@@ -414,6 +414,14 @@ int runInfo(const std::string& path) {
               bounds.min.z, bounds.max.x, bounds.max.y, bounds.max.z);
   std::printf("  sphere      centre (%g, %g, %g) radius %g\n", sphere.center.x, sphere.center.y,
               sphere.center.z, sphere.radius);
+  // By position, as the quadric mode sees it: misoriented and non-manifold edges lock their
+  // vertices, which is why a mesh can stop short of a simplification target.
+  const mesh::SurfaceTopology topology = mesh::surfaceTopology(mesh);
+  std::printf(
+      "  topology    %zu edges: %zu border, %zu non-manifold, %zu misoriented (two "
+      "triangles running the same way); Euler characteristic %lld (welded by position)\n",
+      topology.edges, topology.border_edges, topology.non_manifold_edges,
+      topology.misoriented_edges, topology.eulerCharacteristic());
   std::printf("  materials   %zu\n", asset->materials.size());
   for (const core::Material& m : asset->materials) {
     std::printf("    %-24s baseColor (%.3g %.3g %.3g %.3g) metallic %.3g roughness %.3g%s%s%s%s%s\n",
@@ -1067,6 +1075,17 @@ int runSimplify(SimplifyFlags& flags) {
                     target_triangles, s.rejected_topology, s.rejected_flip, s.rejected_border,
                     image_stats.rejected_long_edges, image_stats.rejected_wide_regions);
     detail += text;
+    // The edge-collapse modes never move a vertex of these edges (clustering ignores them).
+    if (flags.mode != "cluster") {
+      const mesh::SurfaceTopology topology = mesh::surfaceTopology(input);
+      if (topology.misoriented_edges + topology.non_manifold_edges > 0) {
+        std::snprintf(text, sizeof text,
+                      "; the input has %zu misoriented and %zu non-manifold edges (duolod info), "
+                      "whose vertices never move",
+                      topology.misoriented_edges, topology.non_manifold_edges);
+        detail += text;
+      }
+    }
   }
   std::printf("simplify  %s: %zu -> %zu triangles (%.1f%%), %.3f s, %s\n", flags.mode.c_str(),
               input_triangles, output_triangles,

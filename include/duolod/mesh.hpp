@@ -205,4 +205,26 @@ struct SurfaceDistance {
 SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
                                 size_t samples_per_mesh = 100000, uint64_t seed = 1);
 
+// ---------------------------------------------------------------------------------------------
+// Topology: what decides which vertices the quadric mode may move.
+
+// The surface with its vertices welded by position (equal coordinates, +0 and -0 alike; a
+// non-finite position stays a vertex of its own) and its triangles with a repeated welded corner
+// left out. simplifyQuadric never moves a vertex of a non-manifold or misoriented edge, and keeps
+// border edges on the border (or fixed, with lock_border).
+struct SurfaceTopology {
+  size_t vertices = 0;  // welded, used by a triangle
+  size_t edges = 0;
+  size_t triangles = 0;           // not degenerate after welding
+  size_t border_edges = 0;        // on one triangle
+  size_t non_manifold_edges = 0;  // on three triangles or more
+  size_t misoriented_edges = 0;   // on two triangles that run along it the same way
+  // V - E + F (2 for a closed surface of genus 0).
+  long long eulerCharacteristic() const {
+    return (long long)vertices - (long long)edges + (long long)triangles;
+  }
+  bool operator==(const SurfaceTopology&) const = default;
+};
+SurfaceTopology surfaceTopology(const core::Mesh& mesh);
+
 }  // namespace duolod::mesh
