@@ -208,9 +208,9 @@ SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
 // ---------------------------------------------------------------------------------------------
 // Topology: what decides which vertices the quadric mode may move.
 
-// The surface with its vertices welded by position (equal coordinates, +0 and -0 alike; a
-// non-finite position stays a vertex of its own) and its triangles with a repeated welded corner
-// left out. simplifyQuadric never moves a vertex of a non-manifold or misoriented edge, and keeps
+// The surface with its vertices welded by position as the simplifier welds them (equal bits, +0
+// and -0 alike) and its triangles with a repeated welded corner or an index out of range left
+// out. simplifyQuadric never moves a vertex of a non-manifold or misoriented edge, and keeps
 // border edges on the border (or fixed, with lock_border).
 struct SurfaceTopology {
   size_t vertices = 0;  // welded, used by a triangle

@@ -92,29 +92,6 @@ class IndexTable {
   std::vector<uint32_t> slots_;
 };
 
-// Position ids: equal (bitwise, ±0 folded) positions share an id. Returns the id count.
-uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint32_t>& ids) {
-  const size_t n = positions.size();
-  ids.assign(n, kAbsent);
-  std::vector<uint32_t> bits(n * 3);
-  for (size_t v = 0; v < n; ++v) positionBits(positions[v], &bits[v * 3]);
-  IndexTable table(n);
-  std::vector<uint32_t> first_to_id(n, kAbsent);
-  uint32_t count = 0;
-  for (uint32_t v = 0; v < n; ++v) {
-    // One mixing round over the 96 bits (hashWords would mix three times; this runs per vertex).
-    const uint32_t* b = &bits[v * 3];
-    const uint64_t hash =
-        mixHash((uint64_t(b[0]) << 32 | b[1]) ^ (uint64_t(b[2]) * 0x9e3779b97f4a7c15ull));
-    uint32_t first = table.findOrInsert(v, hash, [&](uint32_t other) {
-      return std::memcmp(&bits[v * 3], &bits[other * 3], 12) == 0;
-    });
-    if (first == v) first_to_id[v] = count++;
-    ids[v] = first_to_id[first];
-  }
-  return count;
-}
-
 // Submesh index per triangle when the submeshes tile the index buffer in order; otherwise
 // everything is group 0 and `valid` is false.
 std::vector<uint32_t> triangleGroups(const core::Mesh& mesh, bool& valid) {
@@ -1275,6 +1252,28 @@ void positionBits(core::Vec3 p, uint32_t out[3]) {
     float v = p[i] == 0 ? 0.0f : p[i];
     std::memcpy(&out[i], &v, 4);
   }
+}
+
+uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint32_t>& ids) {
+  const size_t n = positions.size();
+  ids.assign(n, kAbsent);
+  std::vector<uint32_t> bits(n * 3);
+  for (size_t v = 0; v < n; ++v) positionBits(positions[v], &bits[v * 3]);
+  IndexTable table(n);
+  std::vector<uint32_t> first_to_id(n, kAbsent);
+  uint32_t count = 0;
+  for (uint32_t v = 0; v < n; ++v) {
+    // One mixing round over the 96 bits (hashWords would mix three times; this runs per vertex).
+    const uint32_t* b = &bits[v * 3];
+    const uint64_t hash =
+        mixHash((uint64_t(b[0]) << 32 | b[1]) ^ (uint64_t(b[2]) * 0x9e3779b97f4a7c15ull));
+    uint32_t first = table.findOrInsert(v, hash, [&](uint32_t other) {
+      return std::memcmp(&bits[v * 3], &bits[other * 3], 12) == 0;
+    });
+    if (first == v) first_to_id[v] = count++;
+    ids[v] = first_to_id[first];
+  }
+  return count;
 }
 
 bool submeshesTile(const core::Mesh& mesh) {

@@ -382,6 +382,9 @@ inline bool turnsOverOrFlattens(Vec3d corner, Vec3d b, Vec3d d, Vec3d moved) {
 
 // Bit pattern of a position with -0 folded into +0: equal patterns are what prepareMesh welds.
 void positionBits(core::Vec3 p, uint32_t out[3]);
+// Position ids: equal positionBits share an id, numbered in order of first appearance. Returns the
+// id count.
+uint32_t positionIds(const std::vector<core::Vec3>& positions, std::vector<uint32_t>& ids);
 // Whether the submeshes tile the index buffer in order (otherwise prepareMesh makes them one).
 bool submeshesTile(const core::Mesh& mesh);
 
