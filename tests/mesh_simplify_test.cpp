@@ -419,6 +419,27 @@ TEST(SimplifyQuadric, FreeCollapsesAreAllCheapInAPass) {
   EXPECT_TRUE(core::validateMesh(result.mesh).ok());
 }
 
+// A greedy fill that applies no collapse is not repeated: the next fill would find the same mesh
+// and refuse the same edges. A tetrahedron's 6 edges each refuse to collapse (each would make
+// two triangles on the same vertices): positions only, the passes try each once and the queue
+// once (12; with every fill, 30); with UVs, the engine's queue alone tries each once (6; 24).
+TEST(SimplifyQuadric, AFillThatAppliesNothingIsNotRepeated) {
+  Mesh tetra;
+  tetra.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tetra.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  auto positions = mesh::simplifyQuadric(tetra, {.target_triangles = 2});
+  EXPECT_EQ(positions.mesh.triangleCount(), 4u);
+  EXPECT_EQ(positions.stats.passes, 1u);
+  EXPECT_EQ(positions.stats.rejected_topology, 12u);
+  Mesh textured = tetra;
+  textured.uv0 = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  auto engine = mesh::simplifyQuadric(textured, {.target_triangles = 2});
+  EXPECT_EQ(engine.mesh.triangleCount(), 4u);
+  EXPECT_EQ(engine.stats.passes, 0u);  // the engine's greedy queue only, on a mesh this small
+  EXPECT_EQ(engine.stats.rejected_topology, 6u);
+  EXPECT_EQ(engine.stats.rejected_flip + positions.stats.rejected_flip, 0u);
+}
+
 // surfaceTopology counts by position: a cube is closed (8 vertices, 18 edges, 12 triangles, Euler
 // characteristic 2) even with one corner split into a copy for one triangle; a 3 x 3 grid
 // has its 12 outer edges on the border; an inner triangle turned round makes its three edges

@@ -981,6 +981,7 @@ void Engine::runGreedy() {
   auto reached = [&] { return state_.live_triangles <= options_.target_triangles; };
   for (int pass = 0; pass < std::max(1, options_.max_passes) && !reached(); ++pass) {
     pass_rejections_ = 0;
+    const size_t collapses_before = stats_.collapses;
     fillQueue();
     while (!queue_.empty() && !reached()) {
       float cost = 0;
@@ -994,7 +995,9 @@ void Engine::runGreedy() {
       if (double(entry.error) > options_.target_error) continue;
       if (tryCollapse(entry, cost) && options_.progress) options_.progress(state_.live_triangles);
     }
-    if (pass_rejections_ == 0) break;
+    // Refilled only when this fill changed the mesh: a fill that applied nothing tried every
+    // edge of a mesh the next one would find unchanged (simplify_positions.cpp, runGreedy).
+    if (pass_rejections_ == 0 || stats_.collapses == collapses_before) break;
   }
 }
 

@@ -1467,7 +1467,10 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
 // before and after; anchor_dense 1%, already worse, 1.03 -> 1.31); bench/RESULTS.md, issue 3,
 // session 18. A candidate refused by the link or flip test leaves the queue; when the queue runs
 // dry short of the target, refusals having been made, it is filled again from all edges, at most
-// EngineOptions::max_passes times.
+// EngineOptions::max_passes times, but not after a full fill that applied nothing: that fill
+// tried every edge of a mesh the next fill would find unchanged, so it would refuse them all
+// again (CGAL's boeing, stuck at 2046 triangles on its way to 50%, filled four times: 1.0 of its
+// 3.6 ms; bench/RESULTS.md, issue 3, session 40).
 void PositionSimplifier::runGreedy() {
   auto reached = [&] {
     return options_.target_triangles > 0 && live_triangles_ <= options_.target_triangles;
@@ -1517,6 +1520,7 @@ void PositionSimplifier::runGreedy() {
     filling_ = false;
     queue_.heapify();
     const size_t rejected_before = stats_.rejected_topology + stats_.rejected_flip;
+    const size_t collapses_before = stats_.collapses;
     while (!queue_.empty() && !reached()) {
       const QueuedCandidate e = queue_.pop();
       const uint32_t from = e.from(), to = e.to(), id = e.id();
@@ -1530,7 +1534,9 @@ void PositionSimplifier::runGreedy() {
       tryCollapse<true>(c, 0, priced.placement);
     }
     compact();
-    if (!from_seeds && stats_.rejected_topology + stats_.rejected_flip == rejected_before) break;
+    if (!from_seeds && (stats_.rejected_topology + stats_.rejected_flip == rejected_before ||
+                        stats_.collapses == collapses_before))
+      break;
   }
 }
 
