@@ -292,6 +292,9 @@ void QuadricModel::begin(const EngineState& state) {
   // Penalty planes through feature edges, perpendicular to the surface (Garland & Heckbert 1997
   // §6.1): sliding a border vertex inwards or outwards costs, sliding along the line does not.
   for (const FeatureEdge& edge : state.feature_edges) {
+    // A misoriented or non-manifold edge is no border: the surface goes on across it. Its ends
+    // are locked (classifyPositions), so a plane through them would never price a collapse.
+    if (edge.features & kFeatureNonManifold) continue;
     Vec3d face_normal{0, 0, 0};
     for (uint32_t t : edge.triangles) {
       if (t == kAbsent) continue;
