@@ -440,6 +440,38 @@ TEST(SimplifyQuadric, AFillThatAppliesNothingIsNotRepeated) {
   EXPECT_EQ(engine.stats.rejected_flip + positions.stats.rejected_flip, 0u);
 }
 
+// Triangles turned round lock their corners (each of their edges runs the same way in both of
+// its triangles). An octahedron with two faces turned round, (+x, +y, +z) and (-x, -y, +z),
+// leaves only -z free, with all its neighbours locked: the one collapse to 6 triangles takes -z
+// onto a neighbour, say +x, where the two faces of -z that do not hold +x are 2/sqrt(3) away. With
+// the four faces' equal weights w, the error is sqrt(2 w 4/3 / (4 w + 4 w)) = sqrt(1/3), the same
+// through the engine (UVs).
+TEST(SimplifyQuadric, TrianglesTurnedRoundLockTheirCorners) {
+  Mesh octahedron;
+  // +x, -x, +y, -y, +z, -z
+  octahedron.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  octahedron.indices = {0, 4, 2, 2, 1, 4, 1, 4, 3, 3, 0, 4,  // (0, 2, 4) and (1, 3, 4) turned
+                        2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  EXPECT_EQ(mesh::surfaceTopology(octahedron).misoriented_edges, 6u);
+  Mesh textured = octahedron;
+  textured.uv0.assign(6, {0.5f, 0.5f});
+  for (const Mesh* input : {&octahedron, &textured}) {
+    auto result = mesh::simplifyQuadric(*input, {.target_triangles = 6});
+    ASSERT_EQ(result.mesh.triangleCount(), 6u);
+    EXPECT_EQ(result.stats.collapses, 1u);
+    EXPECT_NEAR(result.error, std::sqrt(1.0 / 3.0), 1e-6);
+    // The five locked corners kept their places; -z is gone.
+    std::vector<Vec3> kept = result.mesh.positions;
+    std::vector<Vec3> corners(octahedron.positions.begin(), octahedron.positions.end() - 1);
+    auto by_coordinates = [](const Vec3& a, const Vec3& b) {
+      return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::sort(kept.begin(), kept.end(), by_coordinates);
+    std::sort(corners.begin(), corners.end(), by_coordinates);
+    EXPECT_EQ(kept, corners);
+  }
+}
+
 // surfaceTopology counts by position: a cube is closed (8 vertices, 18 edges, 12 triangles, Euler
 // characteristic 2) even with one corner split into a copy for one triangle; a 3 x 3 grid
 // has its 12 outer edges on the border; an inner triangle turned round makes its three edges
