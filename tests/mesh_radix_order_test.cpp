@@ -1,15 +1,17 @@
 // The quadric fast path's pass order (src/mesh/radix_order.hpp): the radix select must find the
 // same key as std::nth_element and the radix sort must give std::stable_sort's order, for every
 // size (both sides of the comparison-sort cutoff and of the 8-bit/11-bit digit cutoff), rank and
-// pattern of ties.
+// pattern of ties. Also the greedy queues' 4-ary heap (src/mesh/quaternary_heap.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <set>
 #include <vector>
 
+#include "mesh/quaternary_heap.hpp"
 #include "mesh/radix_order.hpp"
 
 namespace duolod {
@@ -134,6 +136,39 @@ TEST(RadixOrder, SortSkipsSharedDigitsAndReturnsWhereTheResultIs) {
   EXPECT_EQ(sorted, scratch.data());
   const std::vector<Record> expected = stableSorted(records);
   for (size_t i = 0; i < n; ++i) ASSERT_EQ(sorted[i].id, expected[i].id) << i;
+}
+
+// The heap against std::multiset under a random mix of pushes and pops after a heapify, with
+// many ties and sizes that leave the last node part full: the top is always the least item left.
+TEST(QuaternaryHeap, PopsTheLeastUnderPushesAndPops) {
+  std::mt19937 random(7);
+  for (int round = 0; round < 50; ++round) {
+    mesh::QuaternaryHeap<int> heap;
+    std::multiset<int> reference;
+    const int initial = int(random() % 40);
+    for (int i = 0; i < initial; ++i) {
+      const int item = int(random() % 16);
+      heap.append(item);
+      reference.insert(item);
+    }
+    heap.heapify();
+    for (int step = 0; step < 400; ++step) {
+      ASSERT_EQ(heap.size(), reference.size());
+      if (random() % 2 == 0) {
+        const int item = int(random() % 16);
+        heap.push(item);
+        reference.insert(item);
+      } else if (!reference.empty()) {
+        ASSERT_EQ(heap.pop(), *reference.begin()) << round << " " << step;
+        reference.erase(reference.begin());
+      }
+    }
+    while (!reference.empty()) {
+      ASSERT_EQ(heap.pop(), *reference.begin()) << round;
+      reference.erase(reference.begin());
+    }
+    EXPECT_TRUE(heap.empty());
+  }
 }
 
 }  // namespace
