@@ -419,6 +419,79 @@ TEST(SimplifyQuadric, FreeCollapsesAreAllCheapInAPass) {
   EXPECT_TRUE(core::validateMesh(result.mesh).ok());
 }
 
+// orientConsistently, by hand: a grid with 2 of its 18 triangles turned gets them turned back
+// (the way most of an open part's area faces), a cube turned inside out but for one triangle
+// faces outwards again (11 turned: a closed part faces outwards), a Moebius strip cannot be
+// oriented and is left as it was, and degenerate or out-of-range triangles are left alone.
+TEST(SurfaceTopology, OrientConsistently) {
+  auto turn = [](Mesh& m, size_t t) { std::swap(m.indices[t * 3 + 1], m.indices[t * 3 + 2]); };
+  const Mesh grid = test::gridMesh(3);
+  Mesh grid_turned = grid;
+  turn(grid_turned, 8);
+  turn(grid_turned, 17);  // a corner cell's
+  EXPECT_EQ(mesh::surfaceTopology(grid_turned).misoriented_edges, 5u);
+  EXPECT_EQ(mesh::orientConsistently(grid_turned),
+            (mesh::OrientationRepair{.turned_triangles = 2, .parts = 1}));
+  EXPECT_EQ(grid_turned.indices, grid.indices);
+
+  const Mesh cube = test::cubeMesh();
+  Mesh inside_out = cube;
+  for (size_t t = 1; t < 12; ++t) turn(inside_out, t);
+  EXPECT_EQ(mesh::orientConsistently(inside_out),
+            (mesh::OrientationRepair{.turned_triangles = 11, .parts = 1}));
+  EXPECT_EQ(inside_out.indices, cube.indices);
+  // The same far from the origin (the enclosed volume's sign, not the origin's side).
+  Mesh far_cube = cube;
+  for (Vec3& p : far_cube.positions) p = p + Vec3{1000, -2000, 500};
+  Mesh far_inside_out = far_cube;
+  for (size_t t = 0; t < 12; ++t) turn(far_inside_out, t);
+  EXPECT_EQ(mesh::orientConsistently(far_inside_out).turned_triangles, 12u);
+  EXPECT_EQ(far_inside_out.indices, far_cube.indices);
+
+  // A Moebius strip of 6 quads: top and bottom rows swap where the strip closes on itself.
+  Mesh strip;
+  constexpr int kQuads = 6;
+  for (int i = 0; i < kQuads; ++i) {
+    const float angle = 2 * 3.14159265f * float(i) / kQuads, twist = angle / 2;
+    const Vec3 centre{2 * std::cos(angle), 2 * std::sin(angle), 0};
+    const Vec3 across{std::cos(twist) * std::cos(angle), std::cos(twist) * std::sin(angle),
+                      std::sin(twist)};
+    strip.positions.push_back(centre + across * 0.5f);  // top i: 2i
+    strip.positions.push_back(centre - across * 0.5f);  // bottom i: 2i + 1
+  }
+  for (uint32_t i = 0; i < kQuads; ++i) {
+    const uint32_t top = 2 * i, bottom = 2 * i + 1;
+    const bool last = i + 1 == kQuads;
+    const uint32_t next_top = last ? 1 : top + 2, next_bottom = last ? 0 : bottom + 2;
+    strip.indices.insert(strip.indices.end(),
+                         {top, bottom, next_bottom, top, next_bottom, next_top});
+  }
+  const Mesh strip_before = strip;
+  EXPECT_EQ(mesh::orientConsistently(strip),
+            (mesh::OrientationRepair{.parts = 1, .non_orientable_parts = 1}));
+  EXPECT_EQ(strip.indices, strip_before.indices);
+
+  // Two parts at once, and triangles that are no part of any.
+  Mesh both = grid;
+  turn(both, 8);
+  const uint32_t offset = uint32_t(both.positions.size());
+  both.positions.insert(both.positions.end(), far_cube.positions.begin(), far_cube.positions.end());
+  for (size_t t = 0; t < 12; ++t)
+    both.indices.insert(both.indices.end(),
+                        {far_cube.indices[t * 3] + offset, far_cube.indices[t * 3 + 2] + offset,
+                         far_cube.indices[t * 3 + 1] + offset});
+  both.indices.insert(both.indices.end(), {0, 0, 1, 2, 1, 5000});
+  Mesh expected = grid;
+  expected.positions = both.positions;
+  for (size_t t = 0; t < 12; ++t)
+    for (int k = 0; k < 3; ++k) expected.indices.push_back(far_cube.indices[t * 3 + k] + offset);
+  expected.indices.insert(expected.indices.end(), {0, 0, 1, 2, 1, 5000});
+  EXPECT_EQ(mesh::orientConsistently(both),
+            (mesh::OrientationRepair{.turned_triangles = 13, .parts = 2}));
+  EXPECT_EQ(both.indices, expected.indices);
+  EXPECT_EQ(mesh::surfaceTopology(both).misoriented_edges, 0u);
+}
+
 // A greedy fill that applies no collapse is not repeated: the next fill would find the same mesh
 // and refuse the same edges. A tetrahedron's 6 edges each refuse to collapse (each would make
 // two triangles on the same vertices): positions only, the passes try each once and the queue

@@ -774,6 +774,7 @@ struct SimplifyFlags {
   double error = 0;
   int grid = 0;
   bool lock_border = false;
+  bool reorient = false;
   bool force = false;
   bool simplify_generated_normals = false;
   ShadingFlags shading;
@@ -820,6 +821,11 @@ struct SimplifyFlags {
                                    "target)")
                       ->check(atLeast(1));
     command->add_flag("--lock-border", lock_border, "open-boundary vertices never move");
+    command->add_flag("--reorient", reorient,
+                      "first turn triangles round so that every edge between two triangles runs "
+                      "opposite ways in them (closed parts facing outwards, open ones the way "
+                      "most of their area faces): the collapse modes never move a vertex of an "
+                      "edge two triangles run the same way");
     command->add_flag("--simplify-generated-normals", simplify_generated_normals,
                       "for a file of positions only: generate normals first and simplify them "
                       "as attributes (closer shading, the general engine: several times slower) "
@@ -937,6 +943,17 @@ int runSimplify(SimplifyFlags& flags) {
                                            .generate_normals = false,
                                            .generate_tangents = false});
   if (!asset) return fail(asset.error().message);
+  // Before normals are derived, so that they follow the turned triangles.
+  std::string reoriented;
+  if (flags.reorient) {
+    const mesh::OrientationRepair repair = mesh::orientConsistently(asset->mesh);
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "reorient  %zu triangles turned round, %zu parts (%zu cannot be oriented: "
+                  "left as they were)\n",
+                  repair.turned_triangles, repair.parts, repair.non_orientable_parts);
+    reoriented = line;
+  }
   const bool positions_only = asset->mesh.normals.empty() && asset->mesh.tangents.empty() &&
                               asset->mesh.uv0.empty() && asset->mesh.uv1.empty() &&
                               asset->mesh.colors.empty() && !flags.simplify_generated_normals;
@@ -963,6 +980,7 @@ int runSimplify(SimplifyFlags& flags) {
   const size_t input_triangles = input.triangleCount();
   std::printf("load      %s: %zu triangles, %zu vertices, %.3f s\n", flags.in.c_str(),
               input_triangles, input.vertexCount(), secondsSince(start));
+  std::fputs(reoriented.c_str(), stdout);
 
   size_t target_triangles = 0;
   if (flags.given(flags.ratio_option))
@@ -1081,8 +1099,11 @@ int runSimplify(SimplifyFlags& flags) {
       if (topology.misoriented_edges + topology.non_manifold_edges > 0) {
         std::snprintf(text, sizeof text,
                       "; the input has %zu misoriented and %zu non-manifold edges (duolod info), "
-                      "whose vertices never move",
-                      topology.misoriented_edges, topology.non_manifold_edges);
+                      "whose vertices never move%s",
+                      topology.misoriented_edges, topology.non_manifold_edges,
+                      topology.misoriented_edges > 0 && !flags.reorient
+                          ? " (--reorient turns triangles round to make edges consistent)"
+                          : "");
         detail += text;
       }
     }

@@ -227,4 +227,20 @@ struct SurfaceTopology {
 };
 SurfaceTopology surfaceTopology(const core::Mesh& mesh);
 
+// What orientConsistently changed.
+struct OrientationRepair {
+  size_t turned_triangles = 0;      // triangles whose corner order was reversed
+  size_t parts = 0;                 // parts joined through edges on exactly two triangles
+  size_t non_orientable_parts = 0;  // left as they were (a Moebius strip has no orientation)
+  bool operator==(const OrientationRepair&) const = default;
+};
+// Turns triangles round (reverses their corner order) so that every edge on exactly two
+// triangles runs opposite ways in them, as on an oriented surface: afterwards surfaceTopology
+// counts no misoriented edges but in non-orientable parts. Triangles are joined by position
+// (welded as surfaceTopology welds) across such edges into parts; a closed part (no border or
+// non-manifold edge) ends up facing outwards (positive enclosed volume), an open one keeps the
+// way most of its triangle area faced. Degenerate triangles and those with an index out of range
+// are left alone; vertex attributes (normals, tangents) are not changed.
+OrientationRepair orientConsistently(core::Mesh& mesh);
+
 }  // namespace duolod::mesh
