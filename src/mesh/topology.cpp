@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -14,75 +13,83 @@
 
 namespace duolod::mesh {
 
-SurfaceTopology surfaceTopology(const core::Mesh& mesh) {
-  std::vector<uint32_t> welded;  // as the simplifier welds: equal bits, -0 as +0
-  const uint32_t welded_count = positionIds(mesh.positions, welded);
+namespace {
 
-  // Each directed edge a -> b as its undirected key (min << 32 | max) and whether it runs from the
-  // higher end: sorted, an edge's uses are adjacent.
-  SurfaceTopology topology;
-  std::vector<uint8_t> used(welded_count, 0);
-  std::vector<std::pair<uint64_t, bool>> directed;
-  directed.reserve(mesh.indices.size());
-  const size_t index_count = mesh.indices.size() - mesh.indices.size() % 3;
-  for (size_t t = 0; t < index_count; t += 3) {
+// A triangle's directed edge a -> b, by position: its undirected key (min << 32 | max), the
+// triangle, and whether it runs from the higher end.
+struct DirectedEdge {
+  uint64_t key;
+  uint32_t triangle;
+  bool from_higher;
+  auto operator<=>(const DirectedEdge&) const = default;
+};
+
+// The directed edges of a mesh's proper triangles (welded by position as the simplifier welds:
+// equal bits, -0 as +0; no index out of range, no two corners on one position), sorted: an
+// edge's uses are adjacent, in triangle order.
+struct WeldedEdges {
+  uint32_t positions = 0;       // welded
+  std::vector<uint8_t> proper;  // per triangle
+  std::vector<DirectedEdge> directed;
+};
+WeldedEdges weldedEdges(const core::Mesh& mesh) {
+  WeldedEdges edges;
+  std::vector<uint32_t> welded;
+  edges.positions = positionIds(mesh.positions, welded);
+  const uint32_t triangle_count = uint32_t(mesh.indices.size() / 3);
+  edges.proper.assign(triangle_count, 0);
+  edges.directed.reserve(size_t(triangle_count) * 3);
+  for (uint32_t t = 0; t < triangle_count; ++t) {
     uint32_t v[3];
     bool in_range = true;
     for (int k = 0; k < 3; ++k) {
-      const uint32_t index = mesh.indices[t + k];
+      const uint32_t index = mesh.indices[size_t(t) * 3 + k];
       in_range &= index < welded.size();
       v[k] = in_range ? welded[index] : 0;
     }
     if (!in_range || v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
-    ++topology.triangles;
+    edges.proper[t] = 1;
     for (int k = 0; k < 3; ++k) {
-      used[v[k]] = 1;
       const uint32_t a = v[k], b = v[(k + 1) % 3];
-      const uint64_t key = uint64_t(std::min(a, b)) << 32 | std::max(a, b);
-      directed.push_back({key, a > b});
+      edges.directed.push_back({uint64_t(std::min(a, b)) << 32 | std::max(a, b), t, a > b});
     }
   }
-  topology.vertices = size_t(std::count(used.begin(), used.end(), 1));
-  std::sort(directed.begin(), directed.end());
+  std::sort(edges.directed.begin(), edges.directed.end());
+  return edges;
+}
+
+// Calls f(first, count) for each edge: its run of uses in `directed`.
+template <class F>
+void forEachEdge(const std::vector<DirectedEdge>& directed, F&& f) {
   for (size_t i = 0; i < directed.size();) {
     size_t end = i + 1;
-    while (end < directed.size() && directed[end].first == directed[i].first) ++end;
-    const size_t uses = end - i;
-    ++topology.edges;
-    if (uses == 1) ++topology.border_edges;
-    if (uses > 2) ++topology.non_manifold_edges;
-    if (uses == 2 && directed[i].second == directed[i + 1].second) ++topology.misoriented_edges;
+    while (end < directed.size() && directed[end].key == directed[i].key) ++end;
+    f(&directed[i], end - i);
     i = end;
   }
+}
+
+}  // namespace
+
+SurfaceTopology surfaceTopology(const core::Mesh& mesh) {
+  const WeldedEdges edges = weldedEdges(mesh);
+  SurfaceTopology topology;
+  topology.triangles = size_t(std::count(edges.proper.begin(), edges.proper.end(), 1));
+  std::vector<uint8_t> used(edges.positions, 0);
+  for (const DirectedEdge& e : edges.directed) used[e.key >> 32] = used[uint32_t(e.key)] = 1;
+  topology.vertices = size_t(std::count(used.begin(), used.end(), 1));
+  forEachEdge(edges.directed, [&](const DirectedEdge* uses, size_t count) {
+    ++topology.edges;
+    if (count == 1) ++topology.border_edges;
+    if (count > 2) ++topology.non_manifold_edges;
+    if (count == 2 && uses[0].from_higher == uses[1].from_higher) ++topology.misoriented_edges;
+  });
   return topology;
 }
 
 OrientationRepair orientConsistently(core::Mesh& mesh) {
-  std::vector<uint32_t> welded;
-  positionIds(mesh.positions, welded);
-  const uint32_t triangle_count = uint32_t(mesh.indices.size() / 3);
-  auto corners = [&](uint32_t t, uint32_t v[3]) {  // false: out of range or degenerate
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t index = mesh.indices[size_t(t) * 3 + k];
-      if (index >= welded.size()) return false;
-      v[k] = welded[index];
-    }
-    return v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
-  };
-
-  // Directed edges (undirected key, triangle, whether it runs from the higher end), sorted: an
-  // edge's uses are adjacent, in triangle order.
-  std::vector<std::tuple<uint64_t, uint32_t, bool>> directed;
-  directed.reserve(mesh.indices.size());
-  for (uint32_t t = 0; t < triangle_count; ++t) {
-    uint32_t v[3];
-    if (!corners(t, v)) continue;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = v[k], b = v[(k + 1) % 3];
-      directed.emplace_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b), t, a > b);
-    }
-  }
-  std::sort(directed.begin(), directed.end());
+  const WeldedEdges edges = weldedEdges(mesh);
+  const uint32_t triangle_count = uint32_t(edges.proper.size());
 
   // Links between the two triangles of each edge on exactly two (`same`: both run it the same
   // way, so exactly one of them must turn), as a triangle -> links table; a triangle on another
@@ -93,25 +100,21 @@ OrientationRepair orientConsistently(core::Mesh& mesh) {
   };
   std::vector<uint32_t> link_start(size_t(triangle_count) + 1, 0);
   std::vector<uint8_t> open(triangle_count, 0);
-  auto for_each_pair = [&](auto&& f) {
-    for (size_t i = 0; i < directed.size();) {
-      size_t end = i + 1;
-      while (end < directed.size() && std::get<0>(directed[end]) == std::get<0>(directed[i])) ++end;
-      if (end - i == 2)
-        f(std::get<1>(directed[i]), std::get<1>(directed[i + 1]),
-          std::get<2>(directed[i]) == std::get<2>(directed[i + 1]));
-      else
-        for (size_t j = i; j < end; ++j) open[std::get<1>(directed[j])] = 1;
-      i = end;
+  forEachEdge(edges.directed, [&](const DirectedEdge* uses, size_t count) {
+    if (count == 2) {
+      ++link_start[uses[0].triangle + 1], ++link_start[uses[1].triangle + 1];
+    } else {
+      for (size_t j = 0; j < count; ++j) open[uses[j].triangle] = 1;
     }
-  };
-  for_each_pair([&](uint32_t a, uint32_t b, bool) { ++link_start[a + 1], ++link_start[b + 1]; });
+  });
   for (uint32_t t = 0; t < triangle_count; ++t) link_start[t + 1] += link_start[t];
   std::vector<Link> links(link_start.back());
   std::vector<uint32_t> cursor(link_start.begin(), link_start.end() - 1);
-  for_each_pair([&](uint32_t a, uint32_t b, bool same) {
-    links[cursor[a]++] = {b, same};
-    links[cursor[b]++] = {a, same};
+  forEachEdge(edges.directed, [&](const DirectedEdge* uses, size_t count) {
+    if (count != 2) return;
+    const bool same = uses[0].from_higher == uses[1].from_higher;
+    links[cursor[uses[0].triangle]++] = {uses[1].triangle, same};
+    links[cursor[uses[1].triangle]++] = {uses[0].triangle, same};
   });
 
   // Each part from its lowest triangle, breadth first: turn[t] as the links ask, relative to the
@@ -121,8 +124,7 @@ OrientationRepair orientConsistently(core::Mesh& mesh) {
   std::vector<uint8_t> turn(triangle_count, kUnseen);
   std::vector<uint32_t> part;
   for (uint32_t first = 0; first < triangle_count; ++first) {
-    uint32_t v[3];
-    if (turn[first] != kUnseen || !corners(first, v)) continue;
+    if (turn[first] != kUnseen || !edges.proper[first]) continue;
     part.assign(1, first);
     turn[first] = 0;
     bool orientable = true, closed = true;
