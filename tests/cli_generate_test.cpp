@@ -14,7 +14,9 @@
 #include <nlohmann/json.hpp>
 
 #include "duolod/io.hpp"
+#include "duolod/mesh.hpp"
 #include "duolod/runtime.hpp"
+#include "mesh_test_meshes.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -162,6 +164,46 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
   ASSERT_TRUE(runtime::loadPolicy((out / "lod.json").string(), replaced_policy, &error)) << error;
   for (size_t k = replaced_policy.levels.size(); k < 10; ++k)
     EXPECT_FALSE(fs::exists(out / ("level" + std::to_string(k) + ".frag.spv"))) << k;
+}
+
+// --reorient turns triangles round before anything is derived, rendered or simplified. An
+// icosphere (1280 outward triangles) with every third triangle turned: without the flag a warning
+// names it as soon as the file is loaded (here a missing shader then ends the run); with it, 427
+// triangles are turned back, the chain's level 0 is the turned-back mesh, and a coarser level is
+// kept (the normals derived across the misoriented edges cancelled: the original's shading was
+// noise that no coarse mesh matched).
+TEST(CliGenerate, ReorientTurnsTrianglesFirst) {
+  const fs::path dir = test::scratchDir("cli_generate_reorient");
+  const std::string turned = (dir / "turned.obj").string();
+  test::writeIcosphereWithTurnedTriangles(turned, 3);
+  test::CommandRun warned =
+      test::runCommand(DUOLOD_CLI, {"generate", turned, "--vert", "/nonexistent.vert", "--frag",
+                                    "/nonexistent.frag", "--out", (dir / "never").string()});
+  EXPECT_EQ(warned.exit_code, 1) << warned.err;
+  EXPECT_TRUE(test::contains(warned.err, "turned.obj: 763 edges are misoriented")) << warned.err;
+  EXPECT_TRUE(test::contains(warned.err, "--reorient turns triangles round first")) << warned.err;
+
+  const fs::path out = dir / "lod";
+  test::CommandRun run = test::runCommand(
+      DUOLOD_CLI, {"generate", turned, "--reorient", "--only", "mesh", "--mesh-mode", "quadric",
+                   "--levels", "3", "--candidates", "20", "--quiet", "--out", out.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_TRUE(test::contains(run.out,
+                             "reorient  427 triangles turned round, 1 parts (0 cannot "
+                             "be oriented: left as they were)\n"))
+      << run.out;
+  EXPECT_FALSE(test::contains(run.err, "misoriented")) << run.err;
+  io::LoadOptions level0;
+  level0.gltf_node = 0;
+  auto written = io::loadAsset((out / "lod.gltf").string(), level0);
+  ASSERT_TRUE(written) << written.error().message;
+  EXPECT_EQ(written->mesh.triangleCount(), 1280u);
+  EXPECT_EQ(mesh::surfaceTopology(written->mesh).misoriented_edges, 0u);
+  runtime::Policy policy;
+  std::string error;
+  ASSERT_TRUE(runtime::loadPolicy((out / "lod.json").string(), policy, &error)) << error;
+  ASSERT_GE(policy.levels.size(), 2u) << run.out;
+  EXPECT_LT(policy.levels[1].triangles, 1280u);
 }
 
 TEST(CliGenerate, BadInputIsAClearError) {

@@ -213,21 +213,8 @@ TEST(CliSimplify, UnreachableTargetSaysWhy) {
 // so, naming the flag); with it, 107 triangles are turned back and the target is reached.
 TEST(CliSimplify, ReorientTurnsTrianglesFirst) {
   fs::path dir = test::scratchDir("reorient");
-  const core::Mesh sphere = test::icosphere(2);
-  ASSERT_EQ(sphere.triangleCount(), 320u);
   const std::string turned = (dir / "turned.obj").string();
-  {
-    std::ofstream obj(turned);
-    for (const core::Vec3& p : sphere.positions)
-      obj << "v " << p.x << " " << p.y << " " << p.z << "\n";
-    for (size_t t = 0; t < 320; ++t) {
-      const uint32_t* v = &sphere.indices[t * 3];
-      if (t % 3 == 1)
-        obj << "f " << v[0] + 1 << " " << v[2] + 1 << " " << v[1] + 1 << "\n";
-      else
-        obj << "f " << v[0] + 1 << " " << v[1] + 1 << " " << v[2] + 1 << "\n";
-    }
-  }
+  test::writeIcosphereWithTurnedTriangles(turned, 2);  // 320 triangles
   test::CommandRun held =
       runCli({"simplify", turned, (dir / "held.obj").string(), "--triangles", "32"});
   ASSERT_EQ(held.exit_code, 0) << held.err;

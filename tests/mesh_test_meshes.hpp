@@ -6,8 +6,10 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <functional>
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -187,6 +189,20 @@ inline core::Vec3 triangleNormal(const core::Mesh& mesh, size_t t) {
   core::Vec3 a = mesh.positions[mesh.indices[t * 3]], b = mesh.positions[mesh.indices[t * 3 + 1]],
              c = mesh.positions[mesh.indices[t * 3 + 2]];
   return core::cross(b - a, c - a);
+}
+
+// Writes icosphere(subdivisions) as an OBJ of positions with every third triangle (1, 4, 7, ...)
+// turned round: a surface whose edges are half misoriented, for --reorient.
+inline void writeIcosphereWithTurnedTriangles(const std::string& path, int subdivisions) {
+  const core::Mesh sphere = icosphere(subdivisions);
+  std::ofstream obj(path);
+  for (const core::Vec3& p : sphere.positions)
+    obj << "v " << p.x << " " << p.y << " " << p.z << "\n";
+  for (size_t t = 0; t < sphere.triangleCount(); ++t) {
+    const uint32_t* v = &sphere.indices[t * 3];
+    const bool turned = t % 3 == 1;
+    obj << "f " << v[0] + 1 << " " << v[turned ? 2 : 1] + 1 << " " << v[turned ? 1 : 2] + 1 << "\n";
+  }
 }
 
 }  // namespace duolod::test

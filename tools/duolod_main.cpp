@@ -921,6 +921,19 @@ mesh::SimplifyResult clusterToTarget(const core::Mesh& input, size_t target_tria
   return best;
 }
 
+// `--reorient` (simplify, generate): turns the mesh's triangles round to make its edges
+// consistent (mesh::orientConsistently) and returns the line that reports it. Run before normals
+// are derived, so that they follow the turned triangles.
+std::string reorientLine(core::Mesh& mesh) {
+  const mesh::OrientationRepair repair = mesh::orientConsistently(mesh);
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "reorient  %zu triangles turned round, %zu parts (%zu cannot be oriented: left "
+                "as they were)\n",
+                repair.turned_triangles, repair.parts, repair.non_orientable_parts);
+  return line;
+}
+
 int runSimplify(SimplifyFlags& flags) {
   if (auto ok = flags.check(); !ok) return fail(ok.error().message);
   // Before the work, not after it (an image-mode run takes minutes).
@@ -944,16 +957,7 @@ int runSimplify(SimplifyFlags& flags) {
                                            .generate_tangents = false});
   if (!asset) return fail(asset.error().message);
   // Before normals are derived, so that they follow the turned triangles.
-  std::string reoriented;
-  if (flags.reorient) {
-    const mesh::OrientationRepair repair = mesh::orientConsistently(asset->mesh);
-    char line[256];
-    std::snprintf(line, sizeof line,
-                  "reorient  %zu triangles turned round, %zu parts (%zu cannot be oriented: "
-                  "left as they were)\n",
-                  repair.turned_triangles, repair.parts, repair.non_orientable_parts);
-    reoriented = line;
-  }
+  const std::string reoriented = flags.reorient ? reorientLine(asset->mesh) : std::string();
   const bool positions_only = asset->mesh.normals.empty() && asset->mesh.tangents.empty() &&
                               asset->mesh.uv0.empty() && asset->mesh.uv1.empty() &&
                               asset->mesh.colors.empty() && !flags.simplify_generated_normals;
@@ -1196,6 +1200,7 @@ struct GenerateFlags {
   bool quiet = false, verbose = false, no_compile_ahead = false, move_to_parameter = false;
   CLI::Option* quiet_option = nullptr;
   bool no_sort_prefetch = false;
+  bool reorient = false;
   int jobs = 0;
   BoundFlags bound_flags;
 
@@ -1207,6 +1212,12 @@ struct GenerateFlags {
     shading.add(command);
     command->add_option("--out", out, "output folder (must not exist or be empty)")->required();
     command->add_flag("--force", force, "write into a non-empty --out folder");
+    command->add_flag("--reorient", reorient,
+                      "first turn triangles round so that every edge between two triangles runs "
+                      "opposite ways in them (closed parts facing outwards, open ones the way "
+                      "most of their area faces), then derive the normals and tangents the file "
+                      "lacks: mesh simplification never moves a vertex of an edge two triangles "
+                      "run the same way, and normals derived across it cancel");
     command->add_option("--optimizer", optimizer, "separate (§5) or interleaved (§4.3)")
         ->check(CLI::IsMember({"separate", "interleaved"}))
         ->capture_default_str();
@@ -1388,8 +1399,27 @@ int runGenerate(GenerateFlags& flags) {
           "summary.json", "shader");
       !ok)
     return fail(ok.error().message);
-  auto asset = loadWithWarnings(flags.in);
+  // With --reorient the normals and tangents the file lacks are derived after the turn (as the
+  // loader would derive them), so that they follow the turned triangles.
+  auto asset = loadWithWarnings(
+      flags.in, {.generate_normals = !flags.reorient, .generate_tangents = !flags.reorient});
   if (!asset) return fail(asset.error().message);
+  std::string reoriented;
+  if (flags.reorient) {
+    reoriented = reorientLine(asset->mesh);
+    core::Mesh& mesh = asset->mesh;
+    if (mesh.normals.empty()) core::computeNormals(mesh);
+    if (mesh.tangents.empty() && !mesh.normals.empty() && !mesh.uv0.empty())
+      core::computeTangentsPerSubmesh(mesh, core::normalMappedSubmeshes(*asset));
+  } else if (const size_t misoriented = mesh::surfaceTopology(asset->mesh).misoriented_edges;
+             misoriented > 0) {
+    // Found before the long work: such a mesh stops short of coarse levels.
+    std::fprintf(stderr,
+                 "duolod: warning: %s: %zu edges are misoriented (two triangles run them the "
+                 "same way): mesh simplification never moves their vertices, and normals "
+                 "derived across them cancel; --reorient turns triangles round first\n",
+                 flags.in.c_str(), misoriented);
+  }
   if (auto ok = checkNearestLevel(flags, *asset); !ok) return fail(ok.error().message);
   auto source = flags.shading.source();
   if (!source) return fail(source.error().message);
@@ -1421,6 +1451,7 @@ int runGenerate(GenerateFlags& flags) {
   std::printf("generate  %s: %zu triangles, shader %s + %s\n", flags.in.c_str(),
               asset->mesh.triangleCount(), source->vertex_name.c_str(),
               source->fragment_name.c_str());
+  std::fputs(reoriented.c_str(), stdout);
   auto result = lod::generateLod(*asset, *source, options);
   line.finish();
   if (!result) return fail(result.error().message);
