@@ -257,21 +257,31 @@ void computeNormals(Mesh& mesh) {
   }
   // Vertices that share a position (split only by a UV or colour seam) share one normal: a
   // texture seam must not become a shading crease.
-  std::unordered_map<uint64_t, std::vector<uint32_t>> by_position;
-  for (uint32_t v = 0; v < mesh.vertexCount(); ++v) {
+  // Grouped by a sort of (position hash, id) rather than a hash map of lists (a list allocated
+  // per vertex: 0.77 s of a 490k-vertex mesh's load); each group keeps its ids in increasing
+  // order, so the sums are made in the same order as before.
+  const uint32_t n = uint32_t(mesh.vertexCount());
+  std::vector<std::pair<uint64_t, uint32_t>> by_position(n);
+  for (uint32_t v = 0; v < n; ++v) {
     Vec3 p = mesh.positions[v];
     if (p.x == 0) p.x = 0;  // -0 and +0 are one position
     if (p.y == 0) p.y = 0;
     if (p.z == 0) p.z = 0;
-    by_position[hashBytes(&p, sizeof p)].push_back(v);
+    by_position[v] = {hashBytes(&p, sizeof p), v};
   }
-  for (auto& [hash, vertices] : by_position) {
-    if (vertices.size() < 2) continue;
+  std::sort(by_position.begin(), by_position.end());
+  std::vector<uint32_t> vertices, group;
+  for (size_t begin = 0, end = 0; begin < n; begin = end) {
+    for (end = begin + 1; end < n && by_position[end].first == by_position[begin].first; ++end) {
+    }
+    if (end - begin < 2) continue;
+    vertices.clear();
+    for (size_t i = begin; i < end; ++i) vertices.push_back(by_position[i].second);
     // Same hash: group by exact position (collisions are possible, so compare).
     for (size_t i = 0; i < vertices.size(); ++i) {
       if (vertices[i] == UINT32_MAX) continue;
       Vec3 sum = mesh.normals[vertices[i]];
-      std::vector<uint32_t> group = {vertices[i]};
+      group.assign(1, vertices[i]);
       for (size_t j = i + 1; j < vertices.size(); ++j)
         if (vertices[j] != UINT32_MAX && mesh.positions[vertices[j]] == mesh.positions[vertices[i]]) {
           sum += mesh.normals[vertices[j]];
@@ -441,26 +451,27 @@ size_t weldVertices(Mesh& mesh) {
     if (!mesh.uv1.empty()) put(mesh.uv1[v]);
     if (!mesh.colors.empty()) put(mesh.colors[v]);
   }
-  struct KeyHash {
-    const std::vector<uint8_t>* keys;
-    size_t stride;
-    size_t operator()(uint32_t v) const { return hashBytes(keys->data() + v * stride, stride); }
-  };
-  struct KeyEqual {
-    const std::vector<uint8_t>* keys;
-    size_t stride;
-    bool operator()(uint32_t a, uint32_t b) const {
-      return std::memcmp(keys->data() + a * stride, keys->data() + b * stride, stride) == 0;
-    }
-  };
-  std::unordered_map<uint32_t, uint32_t, KeyHash, KeyEqual> first_of(
-      n, KeyHash{&keys, stride}, KeyEqual{&keys, stride});
+  // Equal keys found in an open-addressing table of first ids (linear probing, at most half
+  // full), not a node-based hash map (a node allocated per vertex: 0.18 s for 490k distinct
+  // vertices). A vertex maps to the first (lowest id) of its equals, and the kept vertices are
+  // numbered in id order.
+  auto key = [&](uint32_t v) { return keys.data() + size_t(v) * stride; };
+  size_t slots = 16;
+  while (slots < 2 * n) slots *= 2;
+  const size_t mask = slots - 1;
+  std::vector<uint32_t> first_of(slots, UINT32_MAX);  // a kept vertex's id, or empty
   std::vector<uint32_t> remap(n);
   uint32_t next = 0;
   for (uint32_t v = 0; v < n; ++v) {
-    auto [it, inserted] = first_of.try_emplace(v, next);
-    if (inserted) ++next;
-    remap[v] = it->second;
+    size_t slot = hashBytes(key(v), stride) & mask;
+    while (first_of[slot] != UINT32_MAX && std::memcmp(key(first_of[slot]), key(v), stride) != 0)
+      slot = (slot + 1) & mask;
+    if (first_of[slot] == UINT32_MAX) {
+      first_of[slot] = v;
+      remap[v] = next++;
+    } else {
+      remap[v] = remap[first_of[slot]];
+    }
   }
   if (next == n) return 0;
   auto compact = [&](auto& stream) {

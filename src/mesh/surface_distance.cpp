@@ -10,7 +10,11 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <exception>
 #include <limits>
+#include <optional>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #include "duolod/mesh.hpp"
@@ -62,8 +66,12 @@ class TriangleBvh {
     // Triangles that cover the same points as one before them (the same three positions, in any
     // order) add nothing to the surface, and a pile of them, which no box can split, made every
     // query test all of them (4,000 copies of one triangle: 11 s). An open-addressing table of
-    // the kept triangles, by a hash of their sorted positions.
-    std::vector<uint32_t> table(std::bit_ceil(std::max<size_t>(2 * n, 16)), kEmpty);
+    // the kept triangles, by a hash of their sorted positions; each slot also holds the hash's
+    // top half, so that a probe compares positions only when that matches.
+    struct Slot {
+      uint32_t kept = kEmpty, tag = 0;
+    };
+    std::vector<Slot> table(std::bit_ceil(std::max<size_t>(2 * n, 16)));
     const size_t mask = table.size() - 1;
     for (size_t t = 0; t < n; ++t) {
       core::Vec3 v[3];
@@ -88,12 +96,14 @@ class TriangleBvh {
         }
       const uint32_t kept = uint32_t(vertices_.size() / 3);
       bool duplicate = false;
+      const uint32_t tag = uint32_t(hash >> 32);
       for (size_t slot = hash & mask;; slot = (slot + 1) & mask) {
-        if (table[slot] == kEmpty) {
-          table[slot] = kept;
+        if (table[slot].kept == kEmpty) {
+          table[slot] = {kept, tag};
           break;
         }
-        const P3* other = &vertices_[size_t(table[slot]) * 3];
+        if (table[slot].tag != tag) continue;
+        const P3* other = &vertices_[size_t(table[slot].kept) * 3];
         std::array<core::Vec3, 3> other_sorted;
         for (int k = 0; k < 3; ++k)
           other_sorted[k] = {float(other[k].x), float(other[k].y), float(other[k].z)};
@@ -173,6 +183,24 @@ class TriangleBvh {
     struct Task {
       uint32_t node, begin, end;
     };
+    // Each triangle's float box, rounded outwards so that it still contains the double triangle:
+    // once, not again on every level of the tree (the roundings were half the build's time).
+    struct Box {
+      float lo[3], hi[3];
+    };
+    std::vector<Box> triangle_box(centroid_.size());
+    for (size_t t = 0; t < triangle_box.size(); ++t) {
+      Box& box = triangle_box[t];
+      for (int k = 0; k < 3; ++k) box.lo[k] = INFINITY, box.hi[k] = -INFINITY;
+      for (int j = 0; j < 3; ++j) {
+        const P3& v = vertices_[t * 3 + j];
+        const double q[3] = {v.x, v.y, v.z};
+        for (int k = 0; k < 3; ++k) {
+          box.lo[k] = std::min(box.lo[k], std::nextafter(float(q[k]), -INFINITY));
+          box.hi[k] = std::max(box.hi[k], std::nextafter(float(q[k]), INFINITY));
+        }
+      }
+    }
     nodes_.push_back({});
     std::vector<Task> tasks = {{0, begin, end}};
     while (!tasks.empty()) {
@@ -182,14 +210,10 @@ class TriangleBvh {
       for (int k = 0; k < 3; ++k) node.lo[k] = INFINITY, node.hi[k] = -INFINITY;
       double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
       for (uint32_t i = task.begin; i < task.end; ++i) {
-        const P3* v = &vertices_[size_t(order_[i]) * 3];
-        for (int j = 0; j < 3; ++j) {
-          const double q[3] = {v[j].x, v[j].y, v[j].z};
-          for (int k = 0; k < 3; ++k) {
-            // Round outwards so the float box still contains the double triangle.
-            node.lo[k] = std::min(node.lo[k], std::nextafter(float(q[k]), -INFINITY));
-            node.hi[k] = std::max(node.hi[k], std::nextafter(float(q[k]), INFINITY));
-          }
+        const Box& box = triangle_box[order_[i]];
+        for (int k = 0; k < 3; ++k) {
+          node.lo[k] = std::min(node.lo[k], box.lo[k]);
+          node.hi[k] = std::max(node.hi[k], box.hi[k]);
         }
         const P3 c = centroid_[order_[i]];
         const double cq[3] = {c.x, c.y, c.z};
@@ -314,12 +338,22 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
       cumulative = end;
     }
   }
-  // Vertices, for the maximum only (the farthest point is often a vertex).
+  // Vertices, for the maximum only (the farthest point is often a vertex). Each is measured
+  // once, when its first triangle comes, and its distance counts for each of its triangles (the
+  // corners of a closed mesh are six per vertex: 2.9M queries instead of 490k on a mesh of 977k
+  // triangles, 96% of the time).
+  std::vector<double> vertex_distance(from.positions.size(), -1.0);
   for (size_t t = 0; t < n; ++t)
     for (int k = 0; k < 3; ++k) {
       uint32_t i = from.indices[t * 3 + k];
-      if (i < from.positions.size() && core::isFinite(from.positions[i]) && area[t] > 0)
+      if (!(i < from.positions.size() && core::isFinite(from.positions[i]) && area[t] > 0))
+        continue;
+      if (vertex_distance[i] < 0) {
         measure(toP3(from.positions[i]), false, t);
+        vertex_distance[i] = previous_distance;
+      } else {
+        triangle_max[t] = std::max(triangle_max[t], vertex_distance[i]);
+      }
     }
   // The maximum of the distance over a triangle lies anywhere in it, and a few random samples can
   // miss it by much: on CGAL's bunny at 10%, 100k samples a side put the Hausdorff distance at
@@ -355,11 +389,47 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
   return result;
 }
 
+// Runs `first` here and `second` beside it on another thread when there is a second core (the
+// two sides of the distance share only what they read), else one after the other; the results do
+// not depend on which. An exception from either is rethrown here, after both ended.
+template <class First, class Second>
+void runBoth(First&& first, Second&& second) {
+  static const bool two_cores = std::thread::hardware_concurrency() >= 2;
+  std::exception_ptr thrown;
+  std::thread other;
+  if (two_cores) {
+    try {
+      other = std::thread([&] {
+        try {
+          second();
+        } catch (...) {
+          thrown = std::current_exception();
+        }
+      });
+    } catch (const std::system_error&) {  // no thread to be had: both here
+    }
+  }
+  try {
+    first();
+  } catch (...) {
+    if (other.joinable()) other.join();
+    throw;
+  }
+  if (other.joinable())
+    other.join();
+  else
+    second();
+  if (thrown) std::rethrow_exception(thrown);
+}
+
 }  // namespace
 
 SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b, size_t samples_per_mesh,
                                 uint64_t seed) {
-  TriangleBvh bvh_a(a), bvh_b(b);
+  // Each side on its own core: 2.5 s -> 1.4 s for a mesh of 977k triangles against its 10%.
+  std::optional<TriangleBvh> tree_a, tree_b;
+  runBoth([&] { tree_a.emplace(a); }, [&] { tree_b.emplace(b); });
+  const TriangleBvh &bvh_a = *tree_a, &bvh_b = *tree_b;
   if (bvh_a.empty() && bvh_b.empty()) return {};
   if (bvh_a.empty() || bvh_b.empty()) {
     const double inf = std::numeric_limits<double>::infinity();
@@ -368,8 +438,9 @@ SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b, size_t
     unbounded.max_a_to_b = unbounded.max_b_to_a = inf;
     return unbounded;
   }
-  OneSided ab = sampleDistances(a, bvh_b, samples_per_mesh, seed);
-  OneSided ba = sampleDistances(b, bvh_a, samples_per_mesh, seed + 1);
+  OneSided ab, ba;
+  runBoth([&] { ab = sampleDistances(a, bvh_b, samples_per_mesh, seed); },
+          [&] { ba = sampleDistances(b, bvh_a, samples_per_mesh, seed + 1); });
   SurfaceDistance d;
   d.hausdorff = std::max(ab.max, ba.max);
   d.max_a_to_b = ab.max;
