@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 #include <type_traits>
 #include <vector>
@@ -325,6 +326,41 @@ TEST(WeldVertices, KeepsVerticesThatDifferOnlyInUv) {
   ASSERT_EQ(mesh.uv0.size(), 5u);
   EXPECT_EQ(mesh.uv0[2].x, 1.0f);
   EXPECT_EQ(mesh.uv0[3].x, 0.5f);
+}
+
+// Thousands of vertices, each position used three times in a scrambled order and some told
+// apart only by a uv or by -0: the weld's table (open addressing, probed past collisions) gives
+// what a plain ordered map of first occurrences gives.
+TEST(WeldVertices, ManyDuplicatesMatchAPlainMap) {
+  Mesh mesh;
+  uint64_t state = 12345;
+  auto next = [&] {
+    return uint32_t((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 33);
+  };
+  for (int i = 0; i < 9000; ++i) {
+    const uint32_t id = next() % 3000;
+    const float x = id % 2 == 0 && next() % 2 ? -0.0f : 0.0f;  // -0 and +0 weld
+    mesh.positions.push_back({x, float(id % 50), float(id / 50)});
+    mesh.uv0.push_back({id % 7 == 0 ? float(next() % 2) : 0.0f, 0});  // a seam on some
+  }
+  for (uint32_t i = 0; i + 2 < 9000; i += 3)
+    mesh.indices.insert(mesh.indices.end(), {i, i + 1, i + 2});
+  mesh.submeshes = {{0, uint32_t(mesh.indices.size()), 0}};
+  const Mesh before = mesh;
+  std::map<std::array<float, 4>, uint32_t> first;  // key -> new id, in order of first use
+  std::vector<uint32_t> expected_remap(before.vertexCount());
+  for (uint32_t v = 0; v < before.vertexCount(); ++v) {
+    const Vec3 p = before.positions[v];
+    const std::array<float, 4> key = {p.x == 0 ? 0.0f : p.x, p.y, p.z, before.uv0[v].x};
+    expected_remap[v] = first.try_emplace(key, uint32_t(first.size())).first->second;
+  }
+  EXPECT_EQ(core::weldVertices(mesh), before.vertexCount() - first.size());
+  ASSERT_EQ(mesh.vertexCount(), first.size());
+  for (size_t i = 0; i < mesh.indices.size(); ++i) {
+    ASSERT_EQ(mesh.indices[i], expected_remap[before.indices[i]]) << i;
+    EXPECT_EQ(mesh.uv0[mesh.indices[i]].x, before.uv0[before.indices[i]].x);
+    EXPECT_EQ(mesh.positions[mesh.indices[i]].y, before.positions[before.indices[i]].y);
+  }
 }
 
 TEST(WeldVertices, NothingToWeldLeavesMeshAlone) {
