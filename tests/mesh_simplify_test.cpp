@@ -120,6 +120,31 @@ TEST(SimplifyQuadric, ClosedMeshStaysClosed) {
 // all border edges removes a component (the link condition with the border closed by a virtual
 // vertex). Both paths: positions only (the fast path) and with normals (the engine). Without the
 // rule both removed the disc (WaterBottle's cap and the Avocado's skin at 0.5%).
+// The progress callback sees the triangle count fall, and its last call is the result's count:
+// on the position fast path (once a pass and once a greedy fill) and on the engine with normals
+// (once a collapse).
+TEST(SimplifyQuadric, ReportsProgressAsTrianglesGo) {
+  for (bool with_normals : {false, true}) {
+    core::Mesh sphere = test::icosphere(3);
+    ASSERT_EQ(sphere.triangleCount(), 1280u);
+    if (with_normals) core::computeNormals(sphere);
+    std::vector<size_t> seen;
+    const mesh::SimplifyResult result = mesh::simplifyQuadric(
+        sphere, {.target_triangles = 128, .record = false, .progress = [&](size_t triangles) {
+                   seen.push_back(triangles);
+                 }});
+    ASSERT_EQ(result.mesh.triangleCount(), 128u) << with_normals;
+    ASSERT_FALSE(seen.empty()) << with_normals;
+    EXPECT_TRUE(std::is_sorted(seen.rbegin(), seen.rend())) << with_normals;
+    EXPECT_LT(seen.front(), 1280u);
+    EXPECT_EQ(seen.back(), 128u);
+    // The engine reports each collapse: (1280 - 128) / 2 of them.
+    if (with_normals) {
+      EXPECT_EQ(seen.size(), 576u);
+    }
+  }
+}
+
 TEST(SimplifyQuadric, ComponentsDoNotVanish) {
   Mesh mesh = test::icosphere(2);  // 320 triangles, closed
   const uint32_t centre = uint32_t(mesh.vertexCount());

@@ -1015,6 +1015,33 @@ int runSimplify(SimplifyFlags& flags) {
   mesh::ImageSimplifyStats image_stats;
   std::string detail;
   char text[256];
+  // On a terminal, a line updated five times a second, from the first second on: the image-driven
+  // mode renders for each collapse (minutes on large meshes), and the quadric mode on a mesh of a
+  // million triangles with normals takes tens of seconds.
+  const char* progress_label = flags.mode == "image" ? "image-driven" : "quadric";
+  const auto progress_start = std::chrono::steady_clock::now();
+  auto last_shown = progress_start;
+  bool shown = false;
+  auto show_progress = [&](size_t triangles) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_shown < std::chrono::milliseconds(200) ||
+        (!shown && now - progress_start < std::chrono::seconds(1)))
+      return;
+    last_shown = now;
+    shown = true;
+    const double seconds = secondsSince(progress_start);
+    if (target_triangles > 0 && input_triangles > target_triangles)
+      std::fprintf(stderr, "\r  %s: %zu -> %zu triangles (%.0f%%), %.1f s   ", progress_label,
+                   triangles, target_triangles,
+                   100.0 * (double(input_triangles) - double(triangles)) /
+                       (double(input_triangles) - double(target_triangles)),
+                   seconds);
+    else
+      std::fprintf(stderr, "\r  %s: %zu triangles, %.1f s   ", progress_label, triangles, seconds);
+    std::fflush(stderr);
+  };
+  const std::function<void(size_t)> progress =
+      isatty(fileno(stderr)) ? std::function<void(size_t)>(show_progress) : nullptr;
   if (flags.mode == "quadric") {
     result = mesh::simplifyQuadric(
         input, {.target_triangles = target_triangles,
@@ -1022,7 +1049,9 @@ int runSimplify(SimplifyFlags& flags) {
                 .placement = flags.placement == "endpoint" ? mesh::Placement::kEndpoint
                                                            : mesh::Placement::kOptimal,
                 .lock_border = flags.lock_border,
-                .record = false});
+                .record = false,
+                .progress = progress});
+    if (shown) std::fprintf(stderr, "\n");
     std::snprintf(text, sizeof text, "largest collapse error %.4g (asset units)", result.error);
     detail = text;
   } else if (flags.mode == "cluster") {
@@ -1037,38 +1066,16 @@ int runSimplify(SimplifyFlags& flags) {
   } else {
     auto source = flags.shading.source();
     if (!source) return fail(source.error().message);
-    // On a terminal, a line updated five times a second: the image-driven mode renders for each
-    // collapse, minutes on large meshes.
-    const auto progress_start = std::chrono::steady_clock::now();
-    auto last_shown = progress_start;
-    bool shown = false;
-    auto show_progress = [&](size_t triangles) {
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last_shown < std::chrono::milliseconds(200)) return;
-      last_shown = now;
-      shown = true;
-      const double seconds = secondsSince(progress_start);
-      if (target_triangles > 0 && input_triangles > target_triangles)
-        std::fprintf(stderr, "\r  image-driven: %zu -> %zu triangles (%.0f%%), %.1f s   ",
-                     triangles, target_triangles,
-                     100.0 * (double(input_triangles) - double(triangles)) /
-                         (double(input_triangles) - double(target_triangles)),
-                     seconds);
-      else
-        std::fprintf(stderr, "\r  image-driven: %zu triangles, %.1f s   ", triangles, seconds);
-      std::fflush(stderr);
-    };
-    auto simplified = mesh::simplifyImage(
-        *session.renderer, *shaded, *source,
-        {.target_triangles = target_triangles,
-         .target_error = target_error,
-         .distance = distance,
-         .display = flags.shading.display(),
-         .domain = {.views = flags.shading.viewSet()},
-         .lock_border = flags.lock_border,
-         .record = false,
-         .progress = isatty(fileno(stderr)) ? std::function<void(size_t)>(show_progress) : nullptr},
-        &image_stats);
+    auto simplified = mesh::simplifyImage(*session.renderer, *shaded, *source,
+                                          {.target_triangles = target_triangles,
+                                           .target_error = target_error,
+                                           .distance = distance,
+                                           .display = flags.shading.display(),
+                                           .domain = {.views = flags.shading.viewSet()},
+                                           .lock_border = flags.lock_border,
+                                           .record = false,
+                                           .progress = progress},
+                                          &image_stats);
     if (shown) std::fprintf(stderr, "\n");
     if (!simplified) return fail(simplified.error().message);
     result = std::move(*simplified);

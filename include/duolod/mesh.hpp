@@ -37,6 +37,10 @@ struct SimplifyOptions {
   bool allow_material_border_collapse = false;
   // Record every collapse (needed for candidates); costs memory proportional to the collapses.
   bool record = true;
+  // Optional: called now and then with the live triangle count (after each pass, and after each
+  // collapse of the greedy queue), so that a caller can show progress on a long run (a mesh of a
+  // million triangles with normals takes tens of seconds).
+  std::function<void(size_t triangles)> progress = nullptr;
 };
 
 // One step of a progressive record: vertex `removed` merges into `kept`, whose attributes become

@@ -1177,6 +1177,7 @@ void Engine::runPasses() {
       std::sort(first_rest, open_end);
       apply_range(first_rest, open_end);
     }
+    if (options_.progress) options_.progress(s.live_triangles);
     if (applied == 0) break;
     const size_t above_target = reached() ? 0 : s.live_triangles - pass_target;
     if (passStalls(applied, goal, above_target, tail_capacity) || passNearsTail(above_target, tail))

@@ -269,9 +269,9 @@ struct EngineOptions {
   // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
   // distance), and the queue over a mesh that small is cheap. See greedyTailTriangles.
   size_t greedy_tail_triangles = 2000;
-  // Optional: called with the live triangle count after each batch of refined prices and each
-  // applied collapse of the greedy queue (the image-driven mode's order, where collapses wait on
-  // renders), so that a caller can show progress.
+  // Optional: called with the live triangle count after each pass, each batch of refined prices
+  // and each applied collapse of the greedy queue (the image-driven mode's order, where
+  // collapses wait on renders), so that a caller can show progress.
   std::function<void(size_t)> progress = nullptr;
 };
 

@@ -1462,6 +1462,7 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
       order = sortByKey(rest, cheap, open, histograms_);
       apply_range(order, order + open);
     }
+    if (options_.progress) options_.progress(live_triangles_);
     if (applied == 0) break;
     const size_t above_target = reached() ? 0 : live_triangles_ - pass_target;
     if (passStalls(applied, goal, above_target, tail_capacity) || passNearsTail(above_target, tail))
@@ -1552,6 +1553,7 @@ void PositionSimplifier::runGreedy() {
       tryCollapse<true>(c, 0, priced.placement);
     }
     compact();
+    if (options_.progress) options_.progress(live_triangles_);
     if (!from_seeds && (stats_.rejected_topology + stats_.rejected_flip == rejected_before ||
                         stats_.collapses == collapses_before))
       break;

@@ -40,6 +40,7 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
       // positions-only row is where meshopt_simplify 0.18 (position-only) is the comparison.
       .ordering = attributeLayout(prepared.mesh).stride == 0 ? CollapseOrdering::kPasses
                                                              : CollapseOrdering::kGreedy,
+      .progress = options.progress,
   };
   SimplifyResult result = runCollapseEngine(prepared, model, engine_options);
   result.stats.seconds =
