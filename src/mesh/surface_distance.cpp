@@ -119,12 +119,7 @@ class TriangleBvh {
       for (int k = 0; k < 3; ++k) vertices_.push_back(toP3(v[k]));
     }
     const size_t count = vertices_.size() / 3;
-    order_.resize(count);
-    for (uint32_t i = 0; i < count; ++i) order_[i] = i;
-    centroid_.resize(count);
-    for (size_t i = 0; i < count; ++i)
-      centroid_[i] = (vertices_[i * 3] + vertices_[i * 3 + 1] + vertices_[i * 3 + 2]) * (1.0 / 3);
-    if (count > 0) build(0, uint32_t(count));
+    if (count > 0) build(uint32_t(count));
   }
 
   bool empty() const { return nodes_.empty(); }
@@ -178,31 +173,39 @@ class TriangleBvh {
     return d;
   }
 
-  void build(uint32_t begin, uint32_t end) {
+  // The tree over `count` triangles: median splits of their centroids on the longest axis.
+  void build(uint32_t count) {
+    // What the build reads of a triangle, in one array that the splits permute (instead of an
+    // order of ids into separate arrays, read at random on every level: the centroid compares of
+    // the median splits were a quarter of the build's time): its centroid, its float box rounded
+    // outwards once so that it still contains the double triangle (rounded again on every level,
+    // the roundings were half the build's time), and its id.
+    struct Item {
+      P3 centroid;
+      float lo[3], hi[3];
+      uint32_t id;
+    };
+    std::vector<Item> items(count);
+    for (uint32_t t = 0; t < count; ++t) {
+      Item& item = items[t];
+      const P3* v = &vertices_[size_t(t) * 3];
+      item.centroid = (v[0] + v[1] + v[2]) * (1.0 / 3);
+      item.id = t;
+      for (int k = 0; k < 3; ++k) item.lo[k] = INFINITY, item.hi[k] = -INFINITY;
+      for (int j = 0; j < 3; ++j) {
+        const double q[3] = {v[j].x, v[j].y, v[j].z};
+        for (int k = 0; k < 3; ++k) {
+          item.lo[k] = std::min(item.lo[k], std::nextafter(float(q[k]), -INFINITY));
+          item.hi[k] = std::max(item.hi[k], std::nextafter(float(q[k]), INFINITY));
+        }
+      }
+    }
     // Iterative with an explicit stack of (node, begin, end); children are allocated in pairs.
     struct Task {
       uint32_t node, begin, end;
     };
-    // Each triangle's float box, rounded outwards so that it still contains the double triangle:
-    // once, not again on every level of the tree (the roundings were half the build's time).
-    struct Box {
-      float lo[3], hi[3];
-    };
-    std::vector<Box> triangle_box(centroid_.size());
-    for (size_t t = 0; t < triangle_box.size(); ++t) {
-      Box& box = triangle_box[t];
-      for (int k = 0; k < 3; ++k) box.lo[k] = INFINITY, box.hi[k] = -INFINITY;
-      for (int j = 0; j < 3; ++j) {
-        const P3& v = vertices_[t * 3 + j];
-        const double q[3] = {v.x, v.y, v.z};
-        for (int k = 0; k < 3; ++k) {
-          box.lo[k] = std::min(box.lo[k], std::nextafter(float(q[k]), -INFINITY));
-          box.hi[k] = std::max(box.hi[k], std::nextafter(float(q[k]), INFINITY));
-        }
-      }
-    }
     nodes_.push_back({});
-    std::vector<Task> tasks = {{0, begin, end}};
+    std::vector<Task> tasks = {{0, 0, count}};
     while (!tasks.empty()) {
       Task task = tasks.back();
       tasks.pop_back();
@@ -210,33 +213,30 @@ class TriangleBvh {
       for (int k = 0; k < 3; ++k) node.lo[k] = INFINITY, node.hi[k] = -INFINITY;
       double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
       for (uint32_t i = task.begin; i < task.end; ++i) {
-        const Box& box = triangle_box[order_[i]];
+        const Item& item = items[i];
         for (int k = 0; k < 3; ++k) {
-          node.lo[k] = std::min(node.lo[k], box.lo[k]);
-          node.hi[k] = std::max(node.hi[k], box.hi[k]);
+          node.lo[k] = std::min(node.lo[k], item.lo[k]);
+          node.hi[k] = std::max(node.hi[k], item.hi[k]);
         }
-        const P3 c = centroid_[order_[i]];
-        const double cq[3] = {c.x, c.y, c.z};
+        const double cq[3] = {item.centroid.x, item.centroid.y, item.centroid.z};
         for (int k = 0; k < 3; ++k) clo[k] = std::min(clo[k], cq[k]), chi[k] = std::max(chi[k], cq[k]);
       }
-      const uint32_t count = task.end - task.begin;
+      const uint32_t size = task.end - task.begin;
       int axis = 0;
       for (int k = 1; k < 3; ++k)
         if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
-      if (count <= 4 || !(chi[axis] > clo[axis])) {
+      if (size <= 4 || !(chi[axis] > clo[axis])) {
         node.first = task.begin;
-        node.count = count;
+        node.count = size;
         nodes_[task.node] = node;
         continue;
       }
-      uint32_t mid = task.begin + count / 2;
-      auto key = [&](uint32_t i) {
-        const P3 c = centroid_[i];
-        return axis == 0 ? c.x : axis == 1 ? c.y : c.z;
+      uint32_t mid = task.begin + size / 2;
+      auto key = [axis](const Item& item) {
+        return axis == 0 ? item.centroid.x : axis == 1 ? item.centroid.y : item.centroid.z;
       };
-      std::nth_element(order_.begin() + task.begin, order_.begin() + mid,
-                       order_.begin() + task.end,
-                       [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+      std::nth_element(items.begin() + task.begin, items.begin() + mid, items.begin() + task.end,
+                       [&](const Item& a, const Item& b) { return key(a) < key(b); });
       node.first = uint32_t(nodes_.size());
       node.count = 0;
       nodes_[task.node] = node;
@@ -245,11 +245,12 @@ class TriangleBvh {
       tasks.push_back({node.first, task.begin, mid});
       tasks.push_back({node.first + 1, mid, task.end});
     }
+    order_.resize(count);
+    for (uint32_t i = 0; i < count; ++i) order_[i] = items[i].id;
   }
 
   static constexpr uint32_t kEmpty = ~0u;
   std::vector<P3> vertices_;  // 3 per (finite, distinct) triangle
-  std::vector<P3> centroid_;
   std::vector<uint32_t> order_;
   std::vector<Node> nodes_;
 };
