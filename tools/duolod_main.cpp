@@ -921,6 +921,15 @@ mesh::SimplifyResult clusterToTarget(const core::Mesh& input, size_t target_tria
   return best;
 }
 
+// The normals and tangents a mesh lacks, derived as io::loadAsset derives them (normal_mapped:
+// core::normalMappedSubmeshes of its asset): for simplify and generate, which load without them
+// when they derive them later (after --reorient, or again on a simplified mesh).
+void deriveMissingNormalsAndTangents(core::Mesh& mesh, const std::vector<bool>& normal_mapped) {
+  if (mesh.normals.empty()) core::computeNormals(mesh);
+  if (mesh.tangents.empty() && !mesh.normals.empty() && !mesh.uv0.empty())
+    core::computeTangentsPerSubmesh(mesh, normal_mapped);
+}
+
 // `--reorient` (simplify, generate): turns the mesh's triangles round to make its edges
 // consistent (mesh::orientConsistently) and returns the line that reports it. Run before normals
 // are derived, so that they follow the turned triangles.
@@ -961,14 +970,8 @@ int runSimplify(SimplifyFlags& flags) {
   const bool positions_only = asset->mesh.normals.empty() && asset->mesh.tangents.empty() &&
                               asset->mesh.uv0.empty() && asset->mesh.uv1.empty() &&
                               asset->mesh.colors.empty() && !flags.simplify_generated_normals;
-  const bool derived_normals = asset->mesh.normals.empty();
-  const bool derived_tangents = asset->mesh.tangents.empty();
   const std::vector<bool> normal_mapped = core::normalMappedSubmeshes(*asset);
-  auto derive = [&](core::Mesh& mesh) {
-    if (derived_normals) core::computeNormals(mesh);
-    if (derived_tangents && !mesh.normals.empty() && !mesh.uv0.empty())
-      core::computeTangentsPerSubmesh(mesh, normal_mapped);
-  };
+  auto derive = [&](core::Mesh& mesh) { deriveMissingNormalsAndTangents(mesh, normal_mapped); };
   // What a renderer sees (the loader's defaults): the asset itself, or for a file of positions
   // only a copy with derived normals.
   core::Asset derived_copy;
@@ -1414,10 +1417,7 @@ int runGenerate(GenerateFlags& flags) {
   std::string reoriented;
   if (flags.reorient) {
     reoriented = reorientLine(asset->mesh);
-    core::Mesh& mesh = asset->mesh;
-    if (mesh.normals.empty()) core::computeNormals(mesh);
-    if (mesh.tangents.empty() && !mesh.normals.empty() && !mesh.uv0.empty())
-      core::computeTangentsPerSubmesh(mesh, core::normalMappedSubmeshes(*asset));
+    deriveMissingNormalsAndTangents(asset->mesh, core::normalMappedSubmeshes(*asset));
   } else if (const size_t misoriented = mesh::surfaceTopology(asset->mesh).misoriented_edges;
              misoriented > 0) {
     // Found before the long work: such a mesh stops short of coarse levels.

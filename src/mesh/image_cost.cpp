@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <exception>
-#include <thread>
+
+#include "mesh/run_both.hpp"
 
 namespace duolod::mesh {
 namespace {
@@ -236,27 +236,11 @@ void ImageCostModel::buildTiles(const EngineState& state, std::span<const TileJo
   // mode's work that ran on one core (bench/RESULTS.md, issue 3, session 29). Jobs alternate
   // between the threads, which share only what they read.
   constexpr size_t kTwoThreadJobs = 16;
-  static const bool two_threads = std::thread::hardware_concurrency() >= 2;
-  if (!two_threads || jobs.size() < kTwoThreadJobs) {
+  if (jobs.size() < kTwoThreadJobs) {
     build(scratch_[0], 0, 1);
     return;
   }
-  std::exception_ptr thrown;
-  std::thread other([&] {
-    try {
-      build(scratch_[1], 1, 2);
-    } catch (...) {
-      thrown = std::current_exception();
-    }
-  });
-  try {
-    build(scratch_[0], 0, 2);
-  } catch (...) {
-    other.join();
-    throw;
-  }
-  other.join();
-  if (thrown) std::rethrow_exception(thrown);
+  runBoth([&] { build(scratch_[0], 0, 2); }, [&] { build(scratch_[1], 1, 2); });
 }
 
 void ImageCostModel::buildTile(const EngineState& state, const TileJob& job,

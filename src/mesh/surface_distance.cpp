@@ -10,14 +10,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <exception>
 #include <limits>
 #include <optional>
-#include <system_error>
-#include <thread>
 #include <vector>
 
 #include "duolod/mesh.hpp"
+#include "mesh/run_both.hpp"
 
 namespace duolod::mesh {
 namespace {
@@ -296,7 +294,7 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
   size_t counted = 0;
   // The largest distance measured on each triangle: the maximum is refined on the worst ones.
   std::vector<double> triangle_max(n, 0.0);
-  auto measure = [&](P3 p, bool in_mean, size_t triangle) {
+  auto measure = [&](P3 p, bool in_mean, size_t triangle) -> double {
     double bound = std::numeric_limits<double>::infinity();
     if (std::isfinite(previous_distance)) {
       double r = previous_distance + std::sqrt(dot3(p - previous_point, p - previous_point));
@@ -313,6 +311,7 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
       result.mean_sq += d2;
       ++counted;
     }
+    return d;
   };
   if (total > 0 && samples > 0) {
     // Systematic sampling: sample i sits at cumulative area (i + offset) * total / samples.
@@ -350,8 +349,7 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
       if (!(i < from.positions.size() && core::isFinite(from.positions[i]) && area[t] > 0))
         continue;
       if (vertex_distance[i] < 0) {
-        measure(toP3(from.positions[i]), false, t);
-        vertex_distance[i] = previous_distance;
+        vertex_distance[i] = measure(toP3(from.positions[i]), false, t);
       } else {
         triangle_max[t] = std::max(triangle_max[t], vertex_distance[i]);
       }
@@ -388,39 +386,6 @@ OneSided sampleDistances(const core::Mesh& from, const TriangleBvh& to, size_t s
     result.mean = result.mean_sq = std::numeric_limits<double>::quiet_NaN();
   }
   return result;
-}
-
-// Runs `first` here and `second` beside it on another thread when there is a second core (the
-// two sides of the distance share only what they read), else one after the other; the results do
-// not depend on which. An exception from either is rethrown here, after both ended.
-template <class First, class Second>
-void runBoth(First&& first, Second&& second) {
-  static const bool two_cores = std::thread::hardware_concurrency() >= 2;
-  std::exception_ptr thrown;
-  std::thread other;
-  if (two_cores) {
-    try {
-      other = std::thread([&] {
-        try {
-          second();
-        } catch (...) {
-          thrown = std::current_exception();
-        }
-      });
-    } catch (const std::system_error&) {  // no thread to be had: both here
-    }
-  }
-  try {
-    first();
-  } catch (...) {
-    if (other.joinable()) other.join();
-    throw;
-  }
-  if (other.joinable())
-    other.join();
-  else
-    second();
-  if (thrown) std::rethrow_exception(thrown);
 }
 
 }  // namespace
