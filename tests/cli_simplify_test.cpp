@@ -172,6 +172,31 @@ TEST(CliSimplify, QuadricSpotToTenPercentWritesAValidGlb) {
   EXPECT_NEAR(double(replaced->mesh.triangleCount()), 5 * expected, 0.02 * 5 * expected);
 }
 
+// `--no-geometry` leaves out only the geometry line (its surface sampling is most of the command's
+// time on large meshes): the other lines are printed and the file written is the same, byte for
+// byte, as without the flag.
+TEST(CliSimplify, NoGeometryLeavesOutOnlyTheGeometryLine) {
+  fs::path dir = test::scratchDir("no_geometry");
+  const std::string sphere = writeSphere(dir);
+  // One file name in two folders: a .glb names its mesh and node after the file.
+  fs::create_directories(dir / "measured");
+  fs::create_directories(dir / "unmeasured");
+  const std::string measured = (dir / "measured" / "sphere_50.glb").string();
+  const std::string unmeasured = (dir / "unmeasured" / "sphere_50.glb").string();
+  test::CommandRun with = runCli({"simplify", sphere, measured, "--ratio", "0.5"});
+  ASSERT_EQ(with.exit_code, 0) << with.err;
+  EXPECT_FALSE(lineStarting(with.out, "geometry").empty()) << with.out;
+  test::CommandRun without =
+      runCli({"simplify", sphere, unmeasured, "--ratio", "0.5", "--no-geometry"});
+  ASSERT_EQ(without.exit_code, 0) << without.err;
+  EXPECT_TRUE(lineStarting(without.out, "geometry").empty()) << without.out;
+  for (const char* stage : {"load", "simplify", "write"})
+    EXPECT_FALSE(lineStarting(without.out, stage).empty()) << stage << ": " << without.out;
+  const std::string written = test::readText(unmeasured);
+  EXPECT_FALSE(written.empty());
+  EXPECT_TRUE(written == test::readText(measured)) << "the files differ";
+}
+
 // Works on a scratch copy, so that a regression cannot overwrite a shared asset.
 // A target below what the rules allow is reported with the reason: here a square of two
 // triangles whose every vertex is on its locked border has no candidate edge at all, so no

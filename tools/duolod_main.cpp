@@ -777,6 +777,7 @@ struct SimplifyFlags {
   bool reorient = false;
   bool force = false;
   bool simplify_generated_normals = false;
+  bool no_geometry = false;
   ShadingFlags shading;
   // Which of the optional flags were given (CLI11 counts them).
   CLI::Option* ratio_option = nullptr;
@@ -830,6 +831,9 @@ struct SimplifyFlags {
                       "for a file of positions only: generate normals first and simplify them "
                       "as attributes (closer shading, the general engine: several times slower) "
                       "instead of deriving them again on the result");
+    command->add_flag("--no-geometry", no_geometry,
+                      "skip the geometry line (Hausdorff and mean distance by surface sampling): "
+                      "on large meshes it takes longer than the simplification itself");
     shading.add(command);
     command
         ->add_option("--distance", shading.distance,
@@ -941,6 +945,30 @@ std::string reorientLine(core::Mesh& mesh) {
                 "as they were)\n",
                 repair.turned_triangles, repair.parts, repair.non_orientable_parts);
   return line;
+}
+
+// The `geometry` line of `simplify`: symmetric Hausdorff and mean distance between the input and
+// the result by surface sampling (mesh::surfaceDistance), and where the Hausdorff distance is.
+void printGeometryReport(const core::Mesh& input, const core::Mesh& output) {
+  const auto start = std::chrono::steady_clock::now();
+  mesh::SurfaceDistance distances = mesh::surfaceDistance(input, output);
+  // (In double: float's squares vanish for an asset ~1e-20 wide, and the diagonal read 0.)
+  // (Its sides in double as well: a float side of an asset spanning ±3e38 is infinite.)
+  const core::Bounds bounds = core::computeBounds(input);
+  const double side[3] = {double(bounds.max.x) - bounds.min.x, double(bounds.max.y) - bounds.min.y,
+                          double(bounds.max.z) - bounds.min.z};
+  const double diagonal = std::sqrt(side[0] * side[0] + side[1] * side[1] + side[2] * side[2]);
+  const double percent = diagonal > 0 ? 100.0 / diagonal : 0.0;
+  // Where the Hausdorff distance is attained: on the input (detail lost) or on the output (it
+  // left the surface).
+  const bool lost = distances.max_a_to_b >= distances.max_b_to_a;
+  const core::Vec3 farthest = lost ? distances.farthest_a_to_b : distances.farthest_b_to_a;
+  std::printf(
+      "geometry  Hausdorff %.4g (%.3f%% of the bounding-box diagonal %.4g) at (%.4g, %.4g, "
+      "%.4g) on the %s, mean %.4g (%.4f%%), %.3f s\n",
+      distances.hausdorff, distances.hausdorff * percent, diagonal, farthest.x, farthest.y,
+      farthest.z, lost ? "input" : "output", distances.mean, distances.mean * percent,
+      secondsSince(start));
 }
 
 int runSimplify(SimplifyFlags& flags) {
@@ -1156,25 +1184,7 @@ int runSimplify(SimplifyFlags& flags) {
   std::printf("write     %s: %zu triangles, %zu vertices, %.3f s\n", flags.out.c_str(),
               output.mesh.triangleCount(), output.mesh.vertexCount(), secondsSince(start));
 
-  start = std::chrono::steady_clock::now();
-  mesh::SurfaceDistance distances = mesh::surfaceDistance(input, output.mesh);
-  // (In double: float's squares vanish for an asset ~1e-20 wide, and the diagonal read 0.)
-  // (Its sides in double as well: a float side of an asset spanning ±3e38 is infinite.)
-  const core::Bounds bounds = core::computeBounds(input);
-  const double side[3] = {double(bounds.max.x) - bounds.min.x, double(bounds.max.y) - bounds.min.y,
-                          double(bounds.max.z) - bounds.min.z};
-  const double diagonal = std::sqrt(side[0] * side[0] + side[1] * side[1] + side[2] * side[2]);
-  const double percent = diagonal > 0 ? 100.0 / diagonal : 0.0;
-  // Where the Hausdorff distance is attained: on the input (detail lost) or on the output (it
-  // left the surface).
-  const bool lost = distances.max_a_to_b >= distances.max_b_to_a;
-  const core::Vec3 farthest = lost ? distances.farthest_a_to_b : distances.farthest_b_to_a;
-  std::printf(
-      "geometry  Hausdorff %.4g (%.3f%% of the bounding-box diagonal %.4g) at (%.4g, %.4g, "
-      "%.4g) on the %s, mean %.4g (%.4f%%), %.3f s\n",
-      distances.hausdorff, distances.hausdorff * percent, diagonal, farthest.x, farthest.y,
-      farthest.z, lost ? "input" : "output", distances.mean, distances.mean * percent,
-      secondsSince(start));
+  if (!flags.no_geometry) printGeometryReport(input, output.mesh);
 
   if (flags.wantsImageError()) {
     start = std::chrono::steady_clock::now();
