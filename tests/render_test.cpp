@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 
@@ -15,6 +17,7 @@
 #include "duolod/metric.hpp"
 #include "duolod/shader.hpp"
 #include "mesh_test_meshes.hpp"
+#include "render/batch_memory.hpp"
 #include "render/slow_requests.hpp"
 #include "test_support.hpp"
 
@@ -438,6 +441,112 @@ TEST_F(RendererTest, BatchesLargerThanMemoryAreRefusedWithTheFigures) {
       renderer_->render(*id, constant_program_, std::span(samples.data(), 1), {.resolution = 4096});
   EXPECT_TRUE(one) << one.error().message;
   renderer_->releaseAsset(*id);
+}
+
+// A batch that fits the machine but not what is free now (other processes, this one's own
+// images) is refused too, with both figures: the allocation would succeed and the kernel's
+// out-of-memory killer end the process once its pages were touched.
+TEST(BatchMemory, BatchesBeyondTheAvailableMemoryAreRefusedWithTheFigures) {
+  using render::internal::checkBatchMemory;
+  const render::internal::MachineMemory busy{.total = 25.3e9, .available = 3.1e9};
+  // 100 float images of 2000² pixels: 6.4 GB.
+  auto refused = checkBatchMemory(100, 2000, 16, "as float RGBA", busy);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("100 images of 2000 x 2000 pixels take 6.4 GB as float "
+                                         "RGBA, more than the 3.1 GB of memory available now "
+                                         "(of this machine's 25.3 GB)"),
+            std::string::npos)
+      << refused.error().message;
+  EXPECT_TRUE(
+      checkBatchMemory(100, 2000, 16, "as float RGBA", {.total = 25.3e9, .available = 7e9}));
+  EXPECT_TRUE(checkBatchMemory(100, 2000, 16, "as float RGBA", {.total = 25.3e9, .available = 0}))
+      << "an unknown available figure refuses nothing";
+  auto beyond = checkBatchMemory(100, 4095, 16, "as float RGBA", busy);
+  ASSERT_FALSE(beyond);
+  EXPECT_NE(beyond.error().message.find("more than this machine's 25.3 GB of memory"),
+            std::string::npos)
+      << beyond.error().message;
+  // This machine's own figures are read: both known on Linux.
+  const render::internal::MachineMemory here = render::internal::machineMemory();
+  EXPECT_GT(here.total, 0.0);
+  EXPECT_GT(here.available, 0.0);
+}
+
+// Writes `text` to root/relative, making its folders.
+void writeUnder(const std::filesystem::path& root, const std::string& relative,
+                const std::string& text) {
+  const std::filesystem::path path = root / relative;
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << text;
+}
+
+// The figures within a control group's limit: a container (cgroup v2) or a job (v1) that may use
+// 4 GB on a 25 GB machine is ended by the kernel at 4 GB, so that is the memory a batch must fit.
+// What the group holds in inactive file pages (reclaimable cache) does not count as used.
+TEST(BatchMemory, ControlGroupLimitsAreTheMachinesMemory) {
+  using render::internal::readMachineMemory;
+  const std::string meminfo =
+      "MemTotal:       24683568 kB\nMemFree:        20000000 kB\nMemAvailable:   24000000 kB\n"
+      "SwapTotal:             0 kB\nSwapFree:              0 kB\n";
+  const double physical = 25.3e9;
+
+  // No control group file: the machine's figures.
+  const std::filesystem::path bare = test::scratchDir("memory_bare");
+  writeUnder(bare, "proc/meminfo", meminfo);
+  render::internal::MachineMemory m = readMachineMemory(bare.string(), physical);
+  EXPECT_DOUBLE_EQ(m.total, physical);
+  EXPECT_DOUBLE_EQ(m.available, 24000000.0 * 1024);
+
+  // cgroup v2, the process in /ci/job (limit 4 GB) below /ci (limit 6 GB); 1.5 GB used of which
+  // 0.5 GB inactive file pages.
+  const std::filesystem::path v2 = test::scratchDir("memory_v2");
+  writeUnder(v2, "proc/meminfo", meminfo);
+  writeUnder(v2, "proc/self/cgroup", "0::/ci/job\n");
+  writeUnder(v2, "sys/fs/cgroup/ci/memory.max", "6000000000\n");
+  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.max", "4000000000\n");
+  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.current", "1500000000\n");
+  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.stat",
+             "anon 1000000000\nfile 500000000\nactive_file 0\ninactive_file 500000000\n");
+  m = readMachineMemory(v2.string(), physical);
+  EXPECT_DOUBLE_EQ(m.total, 4e9);
+  EXPECT_DOUBLE_EQ(m.available, 3e9);
+  // A batch of 6.4 GB is refused against the group's figures.
+  auto refused = render::internal::checkBatchMemory(100, 2000, 16, "as float RGBA", m);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find(
+                "more than the process's control group's limit of 4.0 GB of memory"),
+            std::string::npos)
+      << refused.error().message;
+  // An unlimited group ("max") leaves the machine's figures.
+  writeUnder(v2, "sys/fs/cgroup/ci/memory.max", "max\n");
+  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.max", "max\n");
+  m = readMachineMemory(v2.string(), physical);
+  EXPECT_DOUBLE_EQ(m.total, physical);
+  EXPECT_DOUBLE_EQ(m.available, 24000000.0 * 1024);
+
+  // Inside a container the group's path is not under the mount, whose root holds its files.
+  const std::filesystem::path container = test::scratchDir("memory_container");
+  writeUnder(container, "proc/meminfo", meminfo);
+  writeUnder(container, "proc/self/cgroup", "0::/docker/0123abcd\n");
+  writeUnder(container, "sys/fs/cgroup/memory.max", "2000000000\n");
+  writeUnder(container, "sys/fs/cgroup/memory.current", "500000000\n");
+  m = readMachineMemory(container.string(), physical);
+  EXPECT_DOUBLE_EQ(m.total, 2e9);
+  EXPECT_DOUBLE_EQ(m.available, 1.5e9);
+
+  // cgroup v1 (a hybrid system: the memory controller on its own hierarchy), "no limit" at the
+  // root as v1 writes it, 3 GB on the group.
+  const std::filesystem::path v1 = test::scratchDir("memory_v1");
+  writeUnder(v1, "proc/meminfo", meminfo);
+  writeUnder(v1, "proc/self/cgroup", "5:cpu,cpuacct:/\n4:memory:/runner/7\n0::/\n");
+  writeUnder(v1, "sys/fs/cgroup/memory/memory.limit_in_bytes", "9223372036854771712\n");
+  writeUnder(v1, "sys/fs/cgroup/memory/runner/7/memory.limit_in_bytes", "3000000000\n");
+  writeUnder(v1, "sys/fs/cgroup/memory/runner/7/memory.usage_in_bytes", "1000000000\n");
+  writeUnder(v1, "sys/fs/cgroup/memory/runner/7/memory.stat",
+             "cache 400000000\ntotal_inactive_file 250000000\n");
+  m = readMachineMemory(v1.string(), physical);
+  EXPECT_DOUBLE_EQ(m.total, 3e9);
+  EXPECT_DOUBLE_EQ(m.available, 2.25e9);
 }
 
 TEST(Domain, DodecahedronHasTwentyUnitViewsAndFiveLightsEach) {

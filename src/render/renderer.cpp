@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "duolod/render.hpp"
+#include "render/batch_memory.hpp"
 #include "render/renderer_internal.hpp"
 
 namespace duolod::render {
@@ -665,21 +666,137 @@ AtlasLayout planAtlas(int count, int tile, int max_size, int samples) {
 
 namespace internal {
 
-// The images a batch returns are held at once: 100 samples of 4095² pixels as floats are 27 GB.
-// A batch larger than the machine's memory is refused with the figures instead of failing to
-// allocate (an abort, before).
-core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as) {
+// The batch memory check (batch_memory.hpp), kept in this file rather than one of its own so
+// that the unity build's batches of eight files stay as they are.
+namespace {
+
+// A file's first number ("max", a missing file or one that does not start with a number: -1).
+double readBytes(const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "r");
+  if (!file) return -1;
+  double value = -1;
+  if (std::fscanf(file, "%lf", &value) != 1) value = -1;
+  std::fclose(file);
+  return value;
+}
+// The value of `key` in a "key value" file (memory.stat; /proc/meminfo with "key: value kB"), or
+// -1.
+double readKeyed(const std::string& path, const char* key) {
+  std::FILE* file = std::fopen(path.c_str(), "r");
+  if (!file) return -1;
+  char line[256];
+  double value = -1;
+  const size_t length = std::strlen(key);
+  while (std::fgets(line, sizeof line, file))
+    if (std::strncmp(line, key, length) == 0 && (line[length] == ' ' || line[length] == ':')) {
+      std::sscanf(line + length + 1, "%lf", &value);
+      break;
+    }
+  std::fclose(file);
+  return value;
+}
+
+// The tightest memory limit of the process's control group and its ancestors, and what the group
+// uses that the kernel cannot reclaim (its usage less its inactive file pages), in bytes; limit
+// 0 when there is none. cgroup v2 ("0::/path" in /proc/self/cgroup) or v1 (the line naming the
+// memory controller). Inside a container the group's path may not exist under the mount (the
+// container sees its own group as the root): the mount's root files stand for it then.
+void readGroupLimit(const std::string& root, double& limit, double& in_use) {
+  limit = 0, in_use = 0;
+  std::FILE* file = std::fopen((root + "/proc/self/cgroup").c_str(), "r");
+  if (!file) return;
+  std::string v2_path, v1_path;
+  bool v2 = false, v1 = false;
+  char line[1024];
+  while (std::fgets(line, sizeof line, file)) {
+    std::string text(line);
+    if (!text.empty() && text.back() == '\n') text.pop_back();
+    const size_t first = text.find(':'), second = text.find(':', first + 1);
+    if (first == std::string::npos || second == std::string::npos) continue;
+    const std::string controllers = text.substr(first + 1, second - first - 1);
+    const std::string path = text.substr(second + 1);
+    if (text.compare(0, first, "0") == 0 && controllers.empty()) v2 = true, v2_path = path;
+    for (size_t at = 0; at <= controllers.size();) {
+      const size_t end = std::min(controllers.find(',', at), controllers.size());
+      if (controllers.compare(at, end - at, "memory") == 0) v1 = true, v1_path = path;
+      at = end + 1;
+    }
+  }
+  std::fclose(file);
+  // v1 when the memory controller is on a v1 hierarchy (a hybrid system lists both).
+  const bool use_v1 = v1;
+  if (!v1 && !v2) return;
+  const std::string mount = root + (use_v1 ? "/sys/fs/cgroup/memory" : "/sys/fs/cgroup");
+  const char* limit_file = use_v1 ? "/memory.limit_in_bytes" : "/memory.max";
+  const char* usage_file = use_v1 ? "/memory.usage_in_bytes" : "/memory.current";
+  const char* inactive_key = use_v1 ? "total_inactive_file" : "inactive_file";
+  std::string group = use_v1 ? v1_path : v2_path;
+  if (group.empty() || group[0] != '/') group = "/" + group;
+  while (group.size() > 1 && group.back() == '/') group.pop_back();
+  if (readBytes(mount + (group == "/" ? "" : group) + usage_file) < 0) group = "/";
+  const std::string own = mount + (group == "/" ? "" : group);
+  // The group and its ancestors up to the mount's root: the tightest limit holds. (v1 reports
+  // "no limit" as a number near 2^63.)
+  for (std::string at = group;;) {
+    const double value = readBytes(mount + (at == "/" ? "" : at) + limit_file);
+    if (value > 0 && value < 1e18 && (limit == 0 || value < limit)) limit = value;
+    if (at == "/") break;
+    const size_t slash = at.find_last_of('/');
+    at = slash == 0 ? "/" : at.substr(0, slash);
+  }
+  const double usage = readBytes(own + usage_file);
+  const double inactive = readKeyed(own + "/memory.stat", inactive_key);
+  if (usage > 0) in_use = std::max(0.0, usage - std::max(0.0, inactive));
+}
+
+}  // namespace
+
+MachineMemory readMachineMemory(const std::string& root, double physical) {
+  MachineMemory memory;
+  memory.total = physical > 0 ? physical : 0;
+  // "MemAvailable:   12345678 kB" (Linux 3.14 on); without it the available figure is unknown.
+  const double available_kb = readKeyed(root + "/proc/meminfo", "MemAvailable");
+  const double swap_free_kb = readKeyed(root + "/proc/meminfo", "SwapFree");
+  if (available_kb >= 0) memory.available = (available_kb + std::max(0.0, swap_free_kb)) * 1024.0;
+  double limit = 0, in_use = 0;
+  readGroupLimit(root, limit, in_use);
+  if (limit > 0) {
+    if (memory.total == 0 || limit < memory.total) memory.total = limit, memory.group_limit = true;
+    const double left = std::max(limit - in_use, 1.0);  // 0 would read as unknown
+    if (memory.available == 0 || left < memory.available) memory.available = left;
+  }
+  return memory;
+}
+
+MachineMemory machineMemory() {
   const long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
-  if (pages <= 0 || page_size <= 0) return core::okStatus();  // unknown: let allocation decide
-  const double memory = double(pages) * double(page_size);
+  return readMachineMemory("", pages > 0 && page_size > 0 ? double(pages) * double(page_size) : 0);
+}
+
+core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as,
+                              const MachineMemory& memory) {
   const double needed = double(count) * double(tile) * double(tile) * double(bytes_per_pixel);
-  if (needed <= memory) return core::okStatus();
-  char text[256];
-  std::snprintf(text, sizeof text,
-                "render: %zu images of %d x %d pixels take %.1f GB %s, more than this machine's "
-                "%.1f GB of memory: render fewer pixels or samples",
-                count, tile, tile, needed / 1e9, as, memory / 1e9);
-  return Error{text};
+  char text[320];
+  if (memory.total > 0 && needed > memory.total) {
+    std::snprintf(text, sizeof text,
+                  "render: %zu images of %d x %d pixels take %.1f GB %s, more than %s %.1f GB of "
+                  "memory: render fewer pixels or samples",
+                  count, tile, tile, needed / 1e9, as,
+                  memory.group_limit ? "the process's control group's limit of" : "this machine's",
+                  memory.total / 1e9);
+    return core::Error{text};
+  }
+  if (memory.available > 0 && needed > memory.available) {
+    std::snprintf(text, sizeof text,
+                  "render: %zu images of %d x %d pixels take %.1f GB %s, more than the %.1f GB "
+                  "of memory available now (of %s %.1f GB): render fewer pixels or samples, or "
+                  "free memory",
+                  count, tile, tile, needed / 1e9, as, memory.available / 1e9,
+                  memory.group_limit ? "the control group's" : "this machine's",
+                  memory.total / 1e9);
+    return core::Error{text};
+  }
+  return core::okStatus();
 }
 
 core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
@@ -767,7 +884,9 @@ core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_i
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
   if (options.supersample != 1)
     return Error{"render: use renderReference() for supersampled images"};
-  if (auto fits = checkBatchMemory(samples.size(), options.resolution, 4, "as 8-bit RGBA"); !fits)
+  if (auto fits =
+          checkBatchMemory(samples.size(), options.resolution, 4, "as 8-bit RGBA", machineMemory());
+      !fits)
     return fits.error();
   auto start = std::chrono::steady_clock::now();
   const GpuAsset& asset = *s.assets[asset_id];
@@ -829,8 +948,8 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
   if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
-  if (auto fits =
-          checkBatchMemory(samples.size(), options.resolution, 4 * sizeof(float), "as float RGBA");
+  if (auto fits = checkBatchMemory(samples.size(), options.resolution, 4 * sizeof(float),
+                                   "as float RGBA", machineMemory());
       !fits)
     return fits.error();
   auto start = std::chrono::steady_clock::now();
