@@ -472,42 +472,43 @@ TEST(BatchMemory, BatchesBeyondTheAvailableMemoryAreRefusedWithTheFigures) {
   EXPECT_GT(here.available, 0.0);
 }
 
-// Writes `text` to root/relative, making its folders.
-void writeUnder(const std::filesystem::path& root, const std::string& relative,
-                const std::string& text) {
-  const std::filesystem::path path = root / relative;
-  std::filesystem::create_directories(path.parent_path());
-  std::ofstream(path) << text;
+// readMachineMemory on a fake system: a scratch folder holding /proc/meminfo (24 GB available, no
+// swap) and `files` (path under the root, contents), for a machine of 25.3 GB.
+render::internal::MachineMemory fakeSystemMemory(
+    const std::string& name, const std::vector<std::pair<std::string, std::string>>& files) {
+  const std::filesystem::path root = test::scratchDir(name);
+  std::vector<std::pair<std::string, std::string>> all = files;
+  all.emplace_back("proc/meminfo",
+                   "MemTotal:       24683568 kB\nMemFree:        20000000 kB\n"
+                   "MemAvailable:   24000000 kB\nSwapTotal:             0 kB\n"
+                   "SwapFree:              0 kB\n");
+  for (const auto& [relative, text] : all) {
+    std::filesystem::create_directories((root / relative).parent_path());
+    std::ofstream(root / relative) << text;
+  }
+  return render::internal::readMachineMemory(root.string(), 25.3e9);
 }
 
 // The figures within a control group's limit: a container (cgroup v2) or a job (v1) that may use
 // 4 GB on a 25 GB machine is ended by the kernel at 4 GB, so that is the memory a batch must fit.
 // What the group holds in inactive file pages (reclaimable cache) does not count as used.
 TEST(BatchMemory, ControlGroupLimitsAreTheMachinesMemory) {
-  using render::internal::readMachineMemory;
-  const std::string meminfo =
-      "MemTotal:       24683568 kB\nMemFree:        20000000 kB\nMemAvailable:   24000000 kB\n"
-      "SwapTotal:             0 kB\nSwapFree:              0 kB\n";
-  const double physical = 25.3e9;
-
+  const double machine = 25.3e9, available = 24000000.0 * 1024;
   // No control group file: the machine's figures.
-  const std::filesystem::path bare = test::scratchDir("memory_bare");
-  writeUnder(bare, "proc/meminfo", meminfo);
-  render::internal::MachineMemory m = readMachineMemory(bare.string(), physical);
-  EXPECT_DOUBLE_EQ(m.total, physical);
-  EXPECT_DOUBLE_EQ(m.available, 24000000.0 * 1024);
+  render::internal::MachineMemory m = fakeSystemMemory("memory_bare", {});
+  EXPECT_DOUBLE_EQ(m.total, machine);
+  EXPECT_DOUBLE_EQ(m.available, available);
 
   // cgroup v2, the process in /ci/job (limit 4 GB) below /ci (limit 6 GB); 1.5 GB used of which
   // 0.5 GB inactive file pages.
-  const std::filesystem::path v2 = test::scratchDir("memory_v2");
-  writeUnder(v2, "proc/meminfo", meminfo);
-  writeUnder(v2, "proc/self/cgroup", "0::/ci/job\n");
-  writeUnder(v2, "sys/fs/cgroup/ci/memory.max", "6000000000\n");
-  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.max", "4000000000\n");
-  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.current", "1500000000\n");
-  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.stat",
-             "anon 1000000000\nfile 500000000\nactive_file 0\ninactive_file 500000000\n");
-  m = readMachineMemory(v2.string(), physical);
+  const std::vector<std::pair<std::string, std::string>> job = {
+      {"proc/self/cgroup", "0::/ci/job\n"},
+      {"sys/fs/cgroup/ci/memory.max", "6000000000\n"},
+      {"sys/fs/cgroup/ci/job/memory.max", "4000000000\n"},
+      {"sys/fs/cgroup/ci/job/memory.current", "1500000000\n"},
+      {"sys/fs/cgroup/ci/job/memory.stat",
+       "anon 1000000000\nfile 500000000\nactive_file 0\ninactive_file 500000000\n"}};
+  m = fakeSystemMemory("memory_v2", job);
   EXPECT_DOUBLE_EQ(m.total, 4e9);
   EXPECT_DOUBLE_EQ(m.available, 3e9);
   // A batch of 6.4 GB is refused against the group's figures.
@@ -518,33 +519,28 @@ TEST(BatchMemory, ControlGroupLimitsAreTheMachinesMemory) {
             std::string::npos)
       << refused.error().message;
   // An unlimited group ("max") leaves the machine's figures.
-  writeUnder(v2, "sys/fs/cgroup/ci/memory.max", "max\n");
-  writeUnder(v2, "sys/fs/cgroup/ci/job/memory.max", "max\n");
-  m = readMachineMemory(v2.string(), physical);
-  EXPECT_DOUBLE_EQ(m.total, physical);
-  EXPECT_DOUBLE_EQ(m.available, 24000000.0 * 1024);
+  auto unlimited = job;
+  unlimited[1].second = unlimited[2].second = "max\n";
+  m = fakeSystemMemory("memory_v2_max", unlimited);
+  EXPECT_DOUBLE_EQ(m.total, machine);
+  EXPECT_DOUBLE_EQ(m.available, available);
 
   // Inside a container the group's path is not under the mount, whose root holds its files.
-  const std::filesystem::path container = test::scratchDir("memory_container");
-  writeUnder(container, "proc/meminfo", meminfo);
-  writeUnder(container, "proc/self/cgroup", "0::/docker/0123abcd\n");
-  writeUnder(container, "sys/fs/cgroup/memory.max", "2000000000\n");
-  writeUnder(container, "sys/fs/cgroup/memory.current", "500000000\n");
-  m = readMachineMemory(container.string(), physical);
+  m = fakeSystemMemory("memory_container", {{"proc/self/cgroup", "0::/docker/0123abcd\n"},
+                                            {"sys/fs/cgroup/memory.max", "2000000000\n"},
+                                            {"sys/fs/cgroup/memory.current", "500000000\n"}});
   EXPECT_DOUBLE_EQ(m.total, 2e9);
   EXPECT_DOUBLE_EQ(m.available, 1.5e9);
 
   // cgroup v1 (a hybrid system: the memory controller on its own hierarchy), "no limit" at the
   // root as v1 writes it, 3 GB on the group.
-  const std::filesystem::path v1 = test::scratchDir("memory_v1");
-  writeUnder(v1, "proc/meminfo", meminfo);
-  writeUnder(v1, "proc/self/cgroup", "5:cpu,cpuacct:/\n4:memory:/runner/7\n0::/\n");
-  writeUnder(v1, "sys/fs/cgroup/memory/memory.limit_in_bytes", "9223372036854771712\n");
-  writeUnder(v1, "sys/fs/cgroup/memory/runner/7/memory.limit_in_bytes", "3000000000\n");
-  writeUnder(v1, "sys/fs/cgroup/memory/runner/7/memory.usage_in_bytes", "1000000000\n");
-  writeUnder(v1, "sys/fs/cgroup/memory/runner/7/memory.stat",
-             "cache 400000000\ntotal_inactive_file 250000000\n");
-  m = readMachineMemory(v1.string(), physical);
+  m = fakeSystemMemory("memory_v1",
+                       {{"proc/self/cgroup", "5:cpu,cpuacct:/\n4:memory:/runner/7\n0::/\n"},
+                        {"sys/fs/cgroup/memory/memory.limit_in_bytes", "9223372036854771712\n"},
+                        {"sys/fs/cgroup/memory/runner/7/memory.limit_in_bytes", "3000000000\n"},
+                        {"sys/fs/cgroup/memory/runner/7/memory.usage_in_bytes", "1000000000\n"},
+                        {"sys/fs/cgroup/memory/runner/7/memory.stat",
+                         "cache 400000000\ntotal_inactive_file 250000000\n"}});
   EXPECT_DOUBLE_EQ(m.total, 3e9);
   EXPECT_DOUBLE_EQ(m.available, 2.25e9);
 }
