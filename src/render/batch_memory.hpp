@@ -34,5 +34,8 @@ MachineMemory readMachineMemory(const std::string& root, double physical);
 // allocation would then succeed and the kernel end the process when the pages are touched).
 core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as,
                               const MachineMemory& memory);
+// The same against this machine's figures, read only for a batch above kSmallBatchBytes.
+inline constexpr double kSmallBatchBytes = 256e6;
+core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as);
 
 }  // namespace duolod::render::internal

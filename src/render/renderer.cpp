@@ -799,6 +799,14 @@ core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, co
   return core::okStatus();
 }
 
+core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as) {
+  // Reading the figures takes ~0.1 ms (a few /proc and /sys files), and the pair search and the
+  // shader searches render thousands of small batches: one below kSmallBatchBytes is let through.
+  const double needed = double(count) * double(tile) * double(tile) * double(bytes_per_pixel);
+  if (needed <= kSmallBatchBytes) return core::okStatus();
+  return checkBatchMemory(count, tile, bytes_per_pixel, as, machineMemory());
+}
+
 core::Status checkRequest(const Renderer::State& s, Renderer::AssetId asset,
                           Renderer::ProgramId program, std::span<const Sample> samples,
                           const RenderOptions& options) {
@@ -884,9 +892,7 @@ core::Result<ImageBatch8> Renderer::render(AssetId asset_id, ProgramId program_i
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
   if (options.supersample != 1)
     return Error{"render: use renderReference() for supersampled images"};
-  if (auto fits =
-          checkBatchMemory(samples.size(), options.resolution, 4, "as 8-bit RGBA", machineMemory());
-      !fits)
+  if (auto fits = checkBatchMemory(samples.size(), options.resolution, 4, "as 8-bit RGBA"); !fits)
     return fits.error();
   auto start = std::chrono::steady_clock::now();
   const GpuAsset& asset = *s.assets[asset_id];
@@ -948,8 +954,8 @@ core::Result<ImageBatchF> Renderer::renderReference(AssetId asset_id, ProgramId 
   if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
   State& s = *state_;
   if (auto ok = checkRequest(s, asset_id, program_id, samples, options); !ok) return ok.error();
-  if (auto fits = checkBatchMemory(samples.size(), options.resolution, 4 * sizeof(float),
-                                   "as float RGBA", machineMemory());
+  if (auto fits =
+          checkBatchMemory(samples.size(), options.resolution, 4 * sizeof(float), "as float RGBA");
       !fits)
     return fits.error();
   auto start = std::chrono::steady_clock::now();
