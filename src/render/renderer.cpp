@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -679,21 +680,24 @@ double readBytes(const std::string& path) {
   std::fclose(file);
   return value;
 }
-// The value of `key` in a "key value" file (memory.stat; /proc/meminfo with "key: value kB"), or
-// -1.
-double readKeyed(const std::string& path, const char* key) {
+// The values of `keys` in a "key value" file (memory.stat; /proc/meminfo with "key: value kB"),
+// in one reading; -1 for a key that is not there.
+template <size_t N>
+std::array<double, N> readKeyed(const std::string& path, const std::array<const char*, N>& keys) {
+  std::array<double, N> values;
+  values.fill(-1);
   std::FILE* file = std::fopen(path.c_str(), "r");
-  if (!file) return -1;
+  if (!file) return values;
   char line[256];
-  double value = -1;
-  const size_t length = std::strlen(key);
   while (std::fgets(line, sizeof line, file))
-    if (std::strncmp(line, key, length) == 0 && (line[length] == ' ' || line[length] == ':')) {
-      std::sscanf(line + length + 1, "%lf", &value);
-      break;
+    for (size_t i = 0; i < N; ++i) {
+      const size_t length = std::strlen(keys[i]);
+      if (std::strncmp(line, keys[i], length) == 0 &&
+          (line[length] == ' ' || line[length] == ':'))
+        std::sscanf(line + length + 1, "%lf", &values[i]);
     }
   std::fclose(file);
-  return value;
+  return values;
 }
 
 // The tightest memory limit of the process's control group and its ancestors, and what the group
@@ -723,14 +727,13 @@ void readGroupLimit(const std::string& root, double& limit, double& in_use) {
     }
   }
   std::fclose(file);
-  // v1 when the memory controller is on a v1 hierarchy (a hybrid system lists both).
-  const bool use_v1 = v1;
   if (!v1 && !v2) return;
-  const std::string mount = root + (use_v1 ? "/sys/fs/cgroup/memory" : "/sys/fs/cgroup");
-  const char* limit_file = use_v1 ? "/memory.limit_in_bytes" : "/memory.max";
-  const char* usage_file = use_v1 ? "/memory.usage_in_bytes" : "/memory.current";
-  const char* inactive_key = use_v1 ? "total_inactive_file" : "inactive_file";
-  std::string group = use_v1 ? v1_path : v2_path;
+  // v1 when the memory controller is on a v1 hierarchy (a hybrid system lists both).
+  const std::string mount = root + (v1 ? "/sys/fs/cgroup/memory" : "/sys/fs/cgroup");
+  const char* limit_file = v1 ? "/memory.limit_in_bytes" : "/memory.max";
+  const char* usage_file = v1 ? "/memory.usage_in_bytes" : "/memory.current";
+  const char* inactive_key = v1 ? "total_inactive_file" : "inactive_file";
+  std::string group = v1 ? v1_path : v2_path;
   if (group.empty() || group[0] != '/') group = "/" + group;
   while (group.size() > 1 && group.back() == '/') group.pop_back();
   if (readBytes(mount + (group == "/" ? "" : group) + usage_file) < 0) group = "/";
@@ -745,7 +748,7 @@ void readGroupLimit(const std::string& root, double& limit, double& in_use) {
     at = slash == 0 ? "/" : at.substr(0, slash);
   }
   const double usage = readBytes(own + usage_file);
-  const double inactive = readKeyed(own + "/memory.stat", inactive_key);
+  const double inactive = readKeyed<1>(own + "/memory.stat", {inactive_key})[0];
   if (usage > 0) in_use = std::max(0.0, usage - std::max(0.0, inactive));
 }
 
@@ -755,8 +758,8 @@ MachineMemory readMachineMemory(const std::string& root, double physical) {
   MachineMemory memory;
   memory.total = physical > 0 ? physical : 0;
   // "MemAvailable:   12345678 kB" (Linux 3.14 on); without it the available figure is unknown.
-  const double available_kb = readKeyed(root + "/proc/meminfo", "MemAvailable");
-  const double swap_free_kb = readKeyed(root + "/proc/meminfo", "SwapFree");
+  const auto [available_kb, swap_free_kb] =
+      readKeyed<2>(root + "/proc/meminfo", {"MemAvailable", "SwapFree"});
   if (available_kb >= 0) memory.available = (available_kb + std::max(0.0, swap_free_kb)) * 1024.0;
   double limit = 0, in_use = 0;
   readGroupLimit(root, limit, in_use);
