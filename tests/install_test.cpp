@@ -96,7 +96,10 @@ TEST(Install, FindPackageBuildsAnEngineProgram) {
       test::runCommand((source / "build" / "engine").string(),
                        {(dir / "grid.obj").string(), (dir / "out.obj").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  EXPECT_EQ(run.out, "triangles 512 -> 128, installed shaders found\n");
+  // A quarter of the triangles, or one fewer (a collapse inside the grid removes two).
+  EXPECT_TRUE(run.out == "triangles 512 -> 128, installed shaders found\n" ||
+              run.out == "triangles 512 -> 127, installed shaders found\n")
+      << run.out;
   EXPECT_TRUE(fs::exists(dir / "out.obj"));
 
   // The installed tool reads the shaders installed beside it, not the source tree's (which exists

@@ -121,8 +121,8 @@ TEST(SimplifyQuadric, ClosedMeshStaysClosed) {
 // vertex). Both paths: positions only (the fast path) and with normals (the engine). Without the
 // rule both removed the disc (WaterBottle's cap and the Avocado's skin at 0.5%).
 // The progress callback sees the triangle count fall, and its last call is the result's count:
-// on the position fast path (once a pass and once a greedy fill) and on the engine with normals
-// (once a collapse).
+// once a pass, then once a greedy fill on the position fast path and once a queue collapse on the
+// engine (with normals).
 TEST(SimplifyQuadric, ReportsProgressAsTrianglesGo) {
   for (bool with_normals : {false, true}) {
     core::Mesh sphere = test::icosphere(3);
@@ -138,10 +138,10 @@ TEST(SimplifyQuadric, ReportsProgressAsTrianglesGo) {
     EXPECT_TRUE(std::is_sorted(seen.rbegin(), seen.rend())) << with_normals;
     EXPECT_LT(seen.front(), 1280u);
     EXPECT_EQ(seen.back(), 128u);
-    // The engine reports each collapse: (1280 - 128) / 2 of them.
-    if (with_normals) {
-      EXPECT_EQ(seen.size(), 576u);
-    }
+    // Fewer calls than collapses ((1280 - 128) / 2 of them), more than passes.
+    EXPECT_LT(seen.size(), 576u) << with_normals;
+    EXPECT_GT(seen.size(), result.stats.passes) << with_normals;
+    EXPECT_GT(result.stats.passes, 0u) << with_normals;
   }
 }
 
@@ -236,8 +236,9 @@ TEST(SimplifyQuadric, HoleStaysOpen) {
 // its tip (their corner angles sum to 51°). The planes of its sides nearly contain its axis, so
 // the quadrics barely grow as the tip slides down it. The distance from the tip to the nearest
 // output vertex, at 240 and 96 of the 480 triangles: without the pin (kSpikePinWeight 0) 0.018
-// and 0.031 in the fast path (positions only), 0.042 and 0.042 in the engine (with normals);
-// pinned, 0.0001 and 0.0046, 0.0018 and 0.0114.
+// and 0.031 in the fast path (positions only), 0.036 and 0.040 in the engine (with normals);
+// pinned, 0.0001 and 0.0046, 0.0057 and 0.0153. (The engine's greedy queue, before its passes in
+// session 43: unpinned 0.042 and 0.042, pinned 0.0018 and 0.0114.)
 double tipLoss(const Mesh& input, Vec3 tip, uint32_t target) {
   auto result = mesh::simplifyQuadric(input, {.target_triangles = target});
   EXPECT_EQ(result.mesh.triangleCount(), target);
@@ -254,7 +255,7 @@ TEST(SimplifyQuadric, KeepsASpikeTip) {
   EXPECT_LT(tipLoss(horn, tip, 96), 0.008);
   Mesh with_normals = horn;
   core::computeNormals(with_normals);
-  EXPECT_LT(tipLoss(with_normals, tip, 240), 0.005);
+  EXPECT_LT(tipLoss(with_normals, tip, 240), 0.008);
   EXPECT_LT(tipLoss(with_normals, tip, 96), 0.02);
 }
 
@@ -519,8 +520,8 @@ TEST(SurfaceTopology, OrientConsistently) {
 
 // A greedy fill that applies no collapse is not repeated: the next fill would find the same mesh
 // and refuse the same edges. A tetrahedron's 6 edges each refuse to collapse (each would make
-// two triangles on the same vertices): positions only, the passes try each once and the queue
-// once (12; with every fill, 30); with UVs, the engine's queue alone tries each once (6; 24).
+// two triangles on the same vertices): positions only and with UVs (the engine) alike, the passes
+// try each once and the queue once (12; with every fill, 30).
 TEST(SimplifyQuadric, AFillThatAppliesNothingIsNotRepeated) {
   Mesh tetra;
   tetra.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -533,8 +534,8 @@ TEST(SimplifyQuadric, AFillThatAppliesNothingIsNotRepeated) {
   textured.uv0 = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
   auto engine = mesh::simplifyQuadric(textured, {.target_triangles = 2});
   EXPECT_EQ(engine.mesh.triangleCount(), 4u);
-  EXPECT_EQ(engine.stats.passes, 0u);  // the engine's greedy queue only, on a mesh this small
-  EXPECT_EQ(engine.stats.rejected_topology, 6u);
+  EXPECT_EQ(engine.stats.passes, 1u);
+  EXPECT_EQ(engine.stats.rejected_topology, 12u);
   EXPECT_EQ(engine.stats.rejected_flip + positions.stats.rejected_flip, 0u);
 }
 

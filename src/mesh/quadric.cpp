@@ -352,10 +352,49 @@ const double* QuadricModel::mergedAttributeQuadric(const CandidateCollapse& cand
   return scratch_.data();
 }
 
+namespace {
+
 // Hoppe 1999 §4: minimizing over the attributes s = -(Bᵀp + b_s) / area leaves a quadric in p
-// alone: A - B Bᵀ / area, b_p - B b_s / area, c - |b_s|² / area.
-// Here for the attribute quadric of `target` merged with those of the wedges that merge into it,
-// summed element by element as it is read (this runs for every candidate).
+// alone: A - B Bᵀ / area, b_p - B b_s / area, c - |b_s|² / area. Here for the sum of the
+// attribute quadrics `sources`, summed element by element as they are read. kSources is their count
+// when it is known at compile time (1: a wedge alone, 2: merged with one other, a free position's
+// collapse), 0 for any: the generic loop over a runtime count for each of the 11 + 4m elements was
+// half of the reduction's instructions. The same operations in the same order either way, so the
+// same bits.
+template <uint32_t kSources>
+DUOLOD_HOT Quadric reduceSources(const double* const* sources, uint32_t count, uint32_t dims) {
+  auto sum = [&](uint32_t k) {
+    if constexpr (kSources == 1) {
+      return sources[0][k];
+    } else if constexpr (kSources == 2) {
+      return sources[0][k] + sources[1][k];
+    } else {
+      double v = sources[0][k];
+      for (uint32_t i = 1; i < count; ++i) v += sources[i][k];
+      return v;
+    }
+  };
+  Quadric r;
+  r.a00 = sum(0), r.a01 = sum(1), r.a02 = sum(2), r.a11 = sum(3), r.a12 = sum(4), r.a22 = sum(5);
+  r.b0 = sum(6), r.b1 = sum(7), r.b2 = sum(8), r.c = sum(9);
+  const double area = sum(10);
+  if (!(area > 0)) return r;
+  const double inv = 1.0 / area;
+  for (uint32_t j = 0; j < dims; ++j) {
+    const double x = sum(11 + 3 * j), y = sum(12 + 3 * j), z = sum(13 + 3 * j);
+    const double s = sum(11 + 3 * dims + j);
+    r.a00 -= x * x * inv, r.a01 -= x * y * inv, r.a02 -= x * z * inv;
+    r.a11 -= y * y * inv, r.a12 -= y * z * inv, r.a22 -= z * z * inv;
+    r.b0 -= x * s * inv, r.b1 -= y * s * inv, r.b2 -= z * s * inv;
+    r.c -= s * s * inv;
+  }
+  return r;
+}
+
+}  // namespace
+
+// The attribute quadric of `target` merged with those of the wedges that merge into it, reduced
+// (this runs for every candidate).
 Quadric QuadricModel::reducedMergedQuadric(const CandidateCollapse& candidate,
                                            uint32_t target) const {
   const double* sources[1 + kMaxWedges];
@@ -364,26 +403,9 @@ Quadric QuadricModel::reducedMergedQuadric(const CandidateCollapse& candidate,
   for (uint32_t i = 0; i < candidate.wedge_count; ++i)
     if (candidate.to_wedges[i] == target)
       sources[count++] = attribute_.data() + size_t(candidate.from_wedges[i]) * attribute_stride_;
-  auto sum = [&](uint32_t k) {
-    double v = sources[0][k];
-    for (uint32_t i = 1; i < count; ++i) v += sources[i][k];
-    return v;
-  };
-  Quadric r;
-  r.a00 = sum(0), r.a01 = sum(1), r.a02 = sum(2), r.a11 = sum(3), r.a12 = sum(4), r.a22 = sum(5);
-  r.b0 = sum(6), r.b1 = sum(7), r.b2 = sum(8), r.c = sum(9);
-  const double area = sum(10);
-  if (!(area > 0)) return r;
-  const double inv = 1.0 / area;
-  for (uint32_t j = 0; j < dims_; ++j) {
-    const double x = sum(11 + 3 * j), y = sum(12 + 3 * j), z = sum(13 + 3 * j);
-    const double s = sum(11 + 3 * dims_ + j);
-    r.a00 -= x * x * inv, r.a01 -= x * y * inv, r.a02 -= x * z * inv;
-    r.a11 -= y * y * inv, r.a12 -= y * z * inv, r.a22 -= z * z * inv;
-    r.b0 -= x * s * inv, r.b1 -= y * s * inv, r.b2 -= z * s * inv;
-    r.c -= s * s * inv;
-  }
-  return r;
+  if (count == 1) return reduceSources<1>(sources, count, dims_);
+  if (count == 2) return reduceSources<2>(sources, count, dims_);
+  return reduceSources<0>(sources, count, dims_);
 }
 
 void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateCollapse& cand,

@@ -1,9 +1,9 @@
 // simplifyQuadric: the collapse engine driven by the quadric cost (quadric.hpp). The fast mode and
 // the geometric baseline of the paper's mesh simplification (§4.2 uses the same engine with an
-// image-driven cost). Position-only meshes: pass ordering with fixed-point pricing (optimal
-// placement solved only for the collapses applied), then the greedy queue for the last collapses
-// (collapse_engine.hpp), run by the position-only fast path (simplify_positions.hpp) when it
-// applies; meshes with attributes: the greedy queue throughout.
+// image-driven cost). Pass ordering, then the greedy queue for the last collapses
+// (collapse_engine.hpp). Position-only meshes price at fixed points (the optimal placement solved
+// only for the collapses applied) and run in the position-only fast path (simplify_positions.hpp)
+// when it applies; meshes with attributes price every candidate at its optimal placement.
 #include <chrono>
 
 #include "duolod/mesh.hpp"
@@ -24,8 +24,14 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
   if (positionFastPathApplies(mesh, options)) return fast(mesh);
   PreparedMesh prepared = prepareMeshWithPositions(mesh);
   if (positionFastPathApplies(prepared.mesh, options)) return fast(prepared.mesh);
+  // With attributes the passes price every candidate at its optimal placement, as the greedy
+  // queue does: ordered by the best of the fixed points, the attribute quadrics' prices misjudged
+  // curved regions, whose collapses are cheap only off the edge (WaterBottle at 50%: the knurled
+  // cap lost its highlights, the pbr render 0.00065 -> 0.0022 per pixel even with passes only
+  // down to 75%; exactly priced 0.00064). bench/RESULTS.md, issue 3, session 43.
+  const bool has_attributes = attributeLayout(prepared.mesh).stride != 0;
   QuadricModel model({.endpoint_only = options.placement == Placement::kEndpoint,
-                      .price_at_fixed_points = true,
+                      .price_at_fixed_points = !has_attributes,
                       .attribute_weight = options.attribute_weight});
   EngineOptions engine_options{
       .target_triangles = options.target_triangles,
@@ -34,12 +40,14 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
       .lock_border = options.lock_border,
       .allow_material_border_collapse = options.allow_material_border_collapse,
       .record = options.record,
-      // Passes for position-only meshes; the greedy queue when there are attributes: on
-      // WaterBottle at 50% the passes made the pbr render 3.5x worse per pixel (0.00064 ->
-      // 0.00223, tests/mesh_attributes_render_test.cpp), mostly around the cap, while the
-      // positions-only row is where meshopt_simplify 0.18 (position-only) is the comparison.
-      .ordering = attributeLayout(prepared.mesh).stride == 0 ? CollapseOrdering::kPasses
-                                                             : CollapseOrdering::kGreedy,
+      // Passes, then the greedy queue at the coarse end, with or without attributes. The
+      // attribute-aware meshes took the greedy queue throughout until session 43: each collapse
+      // re-priced the survivor's edges (~7 evaluations, each a Hoppe reduction and a solve) and
+      // most queue pops were stale entries. Exactly priced passes: bunny with normals to 10%
+      // 0.68x the time; the pbr and UV renders of tests/mesh_attributes_render_test.cpp as good or
+      // better (spot 10% 0.0370 -> 0.0361 per pixel); Hausdorff ratios to meshopt over 5 orders
+      // geomean 0.717 -> 0.748 (none above 1.0), mean 0.517 -> 0.511.
+      .ordering = CollapseOrdering::kPasses,
       .progress = options.progress,
   };
   SimplifyResult result = runCollapseEngine(prepared, model, engine_options);
