@@ -1182,6 +1182,7 @@ void Engine::runPasses() {
     const size_t above_target = reached() ? 0 : s.live_triangles - pass_target;
     if (passStalls(applied, goal, above_target, tail_capacity) || passNearsTail(above_target, tail))
       break;
+    if (double(applied) < options_.min_pass_yield * double(pass_order_.size())) break;
   }
   batch_.clear();
 }

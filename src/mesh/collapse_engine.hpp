@@ -269,6 +269,13 @@ struct EngineOptions {
   // surface most, are ordered exactly (this is where the passes' looser order cost Hausdorff
   // distance), and the queue over a mesh that small is cheap. See greedyTailTriangles.
   size_t greedy_tail_triangles = 2000;
+  // kPasses: a pass that applied fewer than this share of the candidates it priced ends the
+  // passes, and the greedy queue does the rest (0: never). For models whose pass pricing costs
+  // what the queue's does (the quadric model with attributes prices every candidate at its
+  // optimal placement): a pass re-prices every edge, the queue only around its collapses. On the
+  // flat regions of CAD models the last passes apply a few collapses each (fandisk with normals
+  // at 50%: 42, 82 and 8 of ~10k priced), and each cost as much as the queue's whole run there.
+  double min_pass_yield = 0;
   // Optional: called with the live triangle count after each pass, each batch of refined prices
   // and each applied collapse of the greedy queue (the image-driven mode's order, where
   // collapses wait on renders), so that a caller can show progress.
