@@ -213,6 +213,9 @@ class QuadricModel final : public CostModel {
   // the survivor's wedges, minimized over the attributes) that prices and places it.
   void mergedQuadrics(const EngineState& state, const CandidateCollapse& candidate,
                       Quadric& geometric, Quadric& total) const;
+  // Adds the reduced attribute quadrics of the survivor's wedges to `total`.
+  void addReducedAttributes(const EngineState& state, const CandidateCollapse& candidate,
+                            Quadric& total) const;
   // Adds the spike tips' point quadrics to geometric_ (see kSpikePinWeight).
   void pinSpikeTips(const EngineState& state);
 
