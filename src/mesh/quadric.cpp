@@ -440,8 +440,9 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
 
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
   for (CandidateCollapse& cand : batch) {
-    // (Summed here rather than through mergedQuadrics when there are no attributes: this runs
-    // for every edge of every pass, and the copies through memory cost more than the sums.)
+    // (Summed here rather than through mergedQuadrics: the error needs the geometric quadric
+    // apart from the total, and this runs for every edge of every pass, where summing it twice
+    // and copying it through memory showed.)
     Quadric geometric = geometric_[cand.from];
     addInto(geometric, geometric_[cand.to]);
     Quadric total = geometric;
