@@ -752,6 +752,10 @@ void readGroupLimit(const std::string& root, double& limit, double& in_use) {
   if (usage > 0) in_use = std::max(0.0, usage - std::max(0.0, inactive));
 }
 
+double batchBytes(size_t count, int tile, size_t bytes_per_pixel) {
+  return double(count) * double(tile) * double(tile) * double(bytes_per_pixel);
+}
+
 }  // namespace
 
 MachineMemory readMachineMemory(const std::string& root, double physical) {
@@ -778,7 +782,7 @@ MachineMemory machineMemory() {
 
 core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as,
                               const MachineMemory& memory) {
-  const double needed = double(count) * double(tile) * double(tile) * double(bytes_per_pixel);
+  const double needed = batchBytes(count, tile, bytes_per_pixel);
   char text[320];
   if (memory.total > 0 && needed > memory.total) {
     std::snprintf(text, sizeof text,
@@ -805,8 +809,7 @@ core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, co
 core::Status checkBatchMemory(size_t count, int tile, size_t bytes_per_pixel, const char* as) {
   // Reading the figures takes ~0.1 ms (a few /proc and /sys files), and the pair search and the
   // shader searches render thousands of small batches: one below kSmallBatchBytes is let through.
-  const double needed = double(count) * double(tile) * double(tile) * double(bytes_per_pixel);
-  if (needed <= kSmallBatchBytes) return core::okStatus();
+  if (batchBytes(count, tile, bytes_per_pixel) <= kSmallBatchBytes) return core::okStatus();
   return checkBatchMemory(count, tile, bytes_per_pixel, as, machineMemory());
 }
 
