@@ -4,7 +4,10 @@
 // candidates of a 75k-triangle record extract well under a second.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <numeric>
+#include <random>
 #include <set>
 
 #include "duolod/mesh.hpp"
@@ -54,6 +57,60 @@ TEST(ProgressiveRecord, FullReplayIsTheResultAndEmptyReplayIsTheInput) {
       EXPECT_GE(record.steps[i].cumulative_error, record.steps[i - 1].cumulative_error);
     EXPECT_FLOAT_EQ(record.steps.back().cumulative_error, float(result.error));
   }
+}
+
+// From 8192 positions on, the attribute-aware engine runs on a copy in Morton order
+// (simplify_quadric.cpp) and puts its output and record back in the input's order. A grid with a
+// UV seam and normals (9,409 positions), its vertices and each submesh's triangles shuffled (ids
+// in no spatial order, as in scanned meshes): the record still replays to the result and to the
+// input, and the output keeps the submeshes.
+TEST(ProgressiveRecord, ALargeShuffledMeshReplaysInItsOwnOrder) {
+  Mesh grid = test::seamGrid(96, gentleBumps);
+  const uint32_t half = uint32_t(grid.indices.size() / 6) * 3;
+  grid.submeshes = {{0, half, 0}, {half, uint32_t(grid.indices.size()) - half, 1}};
+  std::mt19937 rng(7);
+  std::vector<uint32_t> vertex_order(grid.vertexCount());
+  std::iota(vertex_order.begin(), vertex_order.end(), 0u);
+  std::shuffle(vertex_order.begin(), vertex_order.end(), rng);
+  Mesh input = grid;
+  std::vector<uint32_t> new_id(grid.vertexCount());
+  for (uint32_t i = 0; i < vertex_order.size(); ++i) {
+    const uint32_t v = vertex_order[i];
+    new_id[v] = i;
+    input.positions[i] = grid.positions[v];
+    input.normals[i] = grid.normals[v];
+    input.uv0[i] = grid.uv0[v];
+  }
+  for (const core::Submesh& sub : grid.submeshes) {
+    std::vector<uint32_t> triangles(sub.index_count / 3);
+    std::iota(triangles.begin(), triangles.end(), sub.first_index / 3);
+    std::shuffle(triangles.begin(), triangles.end(), rng);
+    for (size_t i = 0; i < triangles.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        input.indices[sub.first_index + i * 3 + k] = new_id[grid.indices[triangles[i] * 3 + k]];
+  }
+  ASSERT_GE(input.vertexCount(), 8192u);
+
+  auto result = mesh::simplifyQuadric(input, {.target_triangles = input.triangleCount() / 10});
+  const auto& record = result.record;
+  ASSERT_FALSE(record.steps.empty());
+  EXPECT_LE(result.mesh.triangleCount(), input.triangleCount() / 10);
+  EXPECT_TRUE(core::validateMesh(result.mesh).ok());
+  expectSameMesh(mesh::extractMesh(record, record.steps.size()), result.mesh);
+  expectSameMesh(mesh::extractMesh(record, 0), input);
+  ASSERT_EQ(result.mesh.submeshes.size(), 2u);
+  EXPECT_GT(result.mesh.submeshes[0].index_count, 0u);
+  EXPECT_GT(result.mesh.submeshes[1].index_count, 0u);
+  // The seam is still there: its positions keep two UV charts (u below 0.45 and above 0.75).
+  size_t left = 0, right = 0;
+  for (size_t v = 0; v < result.mesh.vertexCount(); ++v)
+    if (std::abs(result.mesh.positions[v].x - 0.5f) < 1e-6f)
+      (result.mesh.uv0[v].x < 0.45f ? left : right) += 1;
+  EXPECT_GT(left, 0u);
+  EXPECT_EQ(left, right);
+  // The same input gives the same output.
+  auto again = mesh::simplifyQuadric(input, {.target_triangles = input.triangleCount() / 10});
+  expectSameMesh(again.mesh, result.mesh);
 }
 
 TEST(ProgressiveRecord, PrefixTriangleCountsMatchTheSteps) {

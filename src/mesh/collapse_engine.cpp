@@ -1200,11 +1200,14 @@ core::Mesh Engine::buildOutput() const {
     if (remap[w] == kAbsent) continue;
     remap[w] = next++;
     appendVertex(out, s.layout, s.asset_positions[s.wedge_position[w]], s.wedgeAttributes(w));
+    if (options_.output_wedges) options_.output_wedges->push_back(w);
   }
   out.indices.reserve(s.live_triangles * 3);
   for (size_t t = 0; t < s.triangle_alive.size(); ++t)
-    if (s.triangle_alive[t])
+    if (s.triangle_alive[t]) {
       for (int k = 0; k < 3; ++k) out.indices.push_back(remap[s.corners[t * 3 + k]]);
+      if (options_.output_triangles) options_.output_triangles->push_back(uint32_t(t));
+    }
   out.submeshes = base_.submeshes;
   for (core::Submesh& sub : out.submeshes) {
     uint32_t first_triangle = sub.first_index / 3;

@@ -66,6 +66,8 @@
 #include <limits>
 #include <memory>
 #include <utility>
+
+#include "mesh/spatial_order.hpp"
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -477,28 +479,6 @@ void PositionSimplifier::setUp() {
 // mesh sorted: fandisk and WaterBottle 9-50% slower, Avocado and spot within 6%).
 constexpr uint32_t kSpatialOrderMinimum = 8192;
 
-// The Morton code of a position: 10 bits per axis of its place in the frame (origin, scale: the
-// bounding box's longest side maps to at most 1), interleaved into 30.
-struct MortonFrame {
-  Vec3d origin;
-  double inverse_scale = 1;
-  uint32_t code(core::Vec3 p) const {
-    auto spread = [](uint32_t x) {
-      x = (x | x << 16) & 0x030000ff;
-      x = (x | x << 8) & 0x0300f00f;
-      x = (x | x << 4) & 0x030c30c3;
-      x = (x | x << 2) & 0x09249249;
-      return x;
-    };
-    auto cell = [&](float value, double o) {
-      const double t = (double(value) - o) * inverse_scale * 1023.0;
-      return uint32_t(t > 0 ? (t < 1023 ? t : 1023) : 0);
-    };
-    return spread(cell(p.x, origin.x)) | spread(cell(p.y, origin.y)) << 1 |
-           spread(cell(p.z, origin.z)) << 2;
-  }
-};
-
 // The engine's frame of a bounding box: origin at its minimum, diagonal 1.
 void frameOf(const core::Bounds& bounds, Vec3d& origin, double& scale) {
   if (bounds.empty()) return;
@@ -506,23 +486,6 @@ void frameOf(const core::Bounds& bounds, Vec3d& origin, double& scale) {
   const Vec3d size = boxSize(bounds);
   const double diagonal = std::sqrt(dot(size, size));
   scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1.0;
-}
-
-// Sorts `ids` stably by code[id] (LSD radix, `digits` digits of `digit_bits` bits).
-void sortByCode(std::vector<uint32_t>& ids, const std::vector<uint32_t>& code, int digit_bits,
-                int digits) {
-  std::vector<uint32_t> scratch(ids.size());
-  const uint32_t buckets = 1u << digit_bits, mask = buckets - 1;
-  uint32_t histogram[1024];
-  for (int level = 0; level < digits; ++level) {
-    const int shift = digit_bits * level;
-    std::fill_n(histogram, buckets, 0u);
-    for (uint32_t v : ids) ++histogram[(code[v] >> shift) & mask];
-    uint32_t sum = 0;
-    for (uint32_t b = 0; b < buckets; ++b) sum += std::exchange(histogram[b], sum);
-    for (uint32_t v : ids) scratch[histogram[(code[v] >> shift) & mask]++] = v;
-    ids.swap(scratch);
-  }
 }
 
 bool samePosition(core::Vec3 a, core::Vec3 b) {  // finite: bitwise equal with ±0 folded
