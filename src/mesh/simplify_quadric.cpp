@@ -105,7 +105,7 @@ SpatialOrder orderSpatially(const PreparedMesh& prepared) {
     const uint32_t first = m.submeshes[s].first_index / 3;
     std::fill_n(group.begin() + first, m.submeshes[s].index_count / 3, s);
   }
-  std::vector<uint32_t> group_start(m.submeshes.size() + 1, 0);
+  std::vector<uint32_t> group_start(std::max<size_t>(m.submeshes.size(), 1) + 1, 0);
   for (uint32_t t = 0; t < triangles; ++t) ++group_start[group[t] + 1];
   for (size_t s = 0; s + 1 < group_start.size(); ++s) group_start[s + 1] += group_start[s];
   order.source_triangle.resize(triangles);
