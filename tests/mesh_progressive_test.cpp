@@ -61,9 +61,9 @@ TEST(ProgressiveRecord, FullReplayIsTheResultAndEmptyReplayIsTheInput) {
 
 // From 8192 positions on, the attribute-aware engine runs on a copy in Morton order
 // (simplify_quadric.cpp) and puts its output and record back in the input's order. A grid with a
-// UV seam and normals (9,409 positions), its vertices and each submesh's triangles shuffled (ids
-// in no spatial order, as in scanned meshes): the record still replays to the result and to the
-// input, and the output keeps the submeshes.
+// UV seam and normals (9,409 positions, above the 8192 from which the engine reorders), its
+// vertices and each submesh's triangles shuffled (ids in no spatial order, as in scanned meshes):
+// the record still replays to the result and to the input, and the output keeps the submeshes.
 TEST(ProgressiveRecord, ALargeShuffledMeshReplaysInItsOwnOrder) {
   Mesh grid = test::seamGrid(96, gentleBumps);
   const uint32_t half = uint32_t(grid.indices.size() / 6) * 3;

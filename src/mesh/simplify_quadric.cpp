@@ -22,13 +22,15 @@ namespace {
 // From this many positions on, the attribute-aware engine runs on a copy of the prepared mesh in
 // spatial order, and its output and record are put back in the prepared mesh's order. Its state
 // per position and wedge (quadrics, attribute quadrics, corner tables, the pass candidates and
-// the queue: several hundred bytes) outgrows the 1 MiB L2 cache from a few thousand positions on,
-// and on a mesh whose ids are in no spatial order (scans: CGAL's bunny00, the median triangle
-// spanning 15k ids) every walk of a neighbourhood misses it. Measured (bench/RESULTS.md, issue 3,
-// session 44): bunny00 with normals to 10% 1.4x faster, a shuffled refined_elephant 1.5x,
-// fandisk with normals (6.5k positions) 1.0-1.13x; below, on the shared assets (2.4-2.9k
-// positions, already cache-resident), the reorder cost 3-7% and gained nothing.
-constexpr uint32_t kEngineSpatialOrderMinimum = 4096;
+// the queue: several hundred bytes) outgrows the 1 MiB L2 cache, and on a mesh whose ids are in
+// no spatial order (scans: CGAL's bunny00, the median triangle spanning 15k ids) every walk of a
+// neighbourhood misses it. The order changes only which of two equally priced collapses goes
+// first: bunny00, armadillo and ChineseDragon-10kv with normals give the same output bit for bit.
+// At 4096, fandisk with normals (6.5k positions, flat CAD faces full of equal prices) changed,
+// and its Hausdorff distance at 1% went from 0.93 to 1.11 times meshopt's (median over 5 input
+// orders) for a gain of at most 13%; on the shared assets (2.4-2.9k positions, cache-resident
+// already) the reorder cost 3-7%. bench/RESULTS.md, issue 3, session 44.
+constexpr uint32_t kEngineSpatialOrderMinimum = 8192;
 
 // `to`'s vertex i is `from`'s vertex order[i], in every stream `from` has.
 void gatherVertices(const core::Mesh& from, std::span<const uint32_t> order, core::Mesh& to) {
