@@ -897,6 +897,61 @@ TEST(SimplifyQuadricBadInput, CoordinatesNearTheEndOfFloatRange) {
   }
 }
 
+// The same faults on a mesh with normals large enough (9,409 positions) for the engine to run in
+// spatial order (simplify_quadric.cpp: a reordered copy, its output and record put back): a NaN
+// and an infinite position, degenerate, duplicate and out-of-range triangles, an isolated
+// vertex, three submeshes one of which is empty, and a submesh list that does not tile.
+TEST(SimplifyQuadricBadInput, LargeMeshWithNormalsInSpatialOrder) {
+  Mesh grid = test::gridMesh(96, 1.0f, bumps);
+  core::computeNormals(grid);
+  grid.positions[500].x = std::numeric_limits<float>::quiet_NaN();
+  grid.positions[4000].z = std::numeric_limits<float>::infinity();
+  const uint32_t n = uint32_t(grid.vertexCount());
+  grid.indices.insert(grid.indices.end(), {7, 7, 8});                                     // repeated
+  grid.indices.insert(grid.indices.end(), {0, 1, 2});                                     // collinear
+  grid.indices.insert(grid.indices.end(), grid.indices.begin(), grid.indices.begin() + 3);  // dup
+  grid.indices.insert(grid.indices.end(), {0, 1, n + 5});                              // out of range
+  grid.positions.push_back({9, 9, 9});  // isolated
+  grid.normals.push_back({0, 0, 1});
+  const uint32_t third = uint32_t(grid.triangleCount() / 3) * 3;
+  grid.submeshes = {{0, third, 0}, {third, 0, 1}, {third, uint32_t(grid.indices.size()) - third, 2}};
+  ASSERT_GE(grid.vertexCount(), 8192u);
+  // The vertices at non-finite positions never move, so they stay in the output (validateMesh
+  // would name them); everything else about the output is checked here.
+  auto well_formed = [](const Mesh& m) {
+    EXPECT_EQ(m.normals.size(), m.vertexCount());
+    for (uint32_t i : m.indices) EXPECT_LT(i, m.vertexCount());
+    uint32_t next = 0;
+    for (const core::Submesh& sub : m.submeshes) {
+      EXPECT_EQ(sub.first_index, next);
+      next += sub.index_count;
+    }
+    EXPECT_EQ(next, m.indices.size());
+    size_t non_finite = 0;
+    for (Vec3 p : m.positions) non_finite += !core::isFinite(p);
+    EXPECT_LE(non_finite, 2u);
+  };
+  auto result = mesh::simplifyQuadric(grid, {.target_triangles = 1000});
+  well_formed(result.mesh);
+  EXPECT_LE(result.mesh.triangleCount(), 1100u);
+  for (Vec3 p : result.mesh.positions) EXPECT_NE(p.x, 9.0f) << "isolated vertex kept";
+  EXPECT_FALSE(std::isnan(result.error));
+  ASSERT_EQ(result.mesh.submeshes.size(), 3u);
+  EXPECT_EQ(result.mesh.submeshes[1].index_count, 0u);
+  const Mesh replayed = mesh::extractMesh(result.record, result.record.steps.size());
+  EXPECT_EQ(replayed.indices, result.mesh.indices);
+  ASSERT_EQ(replayed.vertexCount(), result.mesh.vertexCount());
+  for (size_t v = 0; v < replayed.vertexCount(); ++v) {
+    const Vec3 a = replayed.positions[v], b = result.mesh.positions[v];
+    EXPECT_TRUE((a.x == b.x || (std::isnan(a.x) && std::isnan(b.x))) && a.y == b.y && a.z == b.z)
+        << "vertex " << v;
+  }
+  grid.submeshes = {{3, 9, 0}};  // does not tile the index buffer: one submesh
+  auto untiled = mesh::simplifyQuadric(grid, {.target_triangles = 1000});
+  well_formed(untiled.mesh);
+  EXPECT_EQ(untiled.mesh.submeshes.size(), 1u);
+}
+
 TEST(SimplifyQuadricBadInput, BrokenSubmeshesAndSingleTriangle) {
   Mesh grid = test::gridMesh(4);
   grid.submeshes = {{3, 9, 0}};  // does not tile the index buffer
