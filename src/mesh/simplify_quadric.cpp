@@ -52,9 +52,10 @@ void gatherVertices(const core::Mesh& from, std::span<const uint32_t> order, cor
 // working mesh. Both sorts are stable, so the order is a function of the input alone.
 struct SpatialOrder {
   PreparedMesh mesh;
-  std::vector<uint32_t> source_vertex;  // mesh's vertex i is the prepared mesh's source_vertex[i]
-  std::vector<uint32_t>
-      source_triangle;  // and its triangle i the prepared mesh's source_triangle[i]
+  // mesh's vertex i is the prepared mesh's vertex source_vertex[i], and its triangle i the
+  // prepared mesh's triangle source_triangle[i].
+  std::vector<uint32_t> source_vertex;
+  std::vector<uint32_t> source_triangle;
 };
 
 SpatialOrder orderSpatially(const PreparedMesh& prepared) {
