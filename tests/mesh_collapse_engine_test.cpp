@@ -6,9 +6,13 @@
 // (the quadric mode's), one evaluate() per pass and no overlapping collapses within a pass.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <set>
 
 #include "mesh/collapse_engine.hpp"
+#include "mesh/quadric.hpp"
 #include "mesh_test_meshes.hpp"
 
 namespace duolod {
@@ -184,6 +188,59 @@ TEST(CollapseEngine, PassesNeverApplyOverlappingEdgesInOnePass) {
     EXPECT_GE(c.cost, last_cost);
     last_cost = c.cost;
   }
+}
+
+// QuadricModel prices a batch of 4096 candidates or more in two halves on two cores (runBoth):
+// its prices must be those of one loop, bit for bit. A second model follows the same collapses
+// and prices a copy of every batch in slices of 64 (one core); the two are compared.
+TEST(CollapseEngine, QuadricPricesOnTwoCoresAreThoseOfOne) {
+  core::Mesh grid = test::seamGrid(
+      64, [](float x, float y) { return 0.1f * std::sin(7.0f * x) * std::cos(5.0f * y); });
+  class CheckedModel : public mesh::CostModel {
+   public:
+    void begin(const mesh::EngineState& state) override {
+      fast.begin(state);
+      reference.begin(state);
+    }
+    void evaluate(const mesh::EngineState& state, std::span<mesh::CandidateCollapse> batch) override {
+      std::vector<mesh::CandidateCollapse> copy(batch.begin(), batch.end());
+      fast.evaluate(state, batch);
+      for (size_t i = 0; i < copy.size(); i += 64)
+        reference.evaluate(state, std::span(copy).subspan(i, std::min<size_t>(64, copy.size() - i)));
+      large_batches += batch.size() >= 4096;
+      for (size_t i = 0; i < copy.size(); ++i) {
+        const mesh::CandidateCollapse &a = batch[i], &b = copy[i];
+        compared += 1;
+        mismatches += std::memcmp(&a.cost, &b.cost, sizeof a.cost) != 0 ||
+                      std::memcmp(&a.error, &b.error, sizeof a.error) != 0 ||
+                      std::memcmp(&a.position, &b.position, sizeof a.position) != 0;
+      }
+    }
+    void placeAttributes(const mesh::EngineState& state, const mesh::CandidateCollapse& chosen,
+                         std::span<float> values) override {
+      fast.placeAttributes(state, chosen, values);
+    }
+    void refinePlacement(const mesh::EngineState& state, mesh::CandidateCollapse& chosen) override {
+      fast.refinePlacement(state, chosen);
+    }
+    void setPassPricing(bool passes) override {
+      fast.setPassPricing(passes);
+      reference.setPassPricing(passes);
+    }
+    void onCollapse(const mesh::EngineState& state, const mesh::AppliedCollapse& applied) override {
+      fast.onCollapse(state, applied);
+      reference.onCollapse(state, applied);
+    }
+    mesh::QuadricModel fast{{}}, reference{{}};
+    size_t large_batches = 0, compared = 0, mismatches = 0;
+  } model;
+  auto result = mesh::runCollapseEngine(
+      mesh::prepareMesh(grid), model,
+      {.target_triangles = 200, .ordering = mesh::CollapseOrdering::kPasses});
+  EXPECT_LE(result.mesh.triangleCount(), 200u);
+  EXPECT_GT(model.large_batches, 0u);
+  EXPECT_GT(model.compared, 20000u);
+  EXPECT_EQ(model.mismatches, 0u);
 }
 
 // Both orderings run the same rules and reach the target on a seamed, curved grid.

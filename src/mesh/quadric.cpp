@@ -9,6 +9,8 @@
 // at any scale simplifies the same way; errors are converted back to asset units.
 #include "mesh/quadric.hpp"
 
+#include "mesh/run_both.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -438,38 +440,53 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
   if (dims_ > 0) addReducedAttributes(state, cand, total);
 }
 
+// From this many candidates on, evaluate prices a batch on two cores (runBoth: one thread
+// started per batch, ~50 us, against ~0.3 us a price with attributes).
+constexpr size_t kTwoCorePricingMinimum = 4096;
+
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
-  for (CandidateCollapse& cand : batch) {
-    // (Summed here rather than through mergedQuadrics: the error needs the geometric quadric
-    // apart from the total, and this runs for every edge of every pass, where summing it twice
-    // and copying it through memory showed.)
-    Quadric geometric = geometric_[cand.from];
-    addInto(geometric, geometric_[cand.to]);
-    Quadric total = geometric;
-    if (dims_ > 0) addReducedAttributes(state, cand, total);
-    const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
-    double value = 0;
-    if (cand.endpoint_only) {
-      cand.position = b;
-      value = quadricValue(total, b);
-    } else if (fixed_point_pricing_) {
-      uint8_t at = kFixedAtB;
-      value = priceAtFixedPoints(total, a, b, at);
-      cand.position = fixedPoint(a, b, at);
-    } else {
-      cand.position = minimizeOnEdge(total, a, b, &value);
+  auto price = [&](std::span<CandidateCollapse> part) {
+    for (CandidateCollapse& cand : part) {
+      // (Summed here rather than through mergedQuadrics: the error needs the geometric quadric
+      // apart from the total, and this runs for every edge of every pass, where summing it twice
+      // and copying it through memory showed.)
+      Quadric geometric = geometric_[cand.from];
+      addInto(geometric, geometric_[cand.to]);
+      Quadric total = geometric;
+      if (dims_ > 0) addReducedAttributes(state, cand, total);
+      const Vec3d a = state.positions[cand.from], b = state.positions[cand.to];
+      double value = 0;
+      if (cand.endpoint_only) {
+        cand.position = b;
+        value = quadricValue(total, b);
+      } else if (fixed_point_pricing_) {
+        uint8_t at = kFixedAtB;
+        value = priceAtFixedPoints(total, a, b, at);
+        cand.position = fixedPoint(a, b, at);
+      } else {
+        cand.position = minimizeOnEdge(total, a, b, &value);
+      }
+      // The cost is the weighted quadric itself (Garland & Heckbert's Q(v)): squared distance
+      // times the weight (planeWeight of the area) it applies to, so a collapse that moves a large
+      // region a little and one that moves a small region a lot are compared by how much surface
+      // they displace. (Dividing by the weight, i.e. ordering by mean squared distance, was
+      // measured worse: bench/simplify's mean distance 10-40% higher, Hausdorff worse on 6 of 21
+      // cells instead of 3.) The reported error is the root (weighted) mean squared distance in
+      // asset units.
+      cand.cost = value;
+      const double area = geometric.weight > 0 ? geometric.weight : 1.0;
+      const double geometric_value = dims_ == 0 ? value : quadricValue(geometric, cand.position);
+      cand.error = std::sqrt(geometric_value / area) * state.scale;
     }
-    // The cost is the weighted quadric itself (Garland & Heckbert's Q(v)): squared distance
-    // times the weight (planeWeight of the area) it applies to, so a collapse that moves a large
-    // region a little and one that moves a small region a lot are compared by how much surface
-    // they displace. (Dividing by the weight, i.e. ordering by mean squared distance, was
-    // measured worse: bench/simplify's mean distance 10-40% higher, Hausdorff worse on 6 of 21
-    // cells instead of 3.) The reported error is the root (weighted) mean squared distance in
-    // asset units.
-    cand.cost = value;
-    const double area = geometric.weight > 0 ? geometric.weight : 1.0;
-    const double geometric_value = dims_ == 0 ? value : quadricValue(geometric, cand.position);
-    cand.error = std::sqrt(geometric_value / area) * state.scale;
+  };
+  // Each price reads the model and the state only, so a large batch (a pass prices every live
+  // edge: with attributes a third of the run's instructions, bunny with normals to 10%) is priced
+  // in two halves on the machine's two cores, with the same prices as one loop.
+  if (batch.size() >= kTwoCorePricingMinimum) {
+    const size_t half = batch.size() / 2;
+    runBoth([&] { price(batch.first(half)); }, [&] { price(batch.subspan(half)); });
+  } else {
+    price(batch);
   }
 }
 
