@@ -440,8 +440,9 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
   if (dims_ > 0) addReducedAttributes(state, cand, total);
 }
 
-// From this many candidates on, evaluate prices a batch on two cores (runBoth: one thread
-// started per batch, ~50 us, against ~0.3 us a price with attributes).
+// From this many candidates on, evaluate prices a batch with attributes on two cores (runBoth:
+// one thread started per batch, ~50 us, against ~0.3 us a price with Hoppe's reduction; the
+// position-only prices at fixed points cost a tenth of that and stay on one).
 constexpr size_t kTwoCorePricingMinimum = 4096;
 
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {
@@ -482,7 +483,7 @@ void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollaps
   // Each price reads the model and the state only, so a large batch (a pass prices every live
   // edge: with attributes a third of the run's instructions, bunny with normals to 10%) is priced
   // in two halves on the machine's two cores, with the same prices as one loop.
-  if (batch.size() >= kTwoCorePricingMinimum) {
+  if (dims_ > 0 && batch.size() >= kTwoCorePricingMinimum) {
     const size_t half = batch.size() / 2;
     runBoth([&] { price(batch.first(half)); }, [&] { price(batch.subspan(half)); });
   } else {
