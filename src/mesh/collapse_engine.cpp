@@ -1010,6 +1010,10 @@ void Engine::runGreedy() {
 void Engine::collectPassCandidates() {
   const EngineState& s = state_;
   batch_.clear();
+  // Room for every candidate at once (at most two per edge, about 3 per triangle): grown by
+  // doubling, the first pass's ~100-byte candidates were copied and their fresh pages faulted in
+  // again at every step (bunny with normals: 11 MB, 4% of the run's samples in memmove).
+  batch_.reserve(3 * s.live_triangles + 64);
   const size_t triangles = s.triangle_alive.size();
   const VertexKind* kinds = s.kinds.data();
   CandidateCollapse c;
