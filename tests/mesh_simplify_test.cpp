@@ -831,7 +831,8 @@ TEST(SimplifyQuadricBadInput, DegenerateDuplicateAndIsolated) {
   size_t clean_triangles = grid.triangleCount();
   grid.indices.insert(grid.indices.end(), {0, 0, 1});           // repeated index
   grid.indices.insert(grid.indices.end(), {0, 1, 2});           // zero area (collinear)
-  grid.indices.insert(grid.indices.end(), grid.indices.begin(), grid.indices.begin() + 3);  // dup
+  const std::vector<uint32_t> first(grid.indices.begin(), grid.indices.begin() + 3);
+  grid.indices.insert(grid.indices.end(), first.begin(), first.end());  // dup
   grid.positions.push_back({5, 5, 5});                          // isolated vertex
   grid.positions.push_back(grid.positions[3]);                  // duplicate vertex, unused
   grid.submeshes = {{0, uint32_t(grid.indices.size()), 0}};
@@ -909,7 +910,8 @@ TEST(SimplifyQuadricBadInput, LargeMeshWithNormalsInSpatialOrder) {
   const uint32_t n = uint32_t(grid.vertexCount());
   grid.indices.insert(grid.indices.end(), {7, 7, 8});                                     // repeated
   grid.indices.insert(grid.indices.end(), {0, 1, 2});                                     // collinear
-  grid.indices.insert(grid.indices.end(), grid.indices.begin(), grid.indices.begin() + 3);  // dup
+  const std::vector<uint32_t> first(grid.indices.begin(), grid.indices.begin() + 3);
+  grid.indices.insert(grid.indices.end(), first.begin(), first.end());  // dup
   grid.indices.insert(grid.indices.end(), {0, 1, n + 5});                              // out of range
   grid.positions.push_back({9, 9, 9});  // isolated
   grid.normals.push_back({0, 0, 1});

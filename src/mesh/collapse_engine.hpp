@@ -280,9 +280,10 @@ struct EngineOptions {
   // and each applied collapse of the greedy queue (the image-driven mode's order, where
   // collapses wait on renders), so that a caller can show progress.
   std::function<void(size_t)> progress = nullptr;
-  // Optional: filled with the prepared mesh's wedge of each output vertex and triangle of each
-  // output triangle, for a caller that ran the engine on a reordered copy of its mesh and puts
-  // the output back in the mesh's order (simplify_quadric.cpp's spatial order).
+  // Optional: set to the wedge (vertex of the mesh given to runCollapseEngine) of each output
+  // vertex and the triangle of each output triangle, for a caller that ran the engine on a
+  // reordered copy of its mesh and puts the output back in its own order (simplify_quadric.cpp's
+  // spatial order).
   std::vector<uint32_t>* output_wedges = nullptr;
   std::vector<uint32_t>* output_triangles = nullptr;
 };

@@ -24,12 +24,14 @@ namespace {
 // per position and wedge (quadrics, attribute quadrics, corner tables, the pass candidates and
 // the queue: several hundred bytes) outgrows the 1 MiB L2 cache, and on a mesh whose ids are in
 // no spatial order (scans: CGAL's bunny00, the median triangle spanning 15k ids) every walk of a
-// neighbourhood misses it. The order changes only which of two equally priced collapses goes
-// first: bunny00, armadillo and ChineseDragon-10kv with normals give the same output bit for bit.
-// At 4096, fandisk with normals (6.5k positions, flat CAD faces full of equal prices) changed,
-// and its Hausdorff distance at 1% went from 0.93 to 1.11 times meshopt's (median over 5 input
-// orders) for a gain of at most 13%; on the shared assets (2.4-2.9k positions, cache-resident
-// already) the reorder cost 3-7%. bench/RESULTS.md, issue 3, session 44.
+// neighbourhood misses it. The order can change a result (the quadrics are summed in triangle
+// order, so their roundings move, and equal prices go in another order), but bunny00, armadillo
+// and ChineseDragon-10kv with normals gave the same output bit for bit. At 4096, fandisk with
+// normals (6.5k positions, flat CAD faces full of equal prices) changed, and its Hausdorff
+// distance at 1% went from 0.93 to 1.11 times meshopt's (median over 5 input orders) for a gain
+// of at most 13%; on the shared assets (2.4-2.9k positions, cache-resident already) the reorder
+// cost 3-7%. bench/RESULTS.md, issue 3, session 44. (Position-only meshes that take the engine,
+// not the fast path, keep their order: not measured.)
 constexpr uint32_t kEngineSpatialOrderMinimum = 8192;
 
 // `to`'s vertex i is `from`'s vertex order[i], in every stream `from` has.
@@ -64,14 +66,16 @@ SpatialOrder orderSpatially(const PreparedMesh& prepared) {
   const uint32_t triangles = uint32_t(m.triangleCount());
   SpatialOrder order;
 
+  // The frame of the finite positions (one infinite coordinate would put every other position
+  // in one cell); the others get some code, and the order stays a function of the input.
   core::Bounds bounds;
-  for (core::Vec3 p : m.positions) bounds.extend(p);
+  for (core::Vec3 p : m.positions)
+    if (core::isFinite(p)) bounds.extend(p);
   MortonFrame frame;
   if (!bounds.empty()) {
     frame.origin = {bounds.min.x, bounds.min.y, bounds.min.z};
-    const core::Vec3 size = bounds.size();
-    const double diagonal =
-        std::sqrt(double(size.x) * size.x + double(size.y) * size.y + double(size.z) * size.z);
+    const Vec3d size = boxSize(bounds);
+    const double diagonal = std::sqrt(dot(size, size));
     frame.inverse_scale = diagonal > 0 && std::isfinite(diagonal) ? 1.0 / diagonal : 1.0;
   }
   std::vector<uint32_t> code(positions, 0);
@@ -170,6 +174,8 @@ void restoreOrder(SimplifyResult& result, const PreparedMesh& prepared, const Sp
   for (CollapseStep& step : r.steps) {
     step.removed = order.source_vertex[step.removed];
     step.kept = order.source_vertex[step.kept];
+    // (The engine appends a value for every step, so kept_value >= n; a base value would be a
+    // vertex of the reordered base.)
     if (step.kept_value < n) step.kept_value = order.source_vertex[step.kept_value];
   }
 }
@@ -222,7 +228,7 @@ SimplifyResult simplifyQuadric(const core::Mesh& mesh, const SimplifyOptions& op
       .progress = options.progress,
   };
   SimplifyResult result;
-  if (prepared.position_count >= kEngineSpatialOrderMinimum) {
+  if (has_attributes && prepared.position_count >= kEngineSpatialOrderMinimum) {
     const SpatialOrder order = orderSpatially(prepared);
     std::vector<uint32_t> output_wedges, output_triangles;
     engine_options.output_wedges = &output_wedges;
