@@ -7,13 +7,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <set>
 #include <thread>
 
 #include "mesh/collapse_engine.hpp"
 #include "mesh/quadric.hpp"
+#include "mesh/second_core.hpp"
 #include "mesh_test_meshes.hpp"
 
 namespace duolod {
@@ -324,6 +327,96 @@ TEST(PrepareMesh, DropsDuplicateTrianglesKeepsTheFirstAndTheReversed) {
   ASSERT_EQ(out.positions.size(), 4u);  // vertex 3 welded into 0; 4 renumbered 3
   EXPECT_EQ(out.positions[3].x, 1.0f);
   EXPECT_EQ(out.positions[3].y, 1.0f);
+}
+
+// SecondCore (second_core.hpp): every part of every job runs exactly once, job after job (the
+// claim is reused with a new generation each time), whoever runs it; parts may run on the helper.
+TEST(SecondCore, EveryPartOfEveryJobRunsOnce) {
+  mesh::SecondCore cores;
+  std::vector<std::atomic<uint32_t>> runs(257);
+  std::atomic<uint32_t> on_helper{0};
+  const std::thread::id here = std::this_thread::get_id();
+  for (uint32_t job = 0; job < 300; ++job) {
+    const uint32_t parts = 1 + job % 257;
+    for (uint32_t i = 0; i < parts; ++i) runs[i] = 0;
+    cores.forEach(parts, [&](uint32_t part) {
+      runs[part].fetch_add(1);
+      if (std::this_thread::get_id() != here) on_helper.fetch_add(1);
+    });
+    for (uint32_t i = 0; i < parts; ++i)
+      ASSERT_EQ(runs[i].load(), 1u) << "job " << job << " part " << i;
+  }
+  if (!cores.available()) {
+    EXPECT_EQ(on_helper.load(), 0u);
+    GTEST_SKIP() << "no second core (one core, or the helper is held): every part ran here";
+  }
+  std::printf("parts run on the helper: %u\n", on_helper.load());
+}
+
+// One holder at a time: a second SecondCore (another call, or one nested inside a part) works
+// alone, and gets the helper once the first lets it go.
+TEST(SecondCore, OneHolderAtATime) {
+  if (std::thread::hardware_concurrency() < 2)
+    GTEST_SKIP() << "one core: there is no helper to hold";
+  std::optional<mesh::SecondCore> first;
+  first.emplace();
+  ASSERT_TRUE(first->available());
+  {
+    mesh::SecondCore second;
+    EXPECT_FALSE(second.available());
+    std::vector<int> ran(10, 0);
+    second.forEach(10, [&](uint32_t part) { ++ran[part]; });  // here, in order
+    EXPECT_EQ(ran, std::vector<int>(10, 1));
+  }
+  std::atomic<int> nested_available{0}, nested_parts{0};
+  first->forEach(4, [&](uint32_t) {
+    mesh::SecondCore nested;
+    nested_available += nested.available();
+    nested.forEach(3, [&](uint32_t) { ++nested_parts; });
+  });
+  EXPECT_EQ(nested_available.load(), 0);
+  EXPECT_EQ(nested_parts.load(), 12);
+  first.reset();
+  mesh::SecondCore third;
+  EXPECT_TRUE(third.available());
+}
+
+// The position-only fast path applies a pass's collapses in two halves of a large mesh, on two
+// cores when it has them: the result must not depend on whether it had them. Here the helper is
+// held by this test, so the simplifier runs both halves on one core; the outputs must be equal,
+// bit for bit, to those of a run with the helper.
+TEST(SecondCore, SimplifyingIsTheSameOnOneCoreAsOnTwo) {
+  const core::Mesh input = test::icosphere(6, 1.0f, test::lumps);  // 40,962 positions
+  for (size_t target : {input.triangleCount() / 2, input.triangleCount() / 10, size_t(400)}) {
+    const mesh::SimplifyOptions options{.target_triangles = target};
+    const mesh::SimplifyResult two = mesh::simplifyQuadric(input, options);
+    mesh::SimplifyResult one;
+    {
+      mesh::SecondCore held;  // the simplifier finds the helper taken
+      one = mesh::simplifyQuadric(input, options);
+    }
+    EXPECT_EQ(two.mesh.indices, one.mesh.indices) << target;
+    ASSERT_EQ(two.mesh.positions.size(), one.mesh.positions.size()) << target;
+    EXPECT_EQ(0, std::memcmp(two.mesh.positions.data(), one.mesh.positions.data(),
+                             one.mesh.positions.size() * sizeof(core::Vec3)))
+        << target;
+    ASSERT_EQ(two.record.steps.size(), one.record.steps.size()) << target;
+    for (size_t i = 0; i < one.record.steps.size(); ++i) {
+      const mesh::CollapseStep &a = two.record.steps[i], &b = one.record.steps[i];
+      ASSERT_TRUE(a.removed == b.removed && a.kept == b.kept && a.kept_value == b.kept_value &&
+                  a.triangles_after == b.triangles_after && a.error == b.error &&
+                  a.cumulative_error == b.cumulative_error && a.continues == b.continues)
+          << target << ": step " << i;
+    }
+    ASSERT_EQ(two.record.values.positions.size(), one.record.values.positions.size()) << target;
+    EXPECT_EQ(0, std::memcmp(two.record.values.positions.data(), one.record.values.positions.data(),
+                             one.record.values.positions.size() * sizeof(core::Vec3)))
+        << target;
+    EXPECT_EQ(two.error, one.error) << target;
+    EXPECT_EQ(two.stats.collapses, one.stats.collapses) << target;
+    EXPECT_EQ(two.stats.rejected_flip, one.stats.rejected_flip) << target;
+    EXPECT_EQ(two.mesh.triangleCount(), target) << target;
+  }
 }
 
 }  // namespace

@@ -113,6 +113,39 @@ TEST(ProgressiveRecord, ALargeShuffledMeshReplaysInItsOwnOrder) {
   expectSameMesh(again.mesh, result.mesh);
 }
 
+// A large position-only mesh (40,962 positions: the fast path in spatial order) has its passes'
+// collapses applied in two halves, each recording its own steps, merged afterwards
+// (simplify_positions.cpp, applyHalves): the merged record must still replay to the result, count
+// its triangles step by step and keep its largest error so far.
+TEST(ProgressiveRecord, ALargePositionOnlyMeshReplaysThroughItsHalves) {
+  const Mesh input = test::icosphere(6, 1.0f, test::lumps);
+  for (size_t target : {input.triangleCount() / 3, size_t(400)}) {
+    auto result = mesh::simplifyQuadric(input, {.target_triangles = target});
+    const auto& record = result.record;
+    ASSERT_FALSE(record.steps.empty());
+    EXPECT_EQ(result.mesh.triangleCount(), target);
+    expectSameMesh(mesh::extractMesh(record, record.steps.size()), result.mesh);
+    expectSameMesh(mesh::extractMesh(record, 0), input);
+    size_t triangles = input.triangleCount();
+    float cumulative = 0;
+    for (size_t i = 0; i < record.steps.size(); ++i) {
+      const mesh::CollapseStep& step = record.steps[i];
+      ASSERT_TRUE(step.triangles_after + 1 == triangles || step.triangles_after + 2 == triangles)
+          << "step " << i << ": " << triangles << " -> " << step.triangles_after;
+      triangles = step.triangles_after;
+      cumulative = std::max(cumulative, step.error);
+      ASSERT_EQ(step.cumulative_error, cumulative) << "step " << i;
+      ASSERT_LT(step.kept_value, record.values.positions.size()) << "step " << i;
+    }
+    EXPECT_EQ(triangles, result.mesh.triangleCount());
+    EXPECT_FLOAT_EQ(record.steps.back().cumulative_error, float(result.error));
+    // A prefix replays to its own triangle count.
+    const size_t middle = record.steps.size() / 2;
+    EXPECT_EQ(mesh::extractMesh(record, middle).triangleCount(),
+              record.steps[middle - 1].triangles_after);
+  }
+}
+
 TEST(ProgressiveRecord, PrefixTriangleCountsMatchTheSteps) {
   Mesh input = test::icosphere(3, 1.0f, test::lumps);
   auto result = mesh::simplifyQuadric(input, {.target_triangles = 40});

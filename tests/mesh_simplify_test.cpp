@@ -406,7 +406,10 @@ TEST(SimplifyQuadric, PassesFinishFromTheirRest) {
   const Mesh bumpy = test::gridMesh(128, 1.0f, bumps);  // 32768 triangles
   auto fast = mesh::simplifyQuadric(bumpy, {.target_triangles = 8192});
   EXPECT_EQ(fast.stats.passes, 4u);
-  EXPECT_EQ(fast.mesh.triangleCount(), 8192u);
+  // At most the target; a last collapse removes one or two triangles, so one below it is a
+  // result too (the passes apply this mesh's collapses in two halves: 8191).
+  EXPECT_LE(fast.mesh.triangleCount(), 8192u);
+  EXPECT_GE(fast.mesh.triangleCount(), 8191u);
   EXPECT_TRUE(core::validateMesh(fast.mesh).ok());
   const Mesh sphere = test::icosphere(5);  // 20480 triangles
   auto engine = mesh::simplifyQuadric(

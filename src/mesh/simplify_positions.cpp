@@ -21,6 +21,10 @@
 //     own position, in float with SSE (PricingRecord), and the optimal placement is solved (in
 //     double) only for the collapses applied (as CostModel::refinePlacement does), and not in
 //     the coarse passes far above the target (passIsCoarse, collapse_engine.hpp);
+//   - on large meshes (in spatial order) both cores work: a pass's pricing in parts, and its
+//     collapses in two halves of the vertex ids, each half's collapses away from the cut on one
+//     core, then those near the cut (applyHalves; second_core.hpp). The result is the same on one
+//     core or two; against one run in cost order, the collapses near the cut come last;
 //   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
 //     the input) use a greedy queue, cheapest first and priced at the optimal placement as the
 //     engine's kGreedy; unlike the engine's, an entry whose endpoint changed is priced again only
@@ -76,6 +80,7 @@
 #include "mesh/quadric.hpp"
 #include "mesh/quaternary_heap.hpp"
 #include "mesh/radix_order.hpp"
+#include "mesh/second_core.hpp"
 
 namespace duolod::mesh {
 namespace {
@@ -244,16 +249,53 @@ inline PricedEdge priceEdge(const PricingRecord& a, const PricingRecord& b, bool
 // What a fan walk reads of each neighbour, in half a cache line: its survivor (the remap), the
 // walk's mark, and (for the flip test) its position. Three arrays cost the apply loop three
 // cache misses per neighbour on meshes whose vertex ids are in no spatial order (bunny00).
+// Below this many vertices every per-vertex array of the simplifier (~230 bytes a vertex in all)
+// nearly fits in a core's L2 (1 MiB here), and sorting costs more than it saves (measured, every
+// mesh sorted: fandisk and WaterBottle 9-50% slower, Avocado and spot within 6%).
+constexpr uint32_t kSpatialOrderMinimum = 8192;
+// Meshes in spatial order (so that the two halves of the ids are two regions, and the cores
+// write to different cache lines) use both cores: a pass's pricing in at most
+// kTwoCorePricingParts parts of at least 1024 triangles (while it has kTwoCorePricingMinimum
+// triangles or more), and its collapses in two halves (applyHalves, kHalvesMargin in runPasses).
+// On meshes in the input's order the halves' collapses wrote to the same cache lines and were
+// slower than one core; sorting the small meshes to use them cost WaterBottle and fandisk
+// (positions) more than the second core gave (bench/RESULTS.md, issue 3, session 45).
+constexpr size_t kTwoCorePricingMinimum = 4096;
+constexpr uint32_t kTwoCorePricingParts = 16;
+constexpr double kHalvesMargin = 1.5;
+
 struct alignas(32) VertexState {
   Vec3d position;  // normalized (bounding-box diagonal 1)
   uint32_t remap;  // survivor of a vertex collapsed in this pass (itself if none)
   uint32_t mark;   // the last round (nextRound) that marked it
 };
 
+// What one run of collapses uses besides the mesh: scratch for the two fans and the edge, the
+// rounds of vertex marks, and (for a half of a pass applied beside the other, applyHalves) the
+// tallies and record steps it adds, merged afterwards.
+struct Collapser {
+  // The other two corners of each moving triangle of a collapse's endpoints (room for every
+  // triangle, so they are filled without capacity checks).
+  uint32_t *from_fan = nullptr, *to_fan = nullptr;
+  uint32_t from_fan_size = 0, to_fan_size = 0;
+  uint32_t edge_triangles[2] = {kAbsent, kAbsent};
+  uint32_t edge_triangle_count = 0;
+  uint32_t round = 0;  // the last round (nextRound) it used
+  // A half's tallies: triangles removed, the largest error, the counts, the steps (triangles_after
+  // counted from the pass's start, kept_value into `values`; cumulative_error set when merged).
+  size_t removed = 0;
+  double max_error = 0;
+  SimplifyStats stats;
+  std::vector<CollapseStep> steps;
+  std::vector<core::Vec3> values;
+};
+
 class PositionSimplifier {
  public:
   PositionSimplifier(const core::Mesh& input, const SimplifyOptions& options)
-      : input_(input), options_(options) {}
+      : input_(input),
+        options_(options),
+        second_core_(input.vertexCount() >= kSpatialOrderMinimum) {}
   SimplifyResult run();
 
  private:
@@ -274,12 +316,27 @@ class PositionSimplifier {
   // kGreedy: in the greedy tail (survivors are chains, triangles come from absorbed vertices
   // too, placement is the optimal one); a template so that the passes pay for none of it.
   // `placement`: the greedy tail's optimal placement, found when the candidate was priced.
-  template <bool kGreedy>
-  bool tryCollapse(const PassCandidate& candidate, uint32_t pass, Vec3d placement = {});
+  // kHalf: one of the two halves of a pass applied side by side (applyHalves): the tallies and
+  // record steps go to the collapser, not to the simplifier's.
+  template <bool kGreedy, bool kHalf = false>
+  bool tryCollapse(const PassCandidate& candidate, uint32_t pass, Collapser& collapser,
+                   Vec3d placement = {});
+  template <bool kHalf>
+  void applyCollapse(uint32_t from, uint32_t to, Vec3d position, double cost, uint32_t pass,
+                     Collapser& collapser);
+  template <bool kHalf>
+  size_t applyInOrder(const PassCandidate* begin, const PassCandidate* end, uint32_t pass,
+                      Collapser& collapser, size_t limit, const PassCandidate** stopped = nullptr);
+  size_t applyHalves(const PassCandidate* order, size_t count, PassCandidate* scratch,
+                     uint32_t pass, size_t pass_target);
+  void splitInHalves();
   bool fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner, Vec3d moved) const;
   template <class Emit>
+  void forEachTriangleEdge(size_t begin, size_t end, Emit&& emit);
+  template <class Emit>
+  void forEachBorderEdge(Emit&& emit);
+  template <class Emit>
   void forEachCandidateEdge(Emit&& emit);
-  void applyCollapse(uint32_t from, uint32_t to, Vec3d position, double cost, uint32_t pass);
   SimplifyResult finish();
   // The surviving vertex of v: one level within a pass, a chain (with path halving) in the greedy
   // tail.
@@ -299,12 +356,14 @@ class PositionSimplifier {
         if (!dead_[t]) f(t, c & 3);
       }
   }
-  uint32_t nextRound() {
-    if (++round_ == 0) {
+  uint32_t nextRound() { return nextRound(collapsers_[0]); }
+  // (A half's collapser never wraps: applyHalves leaves room for every round it may use.)
+  uint32_t nextRound(Collapser& collapser) {
+    if (++collapser.round == 0) {
       for (VertexState& s : vertices_) s.mark = 0;
-      round_ = 1;
+      collapser.round = 1;
     }
-    return round_;
+    return collapser.round;
   }
   // Errors in asset units: the root mean squared distance of the merged quadric.
   double errorOf(double cost, double weight) const {
@@ -357,11 +416,13 @@ class PositionSimplifier {
   TailQueue queue_;
   bool filling_ = false;  // appending to queue_ before one heapify
 
-  uint32_t round_ = 0;
-  // The other two corners of each moving triangle of a collapse's endpoints (room for every
-  // triangle, so they are filled without capacity checks).
-  uint32_t *from_fan_ = nullptr, *to_fan_ = nullptr;
-  uint32_t from_fan_size_ = 0, to_fan_size_ = 0;
+  // [0] applies every collapse but the second half's of a pass applied in halves ([1]).
+  Collapser collapsers_[2];
+  // Two halves (applyHalves): each vertex's side of a plane through the median along the longest
+  // axis, and the last pass in which it had a triangle with a vertex on the other side.
+  bool in_halves_ = false;
+  std::vector<uint8_t> half_;
+  std::vector<uint32_t> near_other_half_;
   // Pass candidates, their order keys (orderKey of the cost), the cheap and the rest part of a
   // pass, and the radix order's scratch (radix_order.hpp): room for every candidate of the
   // first pass (allocatePassArrays).
@@ -372,10 +433,9 @@ class PositionSimplifier {
   // These arrays, pricing_ and the fans, in one block (allocatePassArrays).
   std::unique_ptr<std::byte[]> pass_memory_;
   size_t pass_candidate_count_ = 0;
-  uint32_t edge_triangles_[2] = {kAbsent, kAbsent};
-  uint32_t edge_triangle_count_ = 0;
 
   SimplifyStats stats_;
+  SecondCore second_core_;
   double max_error_ = 0;
   ProgressiveRecord record_;
   // A pass's cheap part holds at least the edges up to this cost (kFreeCollapseError).
@@ -473,11 +533,6 @@ void PositionSimplifier::setUp() {
     for (int k = 0; k < 3; ++k) addQuadric(quadrics_[v[k]], plane);
   }
 }
-
-// Below this many vertices every per-vertex array of the simplifier (~230 bytes a vertex in all)
-// nearly fits in a core's L2 (1 MiB here), and sorting costs more than it saves (measured, every
-// mesh sorted: fandisk and WaterBottle 9-50% slower, Avocado and spot within 6%).
-constexpr uint32_t kSpatialOrderMinimum = 8192;
 
 // The engine's frame of a bounding box: origin at its minimum, diagonal 1.
 void frameOf(const core::Bounds& bounds, Vec3d& origin, double& scale) {
@@ -604,6 +659,7 @@ void PositionSimplifier::prepareWorkingMesh() {
   // Working ids: Morton order in the used vertices' frame on large meshes (the weld's order when
   // the two boxes agree, as they do when every vertex is used), else the prepared order.
   const bool spatial = count >= kSpatialOrderMinimum;
+  in_halves_ = spatial;
   std::vector<uint32_t> working_id(n, kAbsent);
   input_id_.resize(count);
   std::vector<uint32_t> source(count);  // input vertex of each working vertex
@@ -956,17 +1012,16 @@ void PositionSimplifier::emitEdge(uint32_t a, uint32_t b) {
 // the constrained end, to the locked end exactly. Edges between two non-free vertices that are not
 // border edges never collapse (a constrained vertex only slides along its line).
 template <class Emit>
-void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
-  const size_t triangles = indices_.size() / 3;
+void PositionSimplifier::forEachTriangleEdge(size_t begin, size_t end, Emit&& emit) {
   const VertexKind* kinds = kinds_.data();
   const uint32_t* indices = indices_.data();
   // (Only where the records outgrow the L2 cache, as for the spatial order.)
   const PricingRecord* pricing =
       greedy_ || vertex_count_ < kSpatialOrderMinimum ? nullptr : pricing_;
   constexpr size_t kAhead = 8;
-  for (size_t t = 0; t < triangles; ++t) {
+  for (size_t t = begin; t < end; ++t) {
     const uint32_t* v = indices + t * 3;
-    if (pricing && t + kAhead < triangles) {
+    if (pricing && t + kAhead < end) {
       // The pass pricing reads the records of each triangle's corners: they are spread over
       // megabytes, so a few triangles ahead they are fetched while this one is priced.
       const uint32_t* ahead = v + 3 * kAhead;
@@ -984,6 +1039,11 @@ void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
         emit(b, a, true);
     }
   }
+}
+
+template <class Emit>
+void PositionSimplifier::forEachBorderEdge(Emit&& emit) {
+  const VertexKind* kinds = kinds_.data();
   for (uint32_t v : constrained_) {
     if (!alive_[v]) continue;
     for (int i = 0; i < 2; ++i) {
@@ -994,6 +1054,12 @@ void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
         emit(v, n, false);
     }
   }
+}
+
+template <class Emit>
+void PositionSimplifier::forEachCandidateEdge(Emit&& emit) {
+  forEachTriangleEdge(0, indices_.size() / 3, emit);
+  forEachBorderEdge(emit);
 }
 
 void PositionSimplifier::collectCandidates() {
@@ -1009,22 +1075,52 @@ void PositionSimplifier::collectCandidates() {
   // Q(mid) = (Q(a) + Q(b)) / 2 - dᵀ(Aa + Ab)d / 4.
   const Quadric* quadrics = quadrics_.data();
   const PricingRecord* pricing = pricing_;
-  PassCandidate* out = pass_candidates_;
-  uint32_t* keys = pass_keys_;
-  size_t count = 0;
   const bool has_error_target = std::isfinite(options_.target_error);
-  // Inlined into the edge walk (a call per edge costs ~15% of the pricing in saved registers).
-  forEachCandidateEdge([&](uint32_t from, uint32_t to,
-                           bool endpoint_only) __attribute__((always_inline)) {
-    const auto [cost, at] = priceEdge(pricing[from], pricing[to], endpoint_only);
-    if (!std::isfinite(cost)) return;
-    if (has_error_target &&
-        !(errorOf(cost, quadrics[from].weight + quadrics[to].weight) <= options_.target_error))
-      return;
-    keys[count] = orderKey(cost);
-    out[count] = {from, to, cost, at, endpoint_only};
-    ++count;
-  });
+  // Prices the edges `walk` emits into out and keys; the number kept.
+  auto price = [&](PassCandidate* out, uint32_t* keys, auto&& walk) {
+    size_t count = 0;
+    // Inlined into the edge walk (a call per edge costs ~15% of the pricing in saved registers).
+    walk([&](uint32_t from, uint32_t to, bool endpoint_only) __attribute__((always_inline)) {
+      const auto [cost, at] = priceEdge(pricing[from], pricing[to], endpoint_only);
+      if (!std::isfinite(cost)) return;
+      if (has_error_target &&
+          !(errorOf(cost, quadrics[from].weight + quadrics[to].weight) <= options_.target_error))
+        return;
+      keys[count] = orderKey(cost);
+      out[count] = {from, to, cost, at, endpoint_only};
+      ++count;
+    });
+    return count;
+  };
+  const size_t triangles = indices_.size() / 3;
+  size_t count = 0;
+  if (second_core_.available() && triangles >= kTwoCorePricingMinimum) {
+    // In parts on both cores (second_core.hpp), each into its own room (at most two candidates a
+    // triangle: of its three edges one or two run from a lower to a higher id), then moved
+    // together in part order: the same candidates in the same order as one walk.
+    const uint32_t parts = uint32_t(std::min<size_t>(kTwoCorePricingParts, triangles / 1024));
+    size_t kept[kTwoCorePricingParts];
+    auto begin_of = [&](uint32_t part) { return triangles * part / parts; };
+    second_core_.forEach(parts, [&](uint32_t part) {
+      const size_t begin = begin_of(part), end = begin_of(part + 1);
+      kept[part] = price(pass_candidates_ + 2 * begin, pass_keys_ + 2 * begin,
+                         [&](auto&& emit) { forEachTriangleEdge(begin, end, emit); });
+    });
+    for (uint32_t part = 0; part < parts; ++part) {
+      const size_t begin = 2 * begin_of(part);
+      if (begin != count) {
+        std::memmove(pass_candidates_ + count, pass_candidates_ + begin,
+                     kept[part] * sizeof(PassCandidate));
+        std::memmove(pass_keys_ + count, pass_keys_ + begin, kept[part] * sizeof(uint32_t));
+      }
+      count += kept[part];
+    }
+  } else {
+    count = price(pass_candidates_, pass_keys_,
+                  [&](auto&& emit) { forEachTriangleEdge(0, triangles, emit); });
+  }
+  count += price(pass_candidates_ + count, pass_keys_ + count,
+                 [&](auto&& emit) { forEachBorderEdge(emit); });
   pass_candidate_count_ = count;
 }
 
@@ -1110,9 +1206,9 @@ bool isolatedTriangle(uint32_t opposite, const uint32_t* from_fan, uint32_t from
 // untouched in this pass, but their neighbours may have moved): the link condition, then the
 // optimal placement if it beats the priced point without turning a triangle over, else the
 // priced point, then the flip test.
-template <bool kGreedy>
+template <bool kGreedy, bool kHalf>
 bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pass,
-                                     Vec3d placement) {
+                                     Collapser& collapser, Vec3d placement) {
   const uint32_t from = candidate.from, to = candidate.to;
   // Raw pointers, so that the stores below (marks, fans) do not make the compiler reload the
   // vectors' data pointers.
@@ -1138,8 +1234,9 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
 
   // from's triangles: the ones on the edge (they die), the others (they move); mark from's
   // neighbours.
-  const uint32_t near_round = nextRound();
-  uint32_t* from_fan = from_fan_;
+  SimplifyStats& stats = kHalf ? collapser.stats : stats_;
+  const uint32_t near_round = nextRound(collapser);
+  uint32_t* from_fan = collapser.from_fan;
   uint32_t from_fan_size = 0, edge_count = 0;
   uint32_t opposite[2] = {kAbsent, kAbsent};
   for_each_triangle(from, [&](uint32_t t, uint32_t k) {
@@ -1149,7 +1246,7 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     if (b == to || d == to) {
       if (edge_count < 2) {
         opposite[edge_count] = b == to ? d : b;
-        edge_triangles_[edge_count] = t;
+        collapser.edge_triangles[edge_count] = t;
       }
       ++edge_count;
       return;
@@ -1158,10 +1255,10 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     from_fan[from_fan_size + 1] = d;
     from_fan_size += 2;
   });
-  edge_triangle_count_ = edge_count;
-  from_fan_size_ = from_fan_size;
+  collapser.edge_triangle_count = edge_count;
+  collapser.from_fan_size = from_fan_size;
   if (edge_count == 0 || edge_count > 2 || (edge_count == 2 && opposite[0] == opposite[1])) {
-    ++stats_.rejected_topology;
+    ++stats.rejected_topology;
     return false;
   }
   // Link condition (Dey, Edelsbrunner et al. 1999): the common neighbours of the endpoints are
@@ -1175,9 +1272,9 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
       from_has_opposite_pair |=
           (b == opposite[0] && d == opposite[1]) || (b == opposite[1] && d == opposite[0]);
     }
-  const uint32_t counted_round = nextRound();
+  const uint32_t counted_round = nextRound(collapser);
   uint32_t common = 0, to_fan_size = 0;
-  uint32_t* to_fan = to_fan_;
+  uint32_t* to_fan = collapser.to_fan;
   bool duplicate = false;
   for_each_triangle(to, [&](uint32_t t, uint32_t k) {
     const uint32_t x = survivor(indices[t * 3 + kNext[k]]);
@@ -1192,11 +1289,11 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     to_fan[to_fan_size + 1] = y;
     to_fan_size += 2;
   });
-  to_fan_size_ = to_fan_size;
+  collapser.to_fan_size = to_fan_size;
   if (common != edge_count || duplicate ||
       (edge_count == 1 && isolatedTriangle(opposite[0], from_fan, from_fan_size, to_fan,
                                            to_fan_size))) {
-    ++stats_.rejected_topology;
+    ++stats.rejected_topology;
     return false;
   }
 
@@ -1205,8 +1302,8 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     const bool moves_to = p.x != at_to.x || p.y != at_to.y || p.z != at_to.z;
     // from's triangles keep their shape when the survivor sits where `from` was.
     const bool moves_from = p.x != at_from.x || p.y != at_from.y || p.z != at_from.z;
-    return (moves_from && fanFlips(from_fan_, from_fan_size_, at_from, p)) ||
-           (moves_to && fanFlips(to_fan_, to_fan_size_, at_to, p));
+    return (moves_from && fanFlips(from_fan, from_fan_size, at_from, p)) ||
+           (moves_to && fanFlips(to_fan, to_fan_size, at_to, p));
   };
   Vec3d priced = candidate.endpoint_only ? at_to : fixedPoint(at_from, at_to, candidate.at);
   if (kGreedy && !candidate.endpoint_only) {  // priced at the optimal placement: place it there
@@ -1220,22 +1317,27 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     const bool moved = best.x != priced.x || best.y != priced.y || best.z != priced.z;
     if (value < candidate.cost && moved && std::isfinite(best.x) && std::isfinite(best.y) &&
         std::isfinite(best.z) && !flips(best)) {
-      applyCollapse(from, to, best, value, pass);
+      applyCollapse<kHalf>(from, to, best, value, pass, collapser);
       return true;
     }
   }
   if (flips(priced)) {
-    ++stats_.rejected_flip;
+    ++stats.rejected_flip;
     return false;
   }
-  applyCollapse(from, to, priced, candidate.cost, pass);
+  applyCollapse<kHalf>(from, to, priced, candidate.cost, pass, collapser);
   return true;
 }
 
+template <bool kHalf>
 void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d position, double cost,
-                                       uint32_t pass) {
-  for (uint32_t i = 0; i < edge_triangle_count_; ++i) dead_[edge_triangles_[i]] = 1;
-  live_triangles_ -= edge_triangle_count_;
+                                       uint32_t pass, Collapser& collapser) {
+  const uint32_t removed = collapser.edge_triangle_count;
+  for (uint32_t i = 0; i < removed; ++i) dead_[collapser.edge_triangles[i]] = 1;
+  if constexpr (kHalf)
+    collapser.removed += removed;
+  else
+    live_triangles_ -= removed;
   vertices_[from].remap = to;
   alive_[from] = 0;
   pass_lock_[from] = pass_lock_[to] = pass;
@@ -1272,18 +1374,21 @@ void PositionSimplifier::applyCollapse(uint32_t from, uint32_t to, Vec3d positio
   }
 
   const double error = errorOf(cost, quadrics_[to].weight);
-  max_error_ = std::max(max_error_, error);
-  ++stats_.collapses;
+  double& max_error = kHalf ? collapser.max_error : max_error_;
+  max_error = std::max(max_error, error);
+  ++(kHalf ? collapser.stats : stats_).collapses;
   if (options_.record) {
+    std::vector<CollapseStep>& steps = kHalf ? collapser.steps : record_.steps;
+    std::vector<core::Vec3>& values = kHalf ? collapser.values : record_.values.positions;
     CollapseStep step;
     step.removed = input_id_[from];
     step.kept = input_id_[to];
-    step.kept_value = uint32_t(record_.values.positions.size());
-    step.triangles_after = uint32_t(live_triangles_);
+    step.kept_value = uint32_t(values.size());
+    step.triangles_after = uint32_t(kHalf ? live_triangles_ - collapser.removed : live_triangles_);
     step.error = float(error);
-    step.cumulative_error = float(max_error_);
-    record_.steps.push_back(step);
-    record_.values.positions.push_back(asset_positions_[to]);
+    step.cumulative_error = float(max_error);
+    steps.push_back(step);
+    values.push_back(asset_positions_[to]);
   }
 }
 
@@ -1322,11 +1427,162 @@ SimplifyResult PositionSimplifier::finish() {
   return result;
 }
 
+// Tries the candidates from begin to end in order, skipping those whose endpoint a collapse of
+// this pass touched, until the live triangles are down to `limit` (kHalf: until the half's
+// collapses have removed `limit` triangles or may remove too many with one more); the number
+// applied. `stopped`, if given: where it stopped.
+template <bool kHalf>
+size_t PositionSimplifier::applyInOrder(const PassCandidate* begin, const PassCandidate* end,
+                                        uint32_t pass, Collapser& collapser, size_t limit,
+                                        const PassCandidate** stopped) {
+  size_t applied = 0;
+  constexpr ptrdiff_t kAhead = 8;
+  const PassCandidate* c = begin;
+  for (; c != end && (kHalf ? collapser.removed + 2 <= limit : live_triangles_ > limit); ++c) {
+    if (end - c > kAhead) {
+      // The endpoints of a collapse a few places ahead are random vertices: their quadrics,
+      // positions and corner ranges are fetched while this one is checked.
+      const PassCandidate& next = c[kAhead];
+      const char* qf = reinterpret_cast<const char*>(&quadrics_[next.from]);
+      const char* qt = reinterpret_cast<const char*>(&quadrics_[next.to]);
+      __builtin_prefetch(qf);
+      __builtin_prefetch(qf + 64);
+      __builtin_prefetch(qt);
+      __builtin_prefetch(qt + 64);
+      __builtin_prefetch(&vertices_[next.from]);
+      __builtin_prefetch(&vertices_[next.to]);
+      __builtin_prefetch(&corner_start_[next.from]);
+      __builtin_prefetch(&corner_start_[next.to]);
+      // Half as far ahead, their corner ranges (corner_start_ is fetched by now).
+      const PassCandidate& nearer = c[kAhead / 2];
+      __builtin_prefetch(&corners_[corner_start_[nearer.from]]);
+      __builtin_prefetch(&corners_[corner_start_[nearer.to]]);
+    }
+    if (pass_lock_[c->from] == pass || pass_lock_[c->to] == pass) continue;
+    if (tryCollapse<false, kHalf>(*c, pass, collapser)) ++applied;
+  }
+  if (stopped) *stopped = c;
+  return applied;
+}
+
+// The mesh's two halves (applyHalves): split at the median vertex along the bounding box's
+// longest axis, so that each holds about as many vertices (the cut itself is a plane: in the
+// working order of a large mesh, or in the input's, vertex ids need not be near each other).
+void PositionSimplifier::splitInHalves() {
+  half_.resize(vertex_count_);
+  for (uint32_t v = 0; v < vertex_count_; ++v) half_[v] = v >= vertex_count_ / 2;
+  near_other_half_.assign(vertex_count_, 0);
+}
+
+// The cheap part of a pass (`order`, `count` candidates in cost order) applied in three runs: the
+// collapses inside each half (both endpoints away from the cut: no triangle of either reaches the
+// other half), the two halves side by side on two cores (second_core.hpp), then those near the
+// cut, here. A collapse reads and writes only its endpoints' triangles and their vertices, so a
+// collapse inside one half never sees one inside the other: each half's run gives what it would
+// give alone, and the result is the same on one core or two. Against one run in cost order, only
+// the order between a collapse near the cut and the others changes. `scratch` has room for
+// `count` candidates. The number applied.
+size_t PositionSimplifier::applyHalves(const PassCandidate* order, size_t count,
+                                       PassCandidate* scratch, uint32_t pass, size_t pass_target) {
+  // Which vertices have a triangle across the cut, as the triangles are at the pass's start.
+  const uint32_t* indices = indices_.data();
+  const uint32_t cut = vertex_count_ / 2;
+  uint32_t* near = near_other_half_.data();
+  for (size_t t = 0, triangles = indices_.size() / 3; t < triangles; ++t) {
+    const uint32_t a = indices[t * 3] >= cut, b = indices[t * 3 + 1] >= cut,
+                   c = indices[t * 3 + 2] >= cut;
+    if ((a ^ b) | (a ^ c))
+      near[indices[t * 3]] = near[indices[t * 3 + 1]] = near[indices[t * 3 + 2]] = pass;
+  }
+  auto side = [&](const PassCandidate& c) -> uint32_t {  // 0, 1, or 2 near the cut
+    return near[c.from] == pass || near[c.to] == pass ? 2 : c.from >= cut;
+  };
+  // Each half uses its own rounds of marks: room for two a candidate.
+  Collapser& first = collapsers_[0];
+  Collapser& second = collapsers_[1];
+  if (first.round > std::numeric_limits<uint32_t>::max() - 2 * count - 2) {
+    for (VertexState& s : vertices_) s.mark = 0;
+    first.round = 0;
+  }
+  size_t sizes[3] = {0, 0, 0};
+  for (size_t i = 0; i < count; ++i) ++sizes[side(order[i])];
+  PassCandidate* runs[3] = {scratch, scratch + sizes[0], scratch + sizes[0] + sizes[1]};
+  size_t filled[3] = {0, 0, 0};
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t s = side(order[i]);
+    runs[s][filled[s]++] = order[i];
+  }
+  second.round = first.round;
+  for (int part = 0; part < 2; ++part) {
+    Collapser& c = part == 0 ? first : second;
+    c.removed = 0;
+    c.max_error = max_error_;
+    c.stats = {};
+    c.steps.clear();
+    c.values.clear();
+    if (options_.record) {  // room for a step a candidate: no allocation on the helper
+      c.steps.reserve(sizes[part]);
+      c.values.reserve(sizes[part]);
+    }
+  }
+  // The triangles the passes may still remove, shared in proportion to the halves'
+  // candidates: neither half knows how far the other got, so each stops where it alone might
+  // overshoot its share, and what is left of both is tried after the collapses near the cut.
+  const size_t removable = live_triangles_ - pass_target;
+  const size_t inside = sizes[0] + sizes[1];
+  size_t shares[2];
+  shares[0] = inside ? size_t(double(removable) * double(sizes[0]) / double(inside)) : 0;
+  shares[1] = removable - shares[0];
+  size_t applied[2] = {0, 0};
+  const PassCandidate* stopped[2] = {runs[0], runs[1]};
+  second_core_.forEach(2, [&](uint32_t part) {
+    applied[part] = applyInOrder<true>(runs[part], runs[part] + sizes[part], pass,
+                                       part == 0 ? first : second, shares[part], &stopped[part]);
+  });
+  first.round = std::max(first.round, second.round);
+
+  // The halves' tallies and record steps, the first half's first: each step's triangle count
+  // and largest error so far as they are in that order.
+  float cumulative = float(max_error_);
+  const uint32_t live_before = uint32_t(live_triangles_);
+  uint32_t in_order = live_before;
+  for (Collapser* c : {&first, &second}) {
+    stats_.collapses += c->stats.collapses;
+    stats_.rejected_topology += c->stats.rejected_topology;
+    stats_.rejected_flip += c->stats.rejected_flip;
+    if (options_.record) {
+      const uint32_t value_base = uint32_t(record_.values.positions.size());
+      uint32_t in_half = live_before;
+      for (CollapseStep step : c->steps) {
+        in_order -= in_half - step.triangles_after;
+        in_half = step.triangles_after;
+        step.triangles_after = in_order;
+        step.kept_value += value_base;
+        cumulative = std::max(cumulative, step.error);
+        step.cumulative_error = cumulative;
+        record_.steps.push_back(step);
+      }
+      record_.values.positions.insert(record_.values.positions.end(), c->values.begin(),
+                                      c->values.end());
+    }
+    live_triangles_ -= c->removed;
+  }
+  max_error_ = std::max(first.max_error, second.max_error);
+  size_t total = applied[0] + applied[1] +
+                 applyInOrder<false>(runs[2], runs[2] + sizes[2], pass, first, pass_target);
+  for (int part = 0; part < 2; ++part)
+    total += applyInOrder<false>(stopped[part], runs[part] + sizes[part], pass, first, pass_target);
+  return total;
+}
+
 // `tail`: the greedy tail's triangles (pass_target is the target plus those, or 0 for none);
 // `tail_capacity`: how many a stalled pass may leave to it (passStalls).
 void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_capacity) {
   auto reached = [&] { return live_triangles_ <= pass_target; };
   EngineOptions defaults;
+  // The share of the last pass's cheap part that was applied (before the first pass, about what
+  // first passes apply: 0.18-0.41 on the benchmark's CGAL meshes and turbine at 50/10/1%).
+  double last_yield = 1.0 / 3;
   for (uint32_t pass = 1; !reached(); ++pass) {
     if (pass > 1) {
       compact();
@@ -1388,33 +1644,22 @@ void PositionSimplifier::runPasses(size_t pass_target, size_t tail, size_t tail_
       return gathered;
     };
     size_t applied = 0;
-    constexpr ptrdiff_t kAhead = 8;
     auto apply_range = [&](const PassCandidate* begin, const PassCandidate* end) {
-      for (const PassCandidate* c = begin; c != end && !reached(); ++c) {
-        if (end - c > kAhead) {
-          // The endpoints of a collapse a few places ahead are random vertices: their quadrics,
-          // positions and corner ranges are fetched while this one is checked.
-          const PassCandidate& next = c[kAhead];
-          const char* qf = reinterpret_cast<const char*>(&quadrics_[next.from]);
-          const char* qt = reinterpret_cast<const char*>(&quadrics_[next.to]);
-          __builtin_prefetch(qf);
-          __builtin_prefetch(qf + 64);
-          __builtin_prefetch(qt);
-          __builtin_prefetch(qt + 64);
-          __builtin_prefetch(&vertices_[next.from]);
-          __builtin_prefetch(&vertices_[next.to]);
-          __builtin_prefetch(&corner_start_[next.from]);
-          __builtin_prefetch(&corner_start_[next.to]);
-          // Half as far ahead, their corner ranges (corner_start_ is fetched by now).
-          const PassCandidate& nearer = c[kAhead / 2];
-          __builtin_prefetch(&corners_[corner_start_[nearer.from]]);
-          __builtin_prefetch(&corners_[corner_start_[nearer.to]]);
-        }
-        if (pass_lock_[c->from] == pass || pass_lock_[c->to] == pass) continue;
-        if (tryCollapse<false>(*c, pass)) ++applied;
-      }
+      applied += applyInOrder<false>(begin, end, pass, collapsers_[0], pass_target);
     };
-    apply_range(order, order + cheap_count);
+    // In halves on two cores (applyHalves) unless this pass is likely to reach the target: each
+    // half stops at its share then, not where one run in cost order would, and the last pass
+    // before the target shapes the result most (always in halves, the 1% cells of the CGAL
+    // meshes' Hausdorff distances moved by up to 0.2 of meshopt's; bench/RESULTS.md, issue 3,
+    // session 45). Likely: its cheap part, applied at the last pass's yield, removes two triangles
+    // a collapse and comes within a margin of the target.
+    const double expected_removed = 2.0 * double(cheap_count) * last_yield;
+    if (in_halves_ && (pass_target == 0 ||
+                       expected_removed * kHalvesMargin < double(live_triangles_ - pass_target)))
+      applied += applyHalves(order, cheap_count, order == rest ? cheap : rest, pass, pass_target);
+    else
+      apply_range(order, order + cheap_count);
+    last_yield = cheap_count > 0 ? double(applied) / double(cheap_count) : 0.0;
     const size_t left = reached() ? 0 : (live_triangles_ - pass_target + 1) / 2;
     if (applied == 0 && rest_count > 0) {  // the cheap part is spent: its buffers are scratch
       const size_t gathered = gather_rest(false);
@@ -1513,7 +1758,7 @@ void PositionSimplifier::runGreedy() {
       }
       const TailPricing priced = tail_pricing_[id];
       const PassCandidate c{from, to, e.cost(), kFixedAtB, priced.endpoint_only};
-      tryCollapse<true>(c, 0, priced.placement);
+      tryCollapse<true>(c, 0, collapsers_[0], priced.placement);
     }
     compact();
     if (options_.progress) options_.progress(live_triangles_);
@@ -1546,6 +1791,8 @@ void PositionSimplifier::allocatePassArrays() {
   const size_t pricing_at = place(vertex_count_ * sizeof(PricingRecord));
   const size_t from_fan_at = place(indices_.size() * 2 * 4);
   const size_t to_fan_at = place(indices_.size() * 2 * 4);
+  const size_t second_from_fan_at = in_halves_ ? place(indices_.size() * 2 * 4) : 0;
+  const size_t second_to_fan_at = in_halves_ ? place(indices_.size() * 2 * 4) : 0;
   // (Trivial types: the block's bytes become their objects as they are written, C++20.)
   pass_memory_.reset(new std::byte[size + 63]);
   std::byte* base = reinterpret_cast<std::byte*>(
@@ -1557,8 +1804,12 @@ void PositionSimplifier::allocatePassArrays() {
   pass_key_scratch_ = reinterpret_cast<uint32_t*>(base + scratch_at);
   histograms_ = reinterpret_cast<uint32_t*>(base + histograms_at);
   pricing_ = reinterpret_cast<PricingRecord*>(base + pricing_at);
-  from_fan_ = reinterpret_cast<uint32_t*>(base + from_fan_at);
-  to_fan_ = reinterpret_cast<uint32_t*>(base + to_fan_at);
+  collapsers_[0].from_fan = reinterpret_cast<uint32_t*>(base + from_fan_at);
+  collapsers_[0].to_fan = reinterpret_cast<uint32_t*>(base + to_fan_at);
+  if (in_halves_) {
+    collapsers_[1].from_fan = reinterpret_cast<uint32_t*>(base + second_from_fan_at);
+    collapsers_[1].to_fan = reinterpret_cast<uint32_t*>(base + second_to_fan_at);
+  }
 }
 
 // Collapses whose error is below this fraction of the bounding-box diagonal are free: a pass takes
@@ -1577,6 +1828,7 @@ SimplifyResult PositionSimplifier::run() {
   buildAdjacency();
   clearAbsorbed();
   classify();
+  if (in_halves_) splitInHalves();
   allocatePassArrays();
   double weight_sum = 0;
   for (uint32_t v = 0; v < vertex_count_; ++v) {

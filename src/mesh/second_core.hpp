@@ -1,0 +1,175 @@
+// A helper thread on the machine's second core that stays for the life of the process, for work
+// split in parts within one call, many times a call (the position-only fast path's passes: a
+// thread started per pass cost more than the pass's half saved, bench/RESULTS.md, issue 3,
+// session 12). It spins while jobs come, so that a part handed over is taken within a fraction
+// of a microsecond, and sleeps on a futex (std::atomic::wait) once none has come for a while.
+// The parts are claimed one by one by both threads, so a helper that wakes late (or a machine
+// with one core, or a helper held by another call) only means that the calling thread runs more
+// of them: the results never depend on who ran which part.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <thread>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace duolod::mesh {
+
+namespace second_core_detail {
+
+inline void relax() {
+#if defined(__SSE2__)
+  _mm_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
+
+// One job at a time: `claim` packs the job's generation (high half) and its next part (low
+// half), so that a part is only ever claimed for the job whose fields were read (a stale
+// claim fails its compare-exchange, or finds the part count reached).
+struct Helper {
+  static constexpr uint32_t kClosed = ~0u;
+  static constexpr std::chrono::microseconds kSpinTime{200};
+  std::atomic<uint32_t> held{0};  // a SecondCore holds the helper
+  std::atomic<uint32_t> sleeping{0};
+  std::atomic<uint32_t> wake{0};  // the futex word the helper sleeps on
+  std::atomic<uint64_t> claim{0};
+  std::atomic<void (*)(void*, uint32_t)> call{nullptr};
+  std::atomic<void*> context{nullptr};
+  std::atomic<uint32_t> count{0};
+  std::atomic<uint32_t> done{0};
+
+  // Runs parts of the job that `claim` now holds until none is left; the number run. A job is
+  // opened in two steps (SecondCore::run): `claim` is first closed under a new generation, then
+  // the fields are written (release), then the claim opens under the generation after it. A
+  // claim succeeds only on the generation that was open when the fields were read, so the fields
+  // are that job's: had they been newer, the closing store would have come first (acquire) and
+  // the compare-exchange would fail.
+  uint32_t work() {
+    uint64_t c = claim.load(std::memory_order_acquire);
+    if (uint32_t(c) == kClosed) return 0;
+    const uint64_t generation = c >> 32;
+    void (*const f)(void*, uint32_t) = call.load(std::memory_order_acquire);
+    void* const data = context.load(std::memory_order_acquire);
+    const uint32_t parts = count.load(std::memory_order_acquire);
+    uint32_t ran = 0;
+    while ((c >> 32) == generation && uint32_t(c) < parts) {
+      if (claim.compare_exchange_weak(c, c + 1, std::memory_order_acq_rel,
+                                      std::memory_order_acquire)) {
+        f(data, uint32_t(c));
+        ++ran;
+        c = claim.load(std::memory_order_acquire);
+      }
+    }
+    return ran;
+  }
+
+  // Spins while jobs come (each pass of a simplification hands one over), and sleeps on `wake`
+  // once none has come for kSpinTime: it does not hold a core between calls, nor through a
+  // long serial stretch of one. Whoever opens a job wakes it if it sleeps (SecondCore::run);
+  // the sleeping flag and the claim are both written then read in sequentially consistent order
+  // on either side, so one of the two always sees the other.
+  void loop() {
+    uint64_t seen = claim.load(std::memory_order_acquire) >> 32;
+    for (;;) {
+      auto last_job = std::chrono::steady_clock::now();
+      for (uint32_t spins = 1;; ++spins) {
+        const uint64_t generation = claim.load(std::memory_order_acquire) >> 32;
+        if (generation != seen) {
+          seen = generation;
+          if (const uint32_t ran = work()) done.fetch_add(ran, std::memory_order_release);
+          last_job = std::chrono::steady_clock::now();
+          continue;
+        }
+        relax();
+        if (spins % 64 == 0 && std::chrono::steady_clock::now() - last_job > kSpinTime) break;
+      }
+      const uint32_t ticket = wake.load(std::memory_order_seq_cst);
+      sleeping.store(1, std::memory_order_seq_cst);
+      if ((claim.load(std::memory_order_seq_cst) >> 32) == seen) wake.wait(ticket);
+      sleeping.store(0, std::memory_order_relaxed);
+    }
+  }
+};
+
+// The process's helper, started on first use; nullptr on a machine with one core or when no
+// thread can be had. Never destroyed: it sleeps between calls and ends with the process.
+inline Helper* helper() {
+  static Helper* const instance = []() -> Helper* {
+    if (std::thread::hardware_concurrency() < 2) return nullptr;
+    Helper* h = new Helper;
+    try {
+      std::thread([h] { h->loop(); }).detach();
+    } catch (...) {
+      delete h;
+      return nullptr;
+    }
+    return h;
+  }();
+  return instance;
+}
+
+}  // namespace second_core_detail
+
+// Holds the helper for the lifetime of the object (one call's work), or nothing when another
+// holds it, the machine has one core or the work is too small to be worth it (`wanted`).
+class SecondCore {
+ public:
+  explicit SecondCore(bool wanted = true) {
+    if (!wanted) return;
+    second_core_detail::Helper* h = second_core_detail::helper();
+    uint32_t free = 0;
+    if (h && h->held.compare_exchange_strong(free, 1, std::memory_order_acquire)) {
+      helper_ = h;
+    }
+  }
+  ~SecondCore() {
+    if (!helper_) return;
+    helper_->held.store(0, std::memory_order_release);
+  }
+  SecondCore(const SecondCore&) = delete;
+  SecondCore& operator=(const SecondCore&) = delete;
+
+  bool available() const { return helper_ != nullptr; }
+
+  // Calls part(i) for every i in [0, parts), here and on the helper, and returns when all have
+  // run. `part` must not throw, and the parts must not depend on each other's order.
+  template <class Part>
+  void forEach(uint32_t parts, Part&& part) {
+    if (!helper_ || parts < 2) {
+      for (uint32_t i = 0; i < parts; ++i) part(i);
+      return;
+    }
+    using P = std::remove_reference_t<Part>;
+    run(
+        parts, [](void* data, uint32_t i) { (*static_cast<P*>(data))(i); }, &part);
+  }
+
+ private:
+  void run(uint32_t parts, void (*call)(void*, uint32_t), void* context) {
+    second_core_detail::Helper& h = *helper_;
+    // Closed first (see Helper::work), then the fields, then open.
+    const uint64_t generation = (h.claim.load(std::memory_order_relaxed) >> 32) + 1;
+    h.claim.store(generation << 32 | second_core_detail::Helper::kClosed,
+                  std::memory_order_relaxed);
+    h.done.store(0, std::memory_order_relaxed);
+    h.call.store(call, std::memory_order_release);
+    h.context.store(context, std::memory_order_release);
+    h.count.store(parts, std::memory_order_release);
+    h.claim.store((generation + 1) << 32, std::memory_order_seq_cst);
+    if (h.sleeping.load(std::memory_order_seq_cst) != 0) {
+      h.wake.fetch_add(1, std::memory_order_relaxed);
+      h.wake.notify_one();
+    }
+    const uint32_t finished = h.work();
+    while (finished + h.done.load(std::memory_order_acquire) < parts) second_core_detail::relax();
+  }
+
+  second_core_detail::Helper* helper_ = nullptr;
+};
+
+}  // namespace duolod::mesh
