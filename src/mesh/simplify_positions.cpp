@@ -257,9 +257,11 @@ constexpr uint32_t kSpatialOrderMinimum = 8192;
 // write to different cache lines) use both cores: a pass's pricing in at most
 // kTwoCorePricingParts parts of at least 1024 triangles (while it has kTwoCorePricingMinimum
 // triangles or more), and its collapses in two halves (applyHalves, kHalvesMargin in runPasses).
-// On meshes in the input's order the halves' collapses wrote to the same cache lines and were
-// slower than one core; sorting the small meshes to use them cost WaterBottle and fandisk
-// (positions) more than the second core gave (bench/RESULTS.md, issue 3, session 45).
+// Halves split by a plane instead (ids of both sides on every cache line) were slower than one
+// core. Smaller meshes gained nothing measurable: sorted into spatial order, WaterBottle and
+// fandisk (positions) lost more than the second core gave; in their input order (which keeps the
+// halves apart: 2-3% of their triangles cross) they ran as fast as on one core (bench/RESULTS.md,
+// issue 3, session 45).
 constexpr size_t kTwoCorePricingMinimum = 4096;
 constexpr uint32_t kTwoCorePricingParts = 16;
 constexpr double kHalvesMargin = 1.5;
@@ -329,7 +331,6 @@ class PositionSimplifier {
                       Collapser& collapser, size_t limit, const PassCandidate** stopped = nullptr);
   size_t applyHalves(const PassCandidate* order, size_t count, PassCandidate* scratch,
                      uint32_t pass, size_t pass_target);
-  void splitInHalves();
   bool fanFlips(const uint32_t* fan, uint32_t size, Vec3d corner, Vec3d moved) const;
   template <class Emit>
   void forEachTriangleEdge(size_t begin, size_t end, Emit&& emit);
@@ -418,10 +419,9 @@ class PositionSimplifier {
 
   // [0] applies every collapse but the second half's of a pass applied in halves ([1]).
   Collapser collapsers_[2];
-  // Two halves (applyHalves): each vertex's side of a plane through the median along the longest
-  // axis, and the last pass in which it had a triangle with a vertex on the other side.
+  // A pass's collapses in two halves, the vertex ids below and above the middle (applyHalves), and
+  // per vertex the last pass in which one of its triangles had vertices in both.
   bool in_halves_ = false;
-  std::vector<uint8_t> half_;
   std::vector<uint32_t> near_other_half_;
   // Pass candidates, their order keys (orderKey of the cost), the cheap and the rest part of a
   // pass, and the radix order's scratch (radix_order.hpp): room for every candidate of the
@@ -1465,15 +1465,6 @@ size_t PositionSimplifier::applyInOrder(const PassCandidate* begin, const PassCa
   return applied;
 }
 
-// The mesh's two halves (applyHalves): split at the median vertex along the bounding box's
-// longest axis, so that each holds about as many vertices (the cut itself is a plane: in the
-// working order of a large mesh, or in the input's, vertex ids need not be near each other).
-void PositionSimplifier::splitInHalves() {
-  half_.resize(vertex_count_);
-  for (uint32_t v = 0; v < vertex_count_; ++v) half_[v] = v >= vertex_count_ / 2;
-  near_other_half_.assign(vertex_count_, 0);
-}
-
 // The cheap part of a pass (`order`, `count` candidates in cost order) applied in three runs: the
 // collapses inside each half (both endpoints away from the cut: no triangle of either reaches the
 // other half), the two halves side by side on two cores (second_core.hpp), then those near the
@@ -1828,7 +1819,7 @@ SimplifyResult PositionSimplifier::run() {
   buildAdjacency();
   clearAbsorbed();
   classify();
-  if (in_halves_) splitInHalves();
+  if (in_halves_) near_other_half_.assign(vertex_count_, 0);
   allocatePassArrays();
   double weight_sum = 0;
   for (uint32_t v = 0; v < vertex_count_; ++v) {
