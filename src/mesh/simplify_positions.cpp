@@ -33,8 +33,10 @@
 //     and the remap becomes a union-find.
 // Everything the engine checks is checked here too (tests/mesh_simplify_test.cpp runs both paths:
 // its meshes with attributes, materials or endpoint placement take the engine).
-// Speed (bench/RESULTS.md, issue 3): 0.78-1.30x meshoptimizer 0.18's wall clock (paired timing,
-// bench/simplify_ab.sh), 1.1-1.6x its instructions (bench/simplify_callgrind.sh). The
+// Speed (bench/RESULTS.md, issue 3): 0.72-1.35x meshoptimizer 0.18's wall clock on 2 cores
+// (paired timing, bench/simplify_ab.sh, session 45: meshes in spatial order 0.72-0.99x on both
+// cores, the smaller ones 1.14-1.35x at 10% and 1% on one), 1.1-1.6x its instructions
+// (bench/simplify_callgrind.sh, one core). The
 // wall clock is the measure: the pass pricing and the pass order are written without
 // data-dependent branches (masks, selects, radix passes) and the apply loop prefetches the
 // candidates ahead; each executes more instructions than the branchy code it replaced, and runs
