@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cfenv>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <optional>
 #include <set>
@@ -340,6 +343,10 @@ TEST(SecondCore, EveryPartOfEveryJobRunsOnce) {
     const uint32_t parts = 1 + job % 257;
     for (uint32_t i = 0; i < parts; ++i) runs[i] = 0;
     cores.forEach(parts, [&](uint32_t part) {
+      // A few microseconds of work a part, so that the helper joins in.
+      const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(2);
+      while (std::chrono::steady_clock::now() < until) {
+      }
       runs[part].fetch_add(1);
       if (std::this_thread::get_id() != here) on_helper.fetch_add(1);
     });
@@ -351,6 +358,7 @@ TEST(SecondCore, EveryPartOfEveryJobRunsOnce) {
     GTEST_SKIP() << "no second core (one core, or the helper is held): every part ran here";
   }
   std::printf("parts run on the helper: %u\n", on_helper.load());
+  EXPECT_GT(on_helper.load(), 0u);
 }
 
 // One holder at a time: a second SecondCore (another call, or one nested inside a part) works
@@ -376,6 +384,10 @@ TEST(SecondCore, OneHolderAtATime) {
   });
   EXPECT_EQ(nested_available.load(), 0);
   EXPECT_EQ(nested_parts.load(), 12);
+  // The holder's own forEach inside one of its parts runs there, whichever thread that is.
+  std::atomic<int> inner_parts{0};
+  first->forEach(4, [&](uint32_t) { first->forEach(5, [&](uint32_t) { ++inner_parts; }); });
+  EXPECT_EQ(inner_parts.load(), 20);
   first.reset();
   mesh::SecondCore third;
   EXPECT_TRUE(third.available());
@@ -417,6 +429,27 @@ TEST(SecondCore, SimplifyingIsTheSameOnOneCoreAsOnTwo) {
     EXPECT_EQ(two.stats.rejected_flip, one.stats.rejected_flip) << target;
     EXPECT_EQ(two.mesh.triangleCount(), target) << target;
   }
+}
+
+// The helper runs a job's parts under its caller's floating-point rounding (it was started under
+// another): rounding upwards, a run with the helper equals one without it.
+TEST(SecondCore, TheHelperRoundsAsItsCallerDoes) {
+  const core::Mesh input = test::icosphere(6, 1.0f, test::lumps);
+  const mesh::SimplifyOptions options{.target_triangles = 8192};
+  (void)mesh::simplifyQuadric(input, options);  // the helper exists, under the default rounding
+  const int rounding = std::fegetround();
+  ASSERT_EQ(std::fesetround(FE_UPWARD), 0);
+  const mesh::SimplifyResult two = mesh::simplifyQuadric(input, options);
+  mesh::SimplifyResult one;
+  {
+    mesh::SecondCore held;
+    one = mesh::simplifyQuadric(input, options);
+  }
+  std::fesetround(rounding);
+  EXPECT_EQ(two.mesh.indices, one.mesh.indices);
+  ASSERT_EQ(two.mesh.positions.size(), one.mesh.positions.size());
+  EXPECT_EQ(0, std::memcmp(two.mesh.positions.data(), one.mesh.positions.data(),
+                           one.mesh.positions.size() * sizeof(core::Vec3)));
 }
 
 }  // namespace

@@ -9,16 +9,47 @@
 #pragma once
 
 #include <atomic>
+#include <cfenv>
 #include <chrono>
 #include <cstdint>
 #include <thread>
+#include <type_traits>
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__linux__)
+#include <sched.h>
 #endif
 
 namespace duolod::mesh {
 
 namespace second_core_detail {
+
+// The calling thread's floating-point control (rounding, flush-to-zero): the helper runs a job's
+// parts under its caller's, so that a part gives the same bits on either thread.
+inline uint32_t floatControl() {
+#if defined(__SSE2__)
+  return _mm_getcsr();
+#else
+  return uint32_t(std::fegetround());
+#endif
+}
+inline void setFloatControl(uint32_t control) {
+#if defined(__SSE2__)
+  _mm_setcsr(control);
+#else
+  std::fesetround(int(control));
+#endif
+}
+
+// CPUs this process may run on (its affinity mask and cgroup pinning, not the machine's count).
+inline unsigned usableCpus() {
+#if defined(__linux__)
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return unsigned(CPU_COUNT(&set));
+#endif
+  return std::thread::hardware_concurrency();
+}
 
 inline void relax() {
 #if defined(__SSE2__)
@@ -37,11 +68,14 @@ struct Helper {
   std::atomic<uint32_t> held{0};  // a SecondCore holds the helper
   std::atomic<uint32_t> sleeping{0};
   std::atomic<uint32_t> wake{0};  // the futex word the helper sleeps on
-  std::atomic<uint64_t> claim{0};
+  // The job's fields, then (on lines of their own: the caller spins on `done` while the helper
+  // claims) the claim and the count of parts the helper ran.
   std::atomic<void (*)(void*, uint32_t)> call{nullptr};
   std::atomic<void*> context{nullptr};
   std::atomic<uint32_t> count{0};
-  std::atomic<uint32_t> done{0};
+  std::atomic<uint32_t> float_control{0};
+  alignas(64) std::atomic<uint64_t> claim{0};
+  alignas(64) std::atomic<uint32_t> done{0};
 
   // Runs parts of the job that `claim` now holds until none is left; the number run. A job is
   // opened in two steps (SecondCore::run): `claim` is first closed under a new generation, then
@@ -56,11 +90,15 @@ struct Helper {
     void (*const f)(void*, uint32_t) = call.load(std::memory_order_acquire);
     void* const data = context.load(std::memory_order_acquire);
     const uint32_t parts = count.load(std::memory_order_acquire);
+    const uint32_t control = float_control.load(std::memory_order_acquire);
+    const uint32_t own_control = floatControl();
     uint32_t ran = 0;
     while ((c >> 32) == generation && uint32_t(c) < parts) {
       if (claim.compare_exchange_weak(c, c + 1, std::memory_order_acq_rel,
                                       std::memory_order_acquire)) {
+        if (control != own_control) setFloatControl(control);
         f(data, uint32_t(c));
+        if (control != own_control) setFloatControl(own_control);
         ++ran;
         c = claim.load(std::memory_order_acquire);
       }
@@ -100,7 +138,7 @@ struct Helper {
 // thread can be had. Never destroyed: it sleeps between calls and ends with the process.
 inline Helper* helper() {
   static Helper* const instance = []() -> Helper* {
-    if (std::thread::hardware_concurrency() < 2) return nullptr;
+    if (usableCpus() < 2) return nullptr;
     Helper* h = new Helper;
     try {
       std::thread([h] { h->loop(); }).detach();
@@ -137,16 +175,19 @@ class SecondCore {
   bool available() const { return helper_ != nullptr; }
 
   // Calls part(i) for every i in [0, parts), here and on the helper, and returns when all have
-  // run. `part` must not throw, and the parts must not depend on each other's order.
+  // run. `part` must not throw (a throw ends the process), and the parts must not depend on each
+  // other's order. A forEach inside a part runs its parts on that part's thread.
   template <class Part>
   void forEach(uint32_t parts, Part&& part) {
-    if (!helper_ || parts < 2) {
+    if (!helper_ || parts < 2 || in_job_) {
       for (uint32_t i = 0; i < parts; ++i) part(i);
       return;
     }
     using P = std::remove_reference_t<Part>;
+    in_job_ = true;
     run(
-        parts, [](void* data, uint32_t i) { (*static_cast<P*>(data))(i); }, &part);
+        parts, [](void* data, uint32_t i) noexcept { (*static_cast<P*>(data))(i); }, &part);
+    in_job_ = false;
   }
 
  private:
@@ -160,16 +201,24 @@ class SecondCore {
     h.call.store(call, std::memory_order_release);
     h.context.store(context, std::memory_order_release);
     h.count.store(parts, std::memory_order_release);
+    h.float_control.store(second_core_detail::floatControl(), std::memory_order_release);
     h.claim.store((generation + 1) << 32, std::memory_order_seq_cst);
     if (h.sleeping.load(std::memory_order_seq_cst) != 0) {
       h.wake.fetch_add(1, std::memory_order_relaxed);
       h.wake.notify_one();
     }
     const uint32_t finished = h.work();
-    while (finished + h.done.load(std::memory_order_acquire) < parts) second_core_detail::relax();
+    // The helper runs its last parts: spin, then (should it have lost its CPU) give ours up.
+    for (uint32_t spins = 0; finished + h.done.load(std::memory_order_acquire) < parts; ++spins) {
+      if (spins < 4096)
+        second_core_detail::relax();
+      else
+        std::this_thread::yield();
+    }
   }
 
   second_core_detail::Helper* helper_ = nullptr;
+  std::atomic<bool> in_job_{false};  // a job of this holder is open (read from its parts)
 };
 
 }  // namespace duolod::mesh

@@ -24,7 +24,8 @@
 //   - on large meshes (in spatial order) both cores work: a pass's pricing in parts, and its
 //     collapses in two halves of the vertex ids, each half's collapses away from the cut on one
 //     core, then those near the cut (applyHalves; second_core.hpp). The result is the same on one
-//     core or two; against one run in cost order, the collapses near the cut come last;
+//     core or two; against one run in cost order, the collapses near the cut come after the
+//     others, and in a pass that may reach the target each half stops at its share;
 //   - at the coarse end (greedyTailTriangles), the last collapses (at most 2000 triangles, 1/16 of
 //     the input) use a greedy queue, cheapest first and priced at the optimal placement as the
 //     engine's kGreedy; unlike the engine's, an entry whose endpoint changed is priced again only
@@ -71,6 +72,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <utility>
 
 #include "mesh/spatial_order.hpp"
@@ -297,9 +299,7 @@ struct Collapser {
 class PositionSimplifier {
  public:
   PositionSimplifier(const core::Mesh& input, const SimplifyOptions& options)
-      : input_(input),
-        options_(options),
-        second_core_(input.vertexCount() >= kSpatialOrderMinimum) {}
+      : input_(input), options_(options) {}
   SimplifyResult run();
 
  private:
@@ -437,7 +437,8 @@ class PositionSimplifier {
   size_t pass_candidate_count_ = 0;
 
   SimplifyStats stats_;
-  SecondCore second_core_;
+  // Held from the set-up on when the mesh is in spatial order (in_halves_); empty otherwise.
+  std::optional<SecondCore> second_core_;
   double max_error_ = 0;
   ProgressiveRecord record_;
   // A pass's cheap part holds at least the edges up to this cost (kFreeCollapseError).
@@ -1033,7 +1034,7 @@ void PositionSimplifier::forEachTriangleEdge(size_t begin, size_t end, Emit&& em
     }
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t a = v[k], b = v[kNext[k]];
-      if (a > b) continue;
+      if (a >= b) continue;  // (never equal: the pricing parts' room counts on it)
       const bool a_free = kinds[a] == VertexKind::kFree, b_free = kinds[b] == VertexKind::kFree;
       if (a_free)
         emit(a, b, !b_free);
@@ -1096,14 +1097,14 @@ void PositionSimplifier::collectCandidates() {
   };
   const size_t triangles = indices_.size() / 3;
   size_t count = 0;
-  if (second_core_.available() && triangles >= kTwoCorePricingMinimum) {
+  if (second_core_ && second_core_->available() && triangles >= kTwoCorePricingMinimum) {
     // In parts on both cores (second_core.hpp), each into its own room (at most two candidates a
     // triangle: of its three edges one or two run from a lower to a higher id), then moved
     // together in part order: the same candidates in the same order as one walk.
     const uint32_t parts = uint32_t(std::min<size_t>(kTwoCorePricingParts, triangles / 1024));
     size_t kept[kTwoCorePricingParts];
     auto begin_of = [&](uint32_t part) { return triangles * part / parts; };
-    second_core_.forEach(parts, [&](uint32_t part) {
+    second_core_->forEach(parts, [&](uint32_t part) {
       const size_t begin = begin_of(part), end = begin_of(part + 1);
       kept[part] = price(pass_candidates_ + 2 * begin, pass_keys_ + 2 * begin,
                          [&](auto&& emit) { forEachTriangleEdge(begin, end, emit); });
@@ -1467,13 +1468,15 @@ size_t PositionSimplifier::applyInOrder(const PassCandidate* begin, const PassCa
   return applied;
 }
 
-// The cheap part of a pass (`order`, `count` candidates in cost order) applied in three runs: the
+// The cheap part of a pass (`order`, `count` candidates in cost order) applied in runs: the
 // collapses inside each half (both endpoints away from the cut: no triangle of either reaches the
-// other half), the two halves side by side on two cores (second_core.hpp), then those near the
-// cut, here. A collapse reads and writes only its endpoints' triangles and their vertices, so a
-// collapse inside one half never sees one inside the other: each half's run gives what it would
-// give alone, and the result is the same on one core or two. Against one run in cost order, only
-// the order between a collapse near the cut and the others changes. `scratch` has room for
+// other half), the two halves side by side on two cores (second_core.hpp), each up to its share
+// of the triangles left to remove; then, here, those near the cut, then what either half left
+// for lack of its share. A collapse reads and writes only its endpoints' triangles and their
+// vertices, so a collapse inside one half never sees one inside the other: each half's run gives
+// what it would give alone, and the result is the same on one core or two. Against one run in
+// cost order, the collapses near the cut come after the others, and the halves' leftovers after
+// those (runPasses keeps a pass likely to reach the target in one run). `scratch` has room for
 // `count` candidates. The number applied.
 size_t PositionSimplifier::applyHalves(const PassCandidate* order, size_t count,
                                        PassCandidate* scratch, uint32_t pass, size_t pass_target) {
@@ -1493,7 +1496,7 @@ size_t PositionSimplifier::applyHalves(const PassCandidate* order, size_t count,
   // Each half uses its own rounds of marks: room for two a candidate.
   Collapser& first = collapsers_[0];
   Collapser& second = collapsers_[1];
-  if (first.round > std::numeric_limits<uint32_t>::max() - 2 * count - 2) {
+  if (uint64_t(first.round) + 2 * uint64_t(count) + 2 > std::numeric_limits<uint32_t>::max()) {
     for (VertexState& s : vertices_) s.mark = 0;
     first.round = 0;
   }
@@ -1528,7 +1531,7 @@ size_t PositionSimplifier::applyHalves(const PassCandidate* order, size_t count,
   shares[1] = removable - shares[0];
   size_t applied[2] = {0, 0};
   const PassCandidate* stopped[2] = {runs[0], runs[1]};
-  second_core_.forEach(2, [&](uint32_t part) {
+  second_core_->forEach(2, [&](uint32_t part) {
     applied[part] = applyInOrder<true>(runs[part], runs[part] + sizes[part], pass,
                                        part == 0 ? first : second, shares[part], &stopped[part]);
   });
@@ -1821,7 +1824,10 @@ SimplifyResult PositionSimplifier::run() {
   buildAdjacency();
   clearAbsorbed();
   classify();
-  if (in_halves_) near_other_half_.assign(vertex_count_, 0);
+  if (in_halves_) {
+    near_other_half_.assign(vertex_count_, 0);
+    second_core_.emplace();
+  }
   allocatePassArrays();
   double weight_sum = 0;
   for (uint32_t v = 0; v < vertex_count_; ++v) {
