@@ -1010,12 +1010,11 @@ void Engine::runGreedy() {
 void Engine::collectPassCandidates() {
   const EngineState& s = state_;
   batch_.clear();
-  // Room for the candidates at once (about 1.5 per triangle at optimal placement, up to two per
-  // edge with endpoint placement or borders, when this is exceeded once): grown by doubling, the
-  // first pass's ~100-byte candidates were copied and their fresh pages faulted in at every step
-  // (bunny with normals: 11 MB; page faults 2.9% of the samples, then 0.8%, and the
-  // reallocation's 0.8% gone).
-  // Room reserved and not touched is address space only.
+  // Room for the candidates at once (about 1.5 per triangle at optimal placement; up to two per
+  // edge with endpoint placement or borders, when the vector grows once more). Grown by doubling,
+  // the first pass's ~100-byte candidates were copied and their fresh pages faulted in at every
+  // step (bunny with normals: 11 MB; page faults 2.9% of the samples, then 0.8%, and the
+  // reallocation's 0.8% gone). Room reserved and not touched is address space only.
   batch_.reserve(3 * s.live_triangles + 64);
   const size_t triangles = s.triangle_alive.size();
   const VertexKind* kinds = s.kinds.data();

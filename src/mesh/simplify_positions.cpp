@@ -250,9 +250,6 @@ inline PricedEdge priceEdge(const PricingRecord& a, const PricingRecord& b, bool
 #endif
 }
 
-// What a fan walk reads of each neighbour, in half a cache line: its survivor (the remap), the
-// walk's mark, and (for the flip test) its position. Three arrays cost the apply loop three
-// cache misses per neighbour on meshes whose vertex ids are in no spatial order (bunny00).
 // Below this many vertices every per-vertex array of the simplifier (~230 bytes a vertex in all)
 // nearly fits in a core's L2 (1 MiB here), and sorting costs more than it saves (measured, every
 // mesh sorted: fandisk and WaterBottle 9-50% slower, Avocado and spot within 6%).
@@ -270,6 +267,9 @@ constexpr size_t kTwoCorePricingMinimum = 4096;
 constexpr uint32_t kTwoCorePricingParts = 16;
 constexpr double kHalvesMargin = 1.5;
 
+// What a fan walk reads of each neighbour, in half a cache line: its survivor (the remap), the
+// walk's mark, and (for the flip test) its position. Three arrays cost the apply loop three
+// cache misses per neighbour on meshes whose vertex ids are in no spatial order (bunny00).
 struct alignas(32) VertexState {
   Vec3d position;  // normalized (bounding-box diagonal 1)
   uint32_t remap;  // survivor of a vertex collapsed in this pass (itself if none)
@@ -283,7 +283,6 @@ struct Collapser {
   // The other two corners of each moving triangle of a collapse's endpoints (room for every
   // triangle, so they are filled without capacity checks).
   uint32_t *from_fan = nullptr, *to_fan = nullptr;
-  uint32_t from_fan_size = 0, to_fan_size = 0;
   uint32_t edge_triangles[2] = {kAbsent, kAbsent};
   uint32_t edge_triangle_count = 0;
   uint32_t round = 0;  // the last round (nextRound) it used
@@ -1259,7 +1258,6 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     from_fan_size += 2;
   });
   collapser.edge_triangle_count = edge_count;
-  collapser.from_fan_size = from_fan_size;
   if (edge_count == 0 || edge_count > 2 || (edge_count == 2 && opposite[0] == opposite[1])) {
     ++stats.rejected_topology;
     return false;
@@ -1292,7 +1290,6 @@ bool PositionSimplifier::tryCollapse(const PassCandidate& candidate, uint32_t pa
     to_fan[to_fan_size + 1] = y;
     to_fan_size += 2;
   });
-  collapser.to_fan_size = to_fan_size;
   if (common != edge_count || duplicate ||
       (edge_count == 1 && isolatedTriangle(opposite[0], from_fan, from_fan_size, to_fan,
                                            to_fan_size))) {
