@@ -15,10 +15,12 @@
 #include <cstring>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <thread>
 
 #include "mesh/collapse_engine.hpp"
 #include "mesh/quadric.hpp"
+#include "mesh/run_both.hpp"
 #include "mesh/second_core.hpp"
 #include "mesh_test_meshes.hpp"
 
@@ -450,6 +452,72 @@ TEST(SecondCore, TheHelperRoundsAsItsCallerDoes) {
   ASSERT_EQ(two.mesh.positions.size(), one.mesh.positions.size());
   EXPECT_EQ(0, std::memcmp(two.mesh.positions.data(), one.mesh.positions.data(),
                            one.mesh.positions.size() * sizeof(core::Vec3)));
+}
+
+// runBoth (run_both.hpp) on the helper, one call after another (the helper sleeps after each
+// part it runs, and must be woken for the next), on a thread of its own when the helper is held,
+// and nested: both pieces run once each, and an exception from either comes back to the caller.
+TEST(RunBoth, BothRunOnceAndTheirExceptionsComeBack) {
+  const std::thread::id here = std::this_thread::get_id();
+  int on_other_thread = 0;
+  for (int call = 0; call < 200; ++call) {
+    int first = 0, second = 0;
+    std::thread::id second_on;
+    mesh::runBoth(
+        [&] {
+          // Long enough for a sleeping helper to wake and take the second piece.
+          const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(300);
+          while (std::chrono::steady_clock::now() < until) {
+          }
+          ++first;
+        },
+        [&] {
+          ++second;
+          second_on = std::this_thread::get_id();
+        });
+    ASSERT_EQ(first, 1) << call;
+    ASSERT_EQ(second, 1) << call;
+    on_other_thread += second_on != here;
+  }
+  std::printf("second pieces run on another thread: %d of 200\n", on_other_thread);
+  auto throws_in = [](int which) {
+    int ran = 0;
+    try {
+      mesh::runBoth(
+          [&] {
+            ++ran;
+            if (which == 0) throw std::runtime_error("first");
+          },
+          [&] {
+            ++ran;
+            if (which == 1) throw std::runtime_error("second");
+          });
+    } catch (const std::runtime_error& e) {
+      // Nothing runs after the exception came back (on one core, `second` is not started once
+      // `first` threw).
+      EXPECT_GE(ran, which == 0 ? 1 : 2) << e.what();
+      return std::string(e.what());
+    }
+    return std::string("none");
+  };
+  EXPECT_EQ(throws_in(0), "first");
+  EXPECT_EQ(throws_in(1), "second");
+  EXPECT_EQ(throws_in(2), "none");
+  {
+    mesh::SecondCore held;  // the helper is taken: a thread of its own (or, on one core, here)
+    EXPECT_EQ(throws_in(1), "second");
+    std::atomic<int> inner{0};
+    mesh::runBoth([&] { mesh::runBoth([&] { ++inner; }, [&] { ++inner; }); },
+                  [&] { mesh::runBoth([&] { ++inner; }, [&] { ++inner; }); });
+    EXPECT_EQ(inner.load(), 4);
+  }
+  std::atomic<int> nested{0};
+  mesh::runBoth([&] { mesh::runBoth([&] { ++nested; }, [&] { ++nested; }); },
+                [&] { mesh::runBoth([&] { ++nested; }, [&] { ++nested; }); });
+  EXPECT_EQ(nested.load(), 4);
+  if (mesh::second_core_detail::usableCpus() >= 2) {
+    EXPECT_GT(on_other_thread, 0);
+  }
 }
 
 }  // namespace

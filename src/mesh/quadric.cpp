@@ -440,9 +440,9 @@ void QuadricModel::mergedQuadrics(const EngineState& state, const CandidateColla
   if (dims_ > 0) addReducedAttributes(state, cand, total);
 }
 
-// From this many candidates on, evaluate prices a batch with attributes on two cores (runBoth:
-// one thread started per batch, ~50 us, against ~0.3 us a price with Hoppe's reduction; the
-// position-only prices at fixed points cost a tenth of that and stay on one).
+// From this many candidates on, evaluate prices a batch with attributes on two cores (runBoth,
+// ~0.3 us a price with Hoppe's reduction; the position-only prices at fixed points cost a tenth
+// of that and stay on one). From 1024 on instead, WaterBottle and spot were no faster.
 constexpr size_t kTwoCorePricingMinimum = 4096;
 
 void QuadricModel::evaluate(const EngineState& state, std::span<CandidateCollapse> batch) {

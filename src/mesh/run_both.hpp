@@ -1,20 +1,49 @@
 // Two independent pieces of work on the two cores of the machine (the image-driven mode's tile
-// builds, the two sides of surfaceDistance).
+// builds, the two sides of surfaceDistance, the attribute-aware passes' pricing).
 #pragma once
 
+#include <cstdint>
 #include <exception>
 #include <system_error>
 #include <thread>
 
+#include "mesh/second_core.hpp"
+
 namespace duolod::mesh {
 
-// Runs `first` here and `second` beside it on another thread when the machine has a second core
-// and a thread can be had, else one after the other; the two share only what they read, so the
-// results do not depend on which. An exception from either is rethrown here, after both ended.
+// Runs `first` here and `second` beside it on another core when the machine has a second one,
+// else one after the other; the two share only what they read, so the results do not depend on
+// which. The other core is the process's helper thread (second_core.hpp) when no other call holds
+// it (a thread started per call made WaterBottle's attribute-aware simplification to 50% ~20%
+// slower; bench/RESULTS.md, issue 3, session 46), else a thread of its own. The helper sleeps
+// right after its part instead of spinning for a next one: these calls come far apart, and the
+// image-driven mode renders in between on llvmpipe's threads, which need the core (spinning, its
+// renders took 10-30% longer). An exception from either is rethrown here, once neither runs (on one
+// core `second` is not started once `first` threw).
 template <class First, class Second>
 void runBoth(First&& first, Second&& second) {
-  static const bool two_cores = std::thread::hardware_concurrency() >= 2;
-  std::exception_ptr thrown;
+  std::exception_ptr thrown[2];
+  {
+    SecondCore helper(/*wanted=*/true, /*linger=*/false);
+    if (helper.available()) {
+      // Both parts are claimed one by one: `first` here, `second` by the helper unless it is
+      // still waking when `first` is done.
+      helper.forEach(2, [&](uint32_t part) {
+        try {
+          if (part == 0)
+            first();
+          else
+            second();
+        } catch (...) {
+          thrown[part] = std::current_exception();
+        }
+      });
+      for (const std::exception_ptr& e : thrown)
+        if (e) std::rethrow_exception(e);
+      return;
+    }
+  }
+  static const bool two_cores = second_core_detail::usableCpus() >= 2;
   std::thread other;
   if (two_cores) {
     try {
@@ -22,7 +51,7 @@ void runBoth(First&& first, Second&& second) {
         try {
           second();
         } catch (...) {
-          thrown = std::current_exception();
+          thrown[1] = std::current_exception();
         }
       });
     } catch (const std::system_error&) {  // no thread to be had: both here
@@ -38,7 +67,7 @@ void runBoth(First&& first, Second&& second) {
     other.join();
   else
     second();
-  if (thrown) std::rethrow_exception(thrown);
+  if (thrown[1]) std::rethrow_exception(thrown[1]);
 }
 
 }  // namespace duolod::mesh

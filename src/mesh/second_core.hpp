@@ -74,6 +74,10 @@ struct Helper {
   std::atomic<void*> context{nullptr};
   std::atomic<uint32_t> count{0};
   std::atomic<uint32_t> float_control{0};
+  // Spin for the next job after this one (kSpinTime), or sleep at once: a caller whose next job
+  // comes after a long serial stretch, or whose serial work runs on other threads that need the
+  // core (llvmpipe's rasterizer, beside the image-driven mode's tile builds), asks it to sleep.
+  std::atomic<bool> linger{true};
   alignas(64) std::atomic<uint64_t> claim{0};
   alignas(64) std::atomic<uint32_t> done{0};
 
@@ -120,6 +124,12 @@ struct Helper {
         if (generation != seen) {
           seen = generation;
           if (const uint32_t ran = work()) done.fetch_add(ran, std::memory_order_release);
+          // The job's own wish (its claim still open under its generation: its fields are its
+          // own), not that of a job being opened.
+          const uint64_t c = claim.load(std::memory_order_acquire);
+          if ((c >> 32) == generation && uint32_t(c) != kClosed &&
+              !linger.load(std::memory_order_relaxed))
+            break;
           last_job = std::chrono::steady_clock::now();
           continue;
         }
@@ -157,7 +167,9 @@ inline Helper* helper() {
 // holds it, the machine has one core or the work is too small to be worth it (`wanted`).
 class SecondCore {
  public:
-  explicit SecondCore(bool wanted = true) {
+  // `linger`: the helper spins for the next job after each one (for jobs that come one after
+  // another, as a simplification's passes), or sleeps at once.
+  explicit SecondCore(bool wanted = true, bool linger = true) : linger_(linger) {
     if (!wanted) return;
     second_core_detail::Helper* h = second_core_detail::helper();
     uint32_t free = 0;
@@ -202,6 +214,7 @@ class SecondCore {
     h.context.store(context, std::memory_order_release);
     h.count.store(parts, std::memory_order_release);
     h.float_control.store(second_core_detail::floatControl(), std::memory_order_release);
+    h.linger.store(linger_, std::memory_order_release);
     h.claim.store((generation + 1) << 32, std::memory_order_seq_cst);
     if (h.sleeping.load(std::memory_order_seq_cst) != 0) {
       h.wake.fetch_add(1, std::memory_order_relaxed);
@@ -218,6 +231,7 @@ class SecondCore {
   }
 
   second_core_detail::Helper* helper_ = nullptr;
+  bool linger_ = true;
   std::atomic<bool> in_job_{false};  // a job of this holder is open (read from its parts)
 };
 
