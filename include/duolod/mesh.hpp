@@ -210,7 +210,8 @@ struct SurfaceDistance {
 // Distances are to the other surface (closest point on any triangle, via a BVH). Two empty meshes
 // are at distance 0; one empty mesh is at infinity. The mean and rms are over the area samples:
 // NaN (not measured) when there are none (samples_per_mesh 0, or a mesh of zero area). The two
-// sides run on two threads when the machine has two cores; the results do not depend on it.
+// sides run on two cores when the machine has them (simplifyQuadric's helper thread when no call
+// holds it, else a thread of their own); the results do not depend on it.
 SurfaceDistance surfaceDistance(const core::Mesh& a, const core::Mesh& b,
                                 size_t samples_per_mesh = 100000, uint64_t seed = 1);
 
