@@ -1164,6 +1164,74 @@ TEST(GltfWriter, InconsistentAssetsAreRefused) {
   EXPECT_EQ(namesIn(dir), std::vector<std::string>{});
 }
 
+// A long data: URI is left out of the reader's own checking parse (withoutLongDataUris): the
+// checks still hold elsewhere in the document, the data is read as written (with a '/' written
+// "\/", as some writers do), a string elsewhere that only looks like a data: URI is left alone,
+// and a document that needs rewriting gets its data back.
+TEST(GltfReader, LongDataUrisAreReadAsWritten) {
+  const fs::path dir = test::scratchDir("long_data_uris");
+  auto grid = [] {
+    HandGltf g;
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    constexpr uint32_t n = 40;  // 1600 vertices: ~26k characters of base64
+    for (uint32_t j = 0; j < n; ++j)
+      for (uint32_t i = 0; i < n; ++i) positions.insert(positions.end(), {float(i), float(j), 0});
+    for (uint32_t j = 0; j + 1 < n; ++j)
+      for (uint32_t i = 0; i + 1 < n; ++i) {
+        const uint32_t a = j * n + i;
+        indices.insert(indices.end(), {a, a + 1, a + n + 1, a, a + n + 1, a + n});
+      }
+    const int p = g.addFloats(positions, "VEC3");
+    const int t = g.addIndices(indices, kUnsignedInt);
+    // A name that reads like a long data: URI, inside another string (escaped quotes).
+    g.addNode({{"mesh", g.addMesh({primitive(p, t)})},
+               {"name", "\"data:" + std::string(5000, 'x') + "\""}});
+    g.setScene({0});
+    return g;
+  };
+  auto escape_slashes = [](const std::string& path) {
+    std::string text = test::readText(path);
+    const std::string plain = "data:application/octet-stream",
+                      escaped = "data:application\\/octet-stream";
+    const size_t at = text.find(plain);
+    EXPECT_NE(at, std::string::npos);
+    text.replace(at, plain.size(), escaped);
+    std::ofstream(path) << text;
+  };
+  {
+    const std::string path = grid().write(dir, "embedded", /*embed=*/true);
+    escape_slashes(path);
+    auto asset = io::loadAsset(path);
+    ASSERT_TRUE(asset) << asset.error().message;
+    EXPECT_EQ(asset->mesh.triangleCount(), 39u * 39u * 2u);
+    ASSERT_EQ(asset->mesh.positions.size(), 1600u);
+    EXPECT_EQ(asset->mesh.positions[1599].x, 39.0f);
+    EXPECT_EQ(asset->mesh.positions[1599].y, 39.0f);
+  }
+  {  // whole floats to rewrite: the rewritten document keeps its data
+    HandGltf g = grid();
+    g.doc["accessors"][0]["count"] = 1600.0;
+    g.doc["nodes"][0]["mesh"] = 0.0;
+    const std::string path = g.write(dir, "rewritten", /*embed=*/true);
+    escape_slashes(path);
+    auto asset = io::loadAsset(path);
+    ASSERT_TRUE(asset) << asset.error().message;
+    EXPECT_EQ(asset->mesh.triangleCount(), 39u * 39u * 2u);
+    ASSERT_EQ(asset->mesh.positions.size(), 1600u);
+    EXPECT_EQ(asset->mesh.positions[1599].x, 39.0f);
+  }
+  {  // the checks still see the rest of the document
+    HandGltf g = grid();
+    g.doc["bufferViews"][0]["byteOffset"] = -12;
+    const std::string path = g.write(dir, "negative", /*embed=*/true);
+    auto asset = io::loadAsset(path);
+    ASSERT_FALSE(asset);
+    EXPECT_TRUE(test::contains(asset.error().message, "bufferView 0: byteOffset is -12"))
+        << asset.error().message;
+  }
+}
+
 // glTF 2.0's integers may be written as whole floats (36.0, 3.6e1), and a uri's '+' is a plus sign
 // (RFC 3986). tinygltf took such integers as absent (a byteOffset of 36.0 read the first triangle
 // instead of the second; a count of 3.0 was "not a positive integer") and looked for a+b.bin as

@@ -739,21 +739,49 @@ size_t wholeNumbersAsIntegers(nlohmann::json& value, bool integers, bool top_lev
   return rewritten;
 }
 
-// The document as tinygltf is to read it, parsed here first for what tinygltf lets through and
-// then reads wrongly:
-//   - integer fields written as whole floats are rewritten as integers (wholeNumbersAsIntegers);
-//   - a '+' in a buffer's or image's uri is a plus sign (RFC 3986), which tinygltf decoded as a
-//     space (a+b.bin was looked for as "a b.bin"): it is rewritten as %2B;
-//   - offsets, lengths, strides and counts are non-negative integers (glTF 2.0's schema): a
-//     negative or fractional byteOffset was read as 0; refused, naming the object and field;
-//   - a '%' in a uri escapes two hex digits: a bad escape cut the file name short ("File not
-//     found : m"); refused, naming the uri.
-// Returns the rewritten JSON text, or an empty string when nothing needed rewriting. A document
-// that does not parse is left to tinygltf, whose message says where.
-core::Result<std::string> normalizedDocument(const uint8_t* text, size_t size,
-                                             const std::string& path) {
-  nlohmann::json doc = nlohmann::json::parse(text, text + size, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return std::string();
+// The JSON text with the contents of its long data: URI strings left out (each string kept as
+// "data:"), or an empty string when it has none. Those strings are most of an embedded file
+// (a 23 MB grid's buffer) and normalizedDocument looks no further than their "data:": parsing
+// them here as well as in tinygltf cost a sixth of `duolod info` on that grid (bench/RESULTS.md,
+// session 46). A '"' not escaped by a backslash and followed by "data:" opens a string in valid
+// JSON (a closing quote is followed by , : ] } or space); the string ends at the next '"' that
+// no backslash escapes (base64 has neither, but a writer may escape a '/' as "\/").
+std::string withoutLongDataUris(const uint8_t* text, size_t size) {
+  constexpr size_t kLong = 4096;
+  const std::string_view all(reinterpret_cast<const char*>(text), size);
+  std::string out;
+  size_t copied = 0;  // text before this is in `out`
+  for (size_t at = all.find("\"data:"); at != std::string_view::npos;
+       at = all.find("\"data:", at + 1)) {
+    size_t backslashes = 0;
+    while (backslashes < at && all[at - 1 - backslashes] == '\\') ++backslashes;
+    if (backslashes % 2 != 0) continue;  // an escaped quote inside another string
+    size_t end = all.find('"', at + 6);  // a quote preceded by an odd run of '\\' is escaped
+    for (;;) {
+      if (end == std::string_view::npos) break;
+      size_t run = 0;
+      while (all[end - 1 - run] == '\\') ++run;
+      if (run % 2 == 0) break;
+      end = all.find('"', end + 1);
+    }
+    if (end == std::string_view::npos) break;  // unterminated: left for the parsers to report
+    if (end - at < kLong) {
+      at = end;
+      continue;
+    }
+    if (out.empty()) out.reserve(size / 16);
+    out.append(all.substr(copied, at + 6 - copied));  // up to and including "data:
+    copied = end;                                     // from the closing quote on
+    at = end;
+  }
+  if (copied == 0) return std::string();
+  out.append(all.substr(copied));
+  return out;
+}
+
+// normalizedDocument's checks and rewrites of a parsed document (an object); how many values
+// were rewritten.
+core::Result<size_t> normalize(nlohmann::json& doc, const std::string& path) {
   size_t rewritten = wholeNumbersAsIntegers(doc, false, true);
   auto each = [&](const char* array, auto&& visit) -> core::Status {
     const auto found = doc.find(array);
@@ -804,7 +832,39 @@ core::Result<std::string> normalizedDocument(const uint8_t* text, size_t size,
     });
     if (!status) return status.error();
   }
-  if (rewritten == 0) return std::string();
+  return rewritten;
+}
+
+// The document as tinygltf is to read it, parsed here first for what tinygltf lets through and
+// then reads wrongly:
+//   - integer fields written as whole floats are rewritten as integers (wholeNumbersAsIntegers);
+//   - a '+' in a buffer's or image's uri is a plus sign (RFC 3986), which tinygltf decoded as a
+//     space (a+b.bin was looked for as "a b.bin"): it is rewritten as %2B;
+//   - offsets, lengths, strides and counts are non-negative integers (glTF 2.0's schema): a
+//     negative or fractional byteOffset was read as 0; refused, naming the object and field;
+//   - a '%' in a uri escapes two hex digits: a bad escape cut the file name short ("File not
+//     found : m"); refused, naming the uri.
+// Returns the rewritten JSON text, or an empty string when nothing needed rewriting. A document
+// that does not parse is left to tinygltf, whose message says where. Long data: URIs are parsed
+// only when the document is rewritten (withoutLongDataUris).
+core::Result<std::string> normalizedDocument(const uint8_t* text, size_t size,
+                                             const std::string& path) {
+  const std::string shortened = withoutLongDataUris(text, size);
+  nlohmann::json doc =
+      shortened.empty() ? nlohmann::json::parse(text, text + size, nullptr, false)
+                        : nlohmann::json::parse(shortened.begin(), shortened.end(), nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return std::string();
+  auto rewritten = normalize(doc, path);
+  if (!rewritten) return rewritten.error();
+  if (*rewritten == 0) return std::string();
+  // The rewritten text goes to tinygltf, so it needs the data: URIs parsed without above: the
+  // whole document is parsed and normalized again (rare: a document that needs rewriting and
+  // embeds long data).
+  if (!shortened.empty()) {
+    doc = nlohmann::json::parse(text, text + size, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return std::string();
+    if (auto again = normalize(doc, path); !again) return again.error();
+  }
   return doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
