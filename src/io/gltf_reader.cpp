@@ -742,7 +742,7 @@ size_t wholeNumbersAsIntegers(nlohmann::json& value, bool integers, bool top_lev
 // The JSON text with the contents of its long data: URI strings left out (each string kept as
 // "data:"), or an empty string when it has none. Those strings are most of an embedded file
 // (a 23 MB grid's buffer) and normalizedDocument looks no further than their "data:": parsing
-// them here as well as in tinygltf cost a sixth of `duolod info` on that grid (bench/RESULTS.md,
+// them here as well as in tinygltf cost an eighth of `duolod info` on that grid (bench/RESULTS.md,
 // session 46). A '"' not escaped by a backslash and followed by "data:" opens a string in valid
 // JSON (a closing quote is followed by , : ] } or space); the string ends at the next '"' that
 // no backslash escapes (base64 has neither, but a writer may escape a '/' as "\/").
