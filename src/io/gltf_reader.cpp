@@ -765,7 +765,7 @@ std::string withoutLongDataUris(const uint8_t* text, size_t size) {
       end = all.find('"', end + 1);
     }
     if (end == std::string_view::npos) break;  // unterminated: left for the parsers to report
-    if (end - at < kLong) {
+    if (end - at - 1 < kLong) {  // its characters, as written (escapes counted as written)
       at = end;
       continue;
     }
@@ -855,16 +855,18 @@ core::Result<std::string> normalizedDocument(const uint8_t* text, size_t size,
                         : nlohmann::json::parse(shortened.begin(), shortened.end(), nullptr, false);
   if (doc.is_discarded() || !doc.is_object()) return std::string();
   auto rewritten = normalize(doc, path);
-  if (!rewritten) return rewritten.error();
-  if (*rewritten == 0) return std::string();
-  // The rewritten text goes to tinygltf, so it needs the data: URIs parsed without above: the
-  // whole document is parsed and normalized again (rare: a document that needs rewriting and
-  // embeds long data).
+  if (rewritten && *rewritten == 0) return std::string();
+  // A refusal, or a rewritten text (which goes to tinygltf, so it needs the data: URIs parsed
+  // without above), from the whole document (rare with long data: URIs): a document whose only
+  // fault is inside a data: URI (a raw line break in MIME-wrapped base64) gets the parser's
+  // message, not a check's, and two long "data:..." keys of one object are not one.
   if (!shortened.empty()) {
     doc = nlohmann::json::parse(text, text + size, nullptr, false);
     if (doc.is_discarded() || !doc.is_object()) return std::string();
-    if (auto again = normalize(doc, path); !again) return again.error();
+    rewritten = normalize(doc, path);
   }
+  if (!rewritten) return rewritten.error();
+  if (*rewritten == 0) return std::string();
   return doc.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 

@@ -26,8 +26,9 @@ void runBoth(First&& first, Second&& second) {
   {
     SecondCore helper(/*wanted=*/true, /*linger=*/false);
     if (helper.available()) {
-      // Both parts are claimed one by one: `first` here, `second` by the helper unless it is
-      // still waking when `first` is done.
+      // The parts are claimed one by one by either thread: mostly `first` here and `second` on
+      // the helper, but a helper already spinning may take `first`, and one still waking finds
+      // both taken.
       helper.forEach(2, [&](uint32_t part) {
         try {
           if (part == 0)
@@ -47,7 +48,9 @@ void runBoth(First&& first, Second&& second) {
   std::thread other;
   if (two_cores) {
     try {
-      other = std::thread([&] {
+      // Under this thread's floating-point control, as on the helper.
+      other = std::thread([&, control = second_core_detail::floatControl()] {
+        second_core_detail::setFloatControl(control);
         try {
           second();
         } catch (...) {

@@ -80,6 +80,9 @@ struct Helper {
   std::atomic<bool> linger{true};
   alignas(64) std::atomic<uint64_t> claim{0};
   alignas(64) std::atomic<uint32_t> done{0};
+  // The caller waits on `done` (it ran out of parts while the helper still runs one): the
+  // helper wakes it after counting its parts.
+  std::atomic<uint32_t> caller_waiting{0};
 
   // Runs parts of the job that `claim` now holds until none is left; the number run. A job is
   // opened in two steps (SecondCore::run): `claim` is first closed under a new generation, then
@@ -116,20 +119,27 @@ struct Helper {
   // the sleeping flag and the claim are both written then read in sequentially consistent order
   // on either side, so one of the two always sees the other.
   void loop() {
-    uint64_t seen = claim.load(std::memory_order_acquire) >> 32;
+    // From the claim's first generation, not the one found when this thread starts: a job
+    // opened before that (the first call of a process, when the thread is slow to start) is
+    // still taken (read as already seen, its caller ran every part alone; found by review,
+    // bench/RESULTS.md, session 46).
+    uint64_t seen = 0;
     for (;;) {
       auto last_job = std::chrono::steady_clock::now();
       for (uint32_t spins = 1;; ++spins) {
         const uint64_t generation = claim.load(std::memory_order_acquire) >> 32;
         if (generation != seen) {
           seen = generation;
-          if (const uint32_t ran = work()) done.fetch_add(ran, std::memory_order_release);
-          // The job's own wish (its claim still open under its generation: its fields are its
-          // own), not that of a job being opened.
+          if (const uint32_t ran = work()) {
+            done.fetch_add(ran, std::memory_order_seq_cst);
+            if (caller_waiting.load(std::memory_order_seq_cst)) done.notify_one();
+          }
+          // The job's own wish: the flag read first, then the claim found still open under the
+          // job's generation. A newer job stores its flag after closing the claim, so had the
+          // flag been the newer job's, the claim would be seen closed or newer.
+          const bool stay = linger.load(std::memory_order_acquire);
           const uint64_t c = claim.load(std::memory_order_acquire);
-          if ((c >> 32) == generation && uint32_t(c) != kClosed &&
-              !linger.load(std::memory_order_relaxed))
-            break;
+          if ((c >> 32) == generation && uint32_t(c) != kClosed && !stay) break;
           last_job = std::chrono::steady_clock::now();
           continue;
         }
@@ -221,12 +231,26 @@ class SecondCore {
       h.wake.notify_one();
     }
     const uint32_t finished = h.work();
-    // The helper runs its last parts: spin, then (should it have lost its CPU) give ours up.
+    // The helper runs its last parts: spin a little, then either give the CPU up in turns (a
+    // lingering holder's jobs come one after another, each part microseconds: the first moment
+    // counts), or sleep until the helper has counted them (runBoth's halves can take many
+    // milliseconds: spinning, the caller took a core from llvmpipe's threads for as long; found
+    // by review, session 46). The flag and `done` are written then read in sequentially
+    // consistent order on both sides, so either the helper sees the flag or the caller sees the
+    // count.
     for (uint32_t spins = 0; finished + h.done.load(std::memory_order_acquire) < parts; ++spins) {
-      if (spins < 4096)
+      if (spins < 4096) {
         second_core_detail::relax();
-      else
+        continue;
+      }
+      if (linger_) {
         std::this_thread::yield();
+        continue;
+      }
+      h.caller_waiting.store(1, std::memory_order_seq_cst);
+      const uint32_t counted = h.done.load(std::memory_order_seq_cst);
+      if (finished + counted < parts) h.done.wait(counted, std::memory_order_seq_cst);
+      h.caller_waiting.store(0, std::memory_order_relaxed);
     }
   }
 
