@@ -11,15 +11,15 @@
 
 namespace duolod::mesh {
 
-// Runs `first` here and `second` beside it on another core when the machine has a second one,
-// else one after the other; the two share only what they read, so the results do not depend on
-// which. The other core is the process's helper thread (second_core.hpp) when no other call holds
-// it (a thread started per call made WaterBottle's attribute-aware simplification to 50% ~20%
-// slower; bench/RESULTS.md, issue 3, session 46), else a thread of its own. The helper sleeps
-// right after its part instead of spinning for a next one: these calls come far apart, and the
-// image-driven mode renders in between on llvmpipe's threads, which need the core (spinning, its
-// renders took 10-30% longer). An exception from either is rethrown here, once neither runs (on one
-// core `second` is not started once `first` threw).
+// Runs `first` and `second` at once on two cores when the machine has them (mostly `first` on
+// this thread), else one after the other here; the two share only what they read, so the results
+// do not depend on which. The other core is the process's helper thread (second_core.hpp) when no
+// other call holds it (waking it costs ~44 us here, starting and joining a thread ~100 us;
+// bench/RESULTS.md, issue 3, session 46), else a thread of its own. The helper sleeps right after
+// its part instead of spinning for a next one: these calls come far apart, and the image-driven
+// mode renders in between on llvmpipe's threads, which need the core (spinning, its renders took
+// 10-30% longer). An exception from either is rethrown here, once neither runs (on one core
+// `second` is not started once `first` threw).
 template <class First, class Second>
 void runBoth(First&& first, Second&& second) {
   std::exception_ptr thrown[2];
