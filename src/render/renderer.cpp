@@ -649,7 +649,15 @@ void Renderer::releaseProgram(ProgramId program) {
 namespace internal {
 
 AtlasLayout planAtlas(int count, int tile, int max_size, int samples) {
-  const size_t kBudgetPixels = size_t(48) << 20;  // ~400 MB of colour + depth at 1 sample
+  // ~8M pixels a chunk: 32 MB of colour and as much depth at 1 sample (a 4x4 supersampled
+  // reference of 256 px takes 13 chunks of 8 tiles). The framebuffers behind a chunk stay
+  // allocated for the renderer's life, as large as its largest chunk, and llvmpipe works through
+  // a small atlas faster: against 48M pixels, measured on llvmpipe (2 cores), the 100-sample 4x4
+  // reference at 256 px took 0.80-0.96x the time (5 alternations) and `duolod error` at 1024 px
+  // 38 s instead of 45-47 s, with peak memory 1.39 -> 0.79 GB (bench_throughput) and 3.5 -> 2.7 GB
+  // (bench/RESULTS.md, session 47). Plain renders of up to 256 px at 100 samples still fit one
+  // chunk.
+  const size_t kBudgetPixels = size_t(8) << 20;
   size_t per_pixel_factor = std::max(1, samples);
   int max_columns = std::max(1, max_size / tile);
   size_t budget_tiles = std::max<size_t>(1, kBudgetPixels / per_pixel_factor / (size_t(tile) * tile));
