@@ -1,5 +1,6 @@
 // The progressive record: replaying all steps gives the simplifier's result exactly, replaying
-// none gives the input, the one-sweep extractMeshes equals extractMesh count by count, candidates
+// none gives the input, the one-sweep extractMeshes equals extractMesh count by count (and
+// countTriangles their triangle counts), candidates
 // are ascending, unique, bracketed by 0 and the end and never split a seam collapse, and 500
 // candidates of a 75k-triangle record extract well under a second.
 #include <gtest/gtest.h>
@@ -171,6 +172,40 @@ TEST(ProgressiveRecord, ExtractMeshesEqualsExtractMesh) {
     SCOPED_TRACE(counts[i]);
     expectSameMesh(meshes[i], mesh::extractMesh(record, counts[i]));
   }
+}
+
+// countTriangles replays without building meshes (generate sizes its candidates by it and
+// extracts only those it draws): the same counts as the extracted meshes', for prefixes inside a
+// seam collapse (rounded up alike), past the end, and out of order.
+TEST(ProgressiveRecord, CountTrianglesEqualsTheExtractedMeshes) {
+  Mesh input = test::seamGrid(20, gentleBumps);
+  auto result = mesh::simplifyQuadric(input, {.target_triangles = 20});
+  const auto& record = result.record;
+  std::vector<size_t> counts;
+  for (size_t i = 0; i < record.steps.size(); i += 7) counts.push_back(i);
+  size_t inside = 0;  // a prefix that ends inside a multi-step (seam) collapse
+  for (size_t i = 0; i + 1 < record.steps.size(); ++i)
+    if (record.steps[i].continues) {
+      inside = i + 1;
+      break;
+    }
+  ASSERT_GT(inside, 0u) << "the seam grid's record has no multi-step collapse";
+  counts.push_back(inside);
+  counts.push_back(record.steps.size());
+  counts.push_back(record.steps.size() + 5);
+  counts.push_back(3);  // smaller than the one before: a fresh replay
+  const std::vector<size_t> triangles = mesh::countTriangles(record, counts);
+  ASSERT_EQ(triangles.size(), counts.size());
+  const std::vector<Mesh> meshes = mesh::extractMeshes(record, counts);
+  std::set<size_t> distinct;
+  for (size_t i = 0; i < counts.size(); ++i) {
+    EXPECT_EQ(triangles[i], meshes[i].triangleCount()) << "prefix " << counts[i];
+    distinct.insert(triangles[i]);
+  }
+  EXPECT_GT(distinct.size(), counts.size() / 2);  // the counts do move along the record
+  EXPECT_EQ(triangles[counts.size() - 3], result.mesh.triangleCount());
+  EXPECT_TRUE(mesh::countTriangles(mesh::ProgressiveRecord{}, counts) ==
+              std::vector<size_t>(counts.size(), 0));
 }
 
 // A seam collapse takes one step per wedge; a prefix ending inside it is rounded up, so the two

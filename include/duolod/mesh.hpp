@@ -110,6 +110,10 @@ core::Mesh extractMesh(const ProgressiveRecord& record, size_t step_count);
 // result has one mesh per count, each equal to extractMesh(record, count).
 std::vector<core::Mesh> extractMeshes(const ProgressiveRecord& record,
                                       std::span<const size_t> step_counts);
+// The triangle count of each of those meshes (extractMeshes(record, step_counts)[i]
+// .triangleCount()), by one replay that builds no mesh.
+std::vector<size_t> countTriangles(const ProgressiveRecord& record,
+                                   std::span<const size_t> step_counts);
 
 // K candidate step counts (§5.1): the record's prefix lengths where the error changes most,
 // always including 0 (the input) and the last step; ascending, unique, never inside a multi-step

@@ -80,11 +80,24 @@ struct LevelState {
   double search_bound = 0;        // what the searches aim at: bound × (1 − bound_margin)
 };
 
-// The candidates of one level's mesh set; index 0 is the original. Uploaded on first use.
+// One mesh candidate: a prefix of a simplification's progressive record (§5.1), extracted when
+// first needed (rendered, handed to a shader search, exported) and kept from then on, or a mesh
+// given as it is (the original). Sets share candidates (a level's set carries the nearer
+// level's), so each is extracted and uploaded once. Extracting all K (500) candidates of every
+// level up front kept them all: on spot's ten levels ~450 MB of the run's 1.69 GB peak (K = 50:
+// 1.24 GB), where the pair search renders a few dozen of each set (bench/RESULTS.md, session 47).
+struct MeshCandidate {
+  std::shared_ptr<const mesh::ProgressiveRecord> record;  // null when `mesh` was given
+  size_t step = 0;
+  size_t triangles = 0;
+  std::shared_ptr<const core::Mesh> mesh;  // extracted (or given)
+  Renderer::AssetId uploaded = -1;
+};
+
+// The candidates of one level's mesh set; index 0 is the original (or the level's start mesh).
 struct MeshSet {
-  std::vector<core::Mesh> meshes;
+  std::vector<std::shared_ptr<MeshCandidate>> meshes;
   std::vector<double> errors;  // the simplifier's error of each candidate (image: ε; quadric: 0)
-  std::vector<Renderer::AssetId> uploaded;
 };
 
 struct ShaderCandidate {
@@ -317,6 +330,8 @@ class Generator {
                                               std::string summary);
   core::Status profile(ShaderCandidate& candidate);
   core::Result<Renderer::AssetId> meshAsset(int set, int mesh);
+  // The candidate's mesh, extracted from its record on first use.
+  const core::Mesh& candidateMesh(int set, int mesh);
   // Scores shader variants on (mesh of `set`, level's distance): the GP configurations of §5.2
   // and the interleaved generations of §4.3.
   core::Result<std::unique_ptr<shader::ConfigurationScorer>> scorerFor(int level, int set,
@@ -463,7 +478,7 @@ void thinEvenly(MeshSet& set, size_t limit) {
   MeshSet thinned;
   for (size_t i = 0; i < limit; ++i) {
     size_t index = i * (count - 1) / (limit - 1);
-    thinned.meshes.push_back(std::move(set.meshes[index]));
+    thinned.meshes.push_back(set.meshes[index]);
     thinned.errors.push_back(set.errors[index]);
   }
   set = std::move(thinned);
@@ -471,21 +486,31 @@ void thinEvenly(MeshSet& set, size_t limit) {
 
 core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
   const int level_count = static_cast<int>(levels_.size());
-  auto addSet = [&](const mesh::ProgressiveRecord& record, bool from_original) {
-    std::vector<size_t> steps = mesh::chooseCandidates(record, options_.mesh_candidates);
+  // The original, as given (the Generator's asset outlives every set).
+  const auto original = std::make_shared<MeshCandidate>();
+  original->triangles = asset_.mesh.triangleCount();
+  original->mesh = std::shared_ptr<const core::Mesh>(&asset_.mesh, [](const core::Mesh*) {});
+  auto addSet = [&](mesh::ProgressiveRecord&& simplified, bool from_original) {
+    auto record = std::make_shared<const mesh::ProgressiveRecord>(std::move(simplified));
+    std::vector<size_t> steps = mesh::chooseCandidates(*record, options_.mesh_candidates);
+    const std::vector<size_t> triangles = mesh::countTriangles(*record, steps);
     MeshSet set;
-    set.meshes = mesh::extractMeshes(record, steps);
-    for (size_t step : steps)
-      set.errors.push_back(step == 0 ? 0.0 : record.steps[step - 1].cumulative_error);
+    for (size_t i = 0; i < steps.size(); ++i) {
+      auto candidate = std::make_shared<MeshCandidate>();
+      candidate->record = record;
+      candidate->step = steps[i];
+      candidate->triangles = triangles[i];
+      set.meshes.push_back(std::move(candidate));
+      set.errors.push_back(steps[i] == 0 ? 0.0 : record->steps[steps[i] - 1].cumulative_error);
+    }
     // A record of the original starts with its cleaned (welded) copy: M_0 is the original itself
     // (every set's M_0 is rendered once, as set 0's).
-    if (from_original && !steps.empty() && steps.front() == 0) set.meshes.front() = asset_.mesh;
-    set.uploaded.assign(set.meshes.size(), -1);
+    if (from_original && !steps.empty() && steps.front() == 0) set.meshes.front() = original;
     mesh_sets_.push_back(std::move(set));
     return static_cast<int>(mesh_sets_.size()) - 1;
   };
   // Set 0 is the original alone: level 0 (bound 0) and the shader-only baseline use it.
-  mesh_sets_.push_back(MeshSet{.meshes = {asset_.mesh}, .errors = {0.0}, .uploaded = {-1}});
+  mesh_sets_.push_back(MeshSet{.meshes = {original}, .errors = {0.0}});
   set_of_level_.assign(level_count, 0);
   addReadyConfigurations(0);
   if (options_.scope == LodScope::kShaderOnly) return core::okStatus();
@@ -493,7 +518,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
   if (options_.mesh_mode == MeshCandidateMode::kQuadric) {
     mesh::SimplifyOptions quadric{.target_triangles = 4, .record = true};
     mesh::SimplifyResult simplified = mesh::simplifyQuadric(asset_.mesh, quadric);
-    int set = addSet(simplified.record, /*from_original=*/true);
+    int set = addSet(std::move(simplified.record), /*from_original=*/true);
     for (int level = 1; level < level_count; ++level) set_of_level_[level] = set;
     return core::okStatus();
   }
@@ -512,14 +537,18 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
                                      .display = options_.levels.display,
                                      .domain = {.views = options_.views},
                                      .supersample = options_.supersample};
-    image.start = previous_set >= 0 ? &mesh_sets_[previous_set].meshes.back() : nullptr;
+    image.start =
+        previous_set >= 0
+            ? &candidateMesh(previous_set, int(mesh_sets_[previous_set].meshes.size()) - 1)
+            : nullptr;
     image.reference = &levels_[level].reference;
     mesh::ImageSimplifyStats stats;
     auto simplified = mesh::simplifyImage(*renderer_, asset_, source, image, &stats);
     if (!simplified)
       return core::Error{"mesh candidates at level " + std::to_string(level) + ": " +
                          simplified.error().message};
-    const int own = addSet(simplified->record, /*from_original=*/previous_set < 0);
+    const size_t start_triangles = simplified->record.base.triangleCount();
+    const int own = addSet(std::move(simplified->record), /*from_original=*/previous_set < 0);
     mesh_sets_[own].errors[0] = stats.initial_error;  // the start mesh's own ε at this distance
     if (previous_set >= 0) {
       const MeshSet& carried = mesh_sets_[previous_set];
@@ -537,11 +566,10 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
       combined.meshes.pop_back();  // == this level's start, set.meshes[0]
       combined.errors.pop_back();
       for (size_t k = 0; k < set.meshes.size(); ++k) {
-        combined.meshes.push_back(std::move(set.meshes[k]));
+        combined.meshes.push_back(set.meshes[k]);
         combined.errors.push_back(k == 0 ? stats.initial_error : set.errors[k]);
       }
       thinEvenly(combined, options_.mesh_candidates);
-      combined.uploaded.assign(combined.meshes.size(), -1);
       set = std::move(combined);
     }
     set_of_level_[level] = own;
@@ -554,9 +582,9 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
       std::snprintf(line, sizeof line,
                     "mesh level %d (%d px): %zu -> %zu triangles, eps %.2f (aim %.2f), %zu "
                     "renders, %.1f s",
-                    level, stats.footprint_px, simplified->record.base.triangleCount(),
-                    simplified->mesh.triangleCount(), stats.final_error, levels_[level].search_bound,
-                    stats.rendered_evaluations, stats.total_seconds);
+                    level, stats.footprint_px, start_triangles, simplified->mesh.triangleCount(),
+                    stats.final_error, levels_[level].search_bound, stats.rendered_evaluations,
+                    stats.total_seconds);
       options_.progress({"mesh candidates", double(level) / std::max(1, level_count - 1), line});
     }
   }
@@ -565,12 +593,20 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
 
 core::Result<Renderer::AssetId> Generator::meshAsset(int set, int mesh) {
   if (mesh == 0) set = 0;  // the original (set 0 holds it alone)
-  MeshSet& mesh_set = mesh_sets_[set];
-  if (mesh_set.uploaded[mesh] >= 0) return mesh_set.uploaded[mesh];
-  auto uploaded = renderer_->uploadMesh(original_asset_, mesh_set.meshes[mesh]);
+  MeshCandidate& candidate = *mesh_sets_[set].meshes[mesh];
+  if (candidate.uploaded >= 0) return candidate.uploaded;
+  auto uploaded = renderer_->uploadMesh(original_asset_, candidateMesh(set, mesh));
   if (!uploaded) return uploaded.error();
-  mesh_set.uploaded[mesh] = *uploaded;
+  candidate.uploaded = *uploaded;
   return *uploaded;
+}
+
+const core::Mesh& Generator::candidateMesh(int set, int mesh) {
+  MeshCandidate& candidate = *mesh_sets_[set].meshes[mesh];
+  if (!candidate.mesh)
+    candidate.mesh =
+        std::make_shared<const core::Mesh>(mesh::extractMesh(*candidate.record, candidate.step));
+  return *candidate.mesh;
 }
 
 core::Result<std::unique_ptr<shader::ConfigurationScorer>> Generator::scorerFor(int level, int set,
@@ -578,7 +614,7 @@ core::Result<std::unique_ptr<shader::ConfigurationScorer>> Generator::scorerFor(
   auto asset = meshAsset(set, mesh);
   if (!asset) return asset.error();
   return shader::ConfigurationScorer::create(
-      *renderer_, cache_, *asset, mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh], original_,
+      *renderer_, cache_, *asset, candidateMesh(mesh == 0 ? 0 : set, mesh), original_,
       evaluationConfig(options_, float(levels_[level].level.distance)));
 }
 
@@ -697,7 +733,8 @@ SeparateProblem Generator::problem(LodScope scope) {
     int set = scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
     problem.mesh_counts.push_back(static_cast<int>(mesh_sets_[set].meshes.size()));
     std::vector<double>& sizes = problem.mesh_sizes.emplace_back();
-    for (const core::Mesh& mesh : mesh_sets_[set].meshes) sizes.push_back(double(mesh.triangleCount()));
+    for (const auto& candidate : mesh_sets_[set].meshes)
+      sizes.push_back(double(candidate->triangles));
   }
   problem.shader_count = scope == LodScope::kMeshOnly ? 1 : static_cast<int>(shaders_.size());
   auto setOf = [this, scope](int level) {
@@ -758,7 +795,7 @@ void Generator::addReadyConfigurations(int completed_level) {
         shader_search_->add({.index = shader_search_->added(),
                              .level = level,
                              .mesh = mesh,
-                             .drawn = mesh_sets_[mesh == 0 ? 0 : set].meshes[mesh],
+                             .drawn = candidateMesh(mesh == 0 ? 0 : set, mesh),
                              .distance = float(levels_[level].level.distance)});
         ++taken;
       }
@@ -989,7 +1026,7 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
     GeneratedLevel out;
     out.level = levels_[level].level;
     out.switch_distance = k == 0 ? 0.0 : levels_[level].level.distance;
-    out.mesh = mesh_sets_[set].meshes[pair.mesh];
+    out.mesh = candidateMesh(set, pair.mesh);
     auto readable = shader::emitProgram(*candidate.program, /*optimize=*/false);
     if (!readable) return readable.error();
     out.readable = {std::move(readable->vertex), std::move(readable->fragment)};

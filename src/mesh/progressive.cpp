@@ -8,6 +8,7 @@
 // K candidates cost one replay plus the size of the K outputs.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "duolod/mesh.hpp"
 #include "mesh/attributes.hpp"
@@ -93,6 +94,8 @@ class Replay {
     }
     first_corner_[step.removed] = kAbsent;
   }
+
+  size_t liveTriangles() const { return live_triangles_; }
 
   core::Mesh snapshot() {
     const core::Mesh& values = record_.values;
@@ -191,6 +194,21 @@ std::vector<core::Mesh> extractMeshes(const ProgressiveRecord& record,
     meshes.push_back(replay.snapshot());
   }
   return meshes;
+}
+
+std::vector<size_t> countTriangles(const ProgressiveRecord& record,
+                                   std::span<const size_t> step_counts) {
+  std::vector<size_t> counts;
+  counts.reserve(step_counts.size());
+  std::optional<Replay> replay;
+  size_t applied = 0;
+  for (size_t requested : step_counts) {
+    const size_t count = roundToCollapse(record, requested);
+    if (!replay || count < applied) replay.emplace(record), applied = 0;  // (as extractMeshes)
+    for (; applied < count; ++applied) replay->apply(record.steps[applied]);
+    counts.push_back(replay->liveTriangles());
+  }
+  return counts;
 }
 
 core::Mesh extractMesh(const ProgressiveRecord& record, size_t step_count) {
