@@ -597,7 +597,7 @@ TEST(CliShaderTest, AByteOrderMarkIsNotAToken) {
 
 // A fragment stage whose alpha is 0 (here an `out vec3`: alpha undefined, 0 on llvmpipe) gave a
 // covered pixel count of 0, every variant an error of 0, and black levels with exit code 0. It is
-// refused before the search, saying why.
+// refused before anything is drawn, saying why (so is one that writes no colour at all).
 TEST(CliShaderTest, AShaderWithoutAlphaIsRefused) {
   DUOLOD_REQUIRE_ASSET(spot, "obj/spot/spot.obj");
   const fs::path dir = test::scratchDir("cli_shader_alpha");
@@ -617,8 +617,24 @@ TEST(CliShaderTest, AShaderWithoutAlphaIsRefused) {
                                  "--search", "greedy", "--steps", "2", "--candidates", "4",
                                  "--no-timing", "--out", (dir / "out").string()});
   EXPECT_EQ(run.exit_code, 1) << run.out;
-  EXPECT_TRUE(test::contains(run.err, "alpha is 0 in every pixel of its")) << run.err;
+  EXPECT_TRUE(test::contains(run.err,
+                             "vec3.frag: its colour output 'outColor' at location 0 is "
+                             "a vec3, which leaves alpha undefined"))
+      << run.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
+  const std::string silent = (dir / "silent.frag").string();
+  std::ofstream(silent) << "#version 450\nvoid main() {}\n";
+  // The same refusal from the commands that draw one shader pair (here with no colour at all).
+  run = runCli({"error", spot, spot, "--vert", vert, "--frag", silent, "--pixels", "32"});
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  EXPECT_TRUE(test::contains(run.err, "silent.frag: writes no colour output at location 0"))
+      << run.err;
+  run = runCli({"render", spot, "--vert", vert, "--frag", silent, "--pixels", "32", "--out",
+                (dir / "silent.png").string()});
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  EXPECT_TRUE(test::contains(run.err, "silent.frag: writes no colour output at location 0"))
+      << run.err;
+  EXPECT_FALSE(fs::exists(dir / "silent.png"));
 }
 
 // GLSL 450 that GLSL ES 3.0 cannot express (bitCount) is simplified as any other: its levels are

@@ -3,6 +3,7 @@
 // (node transforms, mirroring, submeshes, index types, normalized colours), and malformed files,
 // each of which must come back as an Error naming the file, never a crash.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <chrono>
@@ -586,6 +587,44 @@ TEST(GltfReader, PrimitiveWithoutIndicesIsATriangleList) {
   EXPECT_EQ(asset->mesh.submeshes[0].material, 0u);
 }
 
+// Strips and fans in the specification's triangle order (§3.7.2.1), every triangle turning as the
+// first; points and lines are skipped with a warning; a mode outside 0-6 is an error.
+TEST(GltfReader, StripsAndFansAreReadAsTriangles) {
+  // Four vertices of a unit square, in strip order and in fan order.
+  for (auto [mode, expected] : {std::pair{5, std::vector<uint32_t>{0, 1, 2, 1, 3, 2}},
+                                std::pair{6, std::vector<uint32_t>{1, 2, 0, 2, 3, 0}}}) {
+    SCOPED_TRACE(mode);
+    HandGltf g;
+    int positions = g.addFloats(mode == 5 ? std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}
+                                          : std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0},
+                                "VEC3");
+    json prim = primitive(positions);
+    prim["mode"] = mode;
+    g.addNode({{"mesh", g.addMesh({prim})}});
+    g.setScene({0});
+    auto asset = io::readGltf(g.write(test::scratchDir("g"), "strip"), {});
+    ASSERT_TRUE(asset) << asset.error().message;
+    EXPECT_EQ(asset->mesh.indices, expected);
+  }
+  for (int mode : {1, 99}) {
+    HandGltf g;
+    int positions = g.addFloats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
+    json prim = primitive(positions);
+    prim["mode"] = mode;
+    g.addNode({{"mesh", g.addMesh({prim})}});
+    g.setScene({0});
+    auto asset = io::loadAsset(g.write(test::scratchDir("g"), "lines"), {});
+    ASSERT_FALSE(asset);
+    EXPECT_NE(
+        asset.error().message.find(mode == 1 ? "no triangles (" : "not a glTF primitive mode"),
+        std::string::npos)
+        << asset.error().message;
+    if (mode == 1) {
+      EXPECT_NE(asset.error().message.find("(lines)"), std::string::npos);
+    }
+  }
+}
+
 TEST(GltfReader, UnsignedByteAndUnsignedShortIndices) {
   HandGltf g;
   int positions = g.addFloats({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}, "VEC3");
@@ -896,6 +935,24 @@ TEST(GltfMalformed, UriNamingAFolder) {
   expectLoadError(g.write(dir, "folder_buffer"), "sub");
   fs::create_directories(dir / "checker.png");
   expectLoadError(texturedTriangle(false).write(dir, "folder_image"), "checker.png");
+}
+
+// A uri naming a device or a pipe: /dev/zero was read until memory ran out, a pipe waited for a
+// writer for ever.
+TEST(GltfMalformed, UriNamingADeviceOrAPipe) {
+  fs::path dir = test::scratchDir("m");
+  HandGltf g = oneTriangle();
+  const fs::path device = dir / "zero.bin";  // a link to /dev/zero beside the file
+  fs::remove(device);
+  fs::create_symlink("/dev/zero", device);
+  g.doc["buffers"] = {{{"byteLength", g.bin.size()}, {"uri", "zero.bin"}}};
+  expectLoadError(g.write(dir, "device_buffer"), "not a regular file");
+  const fs::path pipe = dir / "pipe.bin";
+  fs::remove(pipe);
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  g.doc["buffers"] = {{{"byteLength", g.bin.size()}, {"uri", "pipe.bin"}}};
+  expectLoadError(g.write(dir, "pipe_buffer"), "not a regular file");
+  fs::remove(pipe);
 }
 
 TEST(GltfMalformed, MissingTextureImageFile) {

@@ -1,5 +1,7 @@
 // Tests for the OBJ/MTL reader and writer: tiny hand-written files with exact expected results,
 // and Keenan Crane's Spot (shared asset) for a real file with UV seams and a texture.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -45,6 +47,64 @@ TEST(ObjReader, QuadIsFanTriangulated) {
   EXPECT_EQ(asset.mesh.submeshes[0].first_index, 0u);
   EXPECT_EQ(asset.mesh.submeshes[0].index_count, 6u);
   EXPECT_EQ(asset.mesh.positions[2], (core::Vec3{1, 1, 0}));
+}
+
+// A dart: corner 3 is a notch. The fan from corner 0 would fold its second triangle back over the
+// notch's outside; ears give (3 0 1) and (1 2 3), both turning as the polygon does.
+const char* kDart =
+    "v 0 0 0\n"
+    "v 2 1 0\n"
+    "v 0 2 0\n"
+    "v 0.5 1 0\n"
+    "f 1 2 3 4\n";
+
+TEST(ObjReader, ConcavePolygonIsCutIntoEars) {
+  core::Asset asset = readObjOk(writeScratchFile("dart.obj", kDart));
+  // The reader numbers vertices as the triangles first use them: the notch is vertex 0.
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 2, 3, 0}));
+  EXPECT_EQ(asset.mesh.positions[0], (core::Vec3{0.5f, 1, 0}));
+  EXPECT_TRUE(asset.warnings.empty());
+}
+
+// Twice the signed area (about +z) of each triangle, summed; and the smallest and largest.
+double signedDoubleArea(const core::Mesh& mesh, double& smallest, double& largest) {
+  double total = 0;
+  smallest = INFINITY, largest = -INFINITY;
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const core::Vec3 a = mesh.positions[mesh.indices[t * 3]],
+                     b = mesh.positions[mesh.indices[t * 3 + 1]],
+                     c = mesh.positions[mesh.indices[t * 3 + 2]];
+    const double area =
+        (double(b.x) - a.x) * (double(c.y) - a.y) - (double(b.y) - a.y) * (double(c.x) - a.x);
+    total += area;
+    smallest = std::min(smallest, area), largest = std::max(largest, area);
+  }
+  return total;
+}
+
+TEST(ObjReader, ConcavePolygonsWithCollinearCornersAndClockwiseTurns) {
+  // An L of area 3 with a corner in the middle of its left side, counter-clockwise, and the same
+  // L clockwise: every triangle turns as its polygon and together they cover it once.
+  const std::string l_shape = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 1 0\n";
+  for (bool clockwise : {false, true}) {
+    SCOPED_TRACE(clockwise ? "clockwise" : "counter-clockwise");
+    core::Asset asset = readObjOk(writeScratchFile(
+        "l.obj", l_shape + (clockwise ? "f 7 6 5 4 3 2 1\n" : "f 1 2 3 4 5 6 7\n")));
+    ASSERT_EQ(asset.mesh.triangleCount(), 5u);
+    double smallest = 0, largest = 0;
+    const double area = signedDoubleArea(asset.mesh, smallest, largest);
+    EXPECT_DOUBLE_EQ(area, clockwise ? -6.0 : 6.0);
+    EXPECT_LE(clockwise ? largest : -smallest, 0.0) << "a triangle turns the other way";
+    EXPECT_TRUE(asset.warnings.empty());
+  }
+}
+
+TEST(ObjReader, SelfCrossingPolygonIsFannedWithAWarning) {
+  // A bow tie: its two halves turn opposite ways, so its area vector is zero.
+  core::Asset asset =
+      readObjOk(writeScratchFile("bowtie.obj", "v 0 0 0\nv 1 1 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 4\n"));
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_TRUE(hasWarningContaining(asset, "bowtie.obj:5: a polygon could not be cut into ears"));
 }
 
 TEST(ObjReader, NegativeIndicesCountBackFromTheLastVertex) {
@@ -151,6 +211,32 @@ TEST(ObjReader, CrlfLinesAndContinuations) {
                                       "f 1 2 \\\r\n 3 4\r\n");
   core::Asset asset = readObjOk(path);
   EXPECT_EQ(asset.mesh.triangleCount(), 2u);
+}
+
+// Values outside glTF's ranges are clamped with a warning naming the line (an OBJ's Kd 5 was
+// written out as a baseColorFactor of 5, which is not glTF); a material defined twice is said so.
+TEST(ObjReader, MaterialValuesOutsideGltfRangesAreClamped) {
+  std::filesystem::path dir = test::scratchDir("clamped_materials");
+  std::ofstream(dir / "odd.mtl") << "newmtl odd\n"
+                                    "Kd 5 -3 0.5\n"
+                                    "Ke -1 2 0\n"
+                                    "Pr 1.5\n"
+                                    "Pm -0.5\n"
+                                    "newmtl odd\n"
+                                    "Kd 5 -3 0.5\n";
+  std::ofstream(dir / "odd.obj")
+      << "mtllib odd.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl odd\nf 1 2 3\n";
+  core::Asset asset = readObjOk((dir / "odd.obj").string());
+  ASSERT_EQ(asset.materials.size(), 1u);
+  const core::Vec4 base = asset.materials[0].base_color_factor;
+  EXPECT_EQ(base.x, 1.0f);
+  EXPECT_EQ(base.y, 0.0f);
+  EXPECT_EQ(base.z, 0.5f);
+  EXPECT_TRUE(hasWarningContaining(asset, "odd.mtl:2: 'Kd' outside [0, 1]; clamped"));
+  EXPECT_TRUE(hasWarningContaining(asset, "odd.mtl:3: 'Ke' outside [0, inf]; clamped"));
+  EXPECT_TRUE(hasWarningContaining(asset, "odd.mtl:4: 'Pr' outside [0, 1]; clamped"));
+  EXPECT_TRUE(hasWarningContaining(asset, "odd.mtl:5: 'Pm' outside [0, 1]; clamped"));
+  EXPECT_TRUE(hasWarningContaining(asset, "odd.mtl:6: material 'odd' is defined again"));
 }
 
 TEST(ObjReader, MaterialsGroupTrianglesIntoContiguousSubmeshes) {

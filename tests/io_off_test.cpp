@@ -43,6 +43,12 @@ TEST(OffReader, PentagonAndCountsOnTheKeywordLine) {
   EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 3, 4}));
 }
 
+TEST(OffReader, ConcavePolygonIsCutIntoEars) {  // the dart of io_obj_test.cpp
+  core::Asset asset = readOffOk(
+      writeScratchFile("dart.off", "OFF\n4 1 0\n0 0 0\n2 1 0\n0 2 0\n0.5 1 0\n4 0 1 2 3\n"));
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{3, 0, 1, 1, 2, 3}));
+}
+
 TEST(OffReader, MissingKeywordIsAccepted) {
   core::Asset asset =
       readOffOk(writeScratchFile("bare.off", "3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));

@@ -164,6 +164,15 @@ TEST(PlyReader, Ascii) {
   expectTestMesh(asset);
 }
 
+TEST(PlyReader, ConcavePolygonIsCutIntoEars) {  // the dart of io_obj_test.cpp
+  core::Asset asset = readPlyOk(writeScratchFile(
+      "dart.ply",
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n2 1 0\n0 2 0\n0.5 1 0\n4 0 1 2 3\n"));
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{3, 0, 1, 1, 2, 3}));
+}
+
 TEST(PlyReader, BinaryLittleAndBigEndianMatchAscii) {
   core::Asset ascii = readPlyOk(writeScratchFile("mesh_ascii.ply", asciiPly()));
   core::Asset little = readPlyOk(writeScratchFile("mesh_le.ply", binaryPly(false)));

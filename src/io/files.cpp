@@ -27,8 +27,13 @@ using core::Error;
 
 core::Result<std::vector<uint8_t>> readFileBytes(const std::string& path) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) return Error{path + ": file not found"};
-  if (fs::is_directory(path, ec)) return Error{path + ": is a folder, not a file"};
+  const fs::file_status status = fs::status(path, ec);  // follows symbolic links
+  if (!fs::exists(status)) return Error{path + ": file not found"};
+  if (fs::is_directory(status)) return Error{path + ": is a folder, not a file"};
+  // A device, pipe or socket is read until it ends, which /dev/zero never does (memory ran out)
+  // and a pipe with no writer does not either (it waited for ever).
+  if (!fs::is_regular_file(status))
+    return Error{path + ": not a regular file (a device, pipe or socket)"};
   FILE* file = std::fopen(path.c_str(), "rb");
   if (!file) return Error{path + ": cannot open (" + std::strerror(errno) + ")"};
   // In blocks, not through istreambuf_iterator: that pushed one byte at a time (~16 instructions
@@ -823,9 +828,14 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
   if (degenerate > 0)
     asset.warnings.push_back(std::to_string(degenerate) + " degenerate triangles removed");
   if (mesh.triangleCount() == 0)
-    return Error{path + (degenerate > 0 ? ": all " + std::to_string(degenerate) +
-                                              " triangles are degenerate (zero area)"
-                                        : std::string(": the file contains no triangles"))};
+    return Error{
+        path +
+        (degenerate > 0
+             ? ": all " + std::to_string(degenerate) + " triangles are degenerate (zero area)"
+             : ": the file contains no triangles" +
+                   // why, when the reader said (skipped primitives,
+                   // ignored statements)
+                   (asset.warnings.empty() ? std::string() : " (" + asset.warnings.front() + ")"))};
   if (size_t off = core::normalizeNormals(mesh); off > 0)
     asset.warnings.push_back(std::to_string(off) + " normals were not of unit length; normalized");
   if (options.weld) core::weldVertices(mesh);

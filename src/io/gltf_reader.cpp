@@ -90,6 +90,14 @@ bool loadImageThroughStb(tinygltf::Image* image, const int index, std::string* e
   return true;
 }
 
+// tinygltf's own FileExists opens the file to see whether it exists, and opening a pipe waits for
+// a writer: a uri naming one hung the reader. Asked of the file system instead (readWholeFile
+// then refuses anything but a regular file).
+bool fileExists(const std::string& path, void*) {
+  std::error_code ec;
+  return std::filesystem::exists(path, ec);
+}
+
 // tinygltf's own ReadWholeFile sizes its buffer with tellg(), which on a folder is a huge value: a
 // buffer or image uri naming a folder aborted with bad_alloc. Read through readFileBytes instead.
 // `user`: the list of files read (Asset::source_files).
@@ -104,6 +112,23 @@ bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std:
   }
   *out = std::move(bytes.value());
   return true;
+}
+
+// The triangles of a strip or a fan, in the glTF specification's order (§3.7.2.1: strip
+// triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), so that every triangle turns as the first;
+// fan triangle i is (v_{i+1}, v_{i+2}, v_0)). Fewer than three vertices make no triangle.
+std::vector<uint32_t> triangleListOf(const std::vector<uint32_t>& vertices, int mode) {
+  std::vector<uint32_t> triangles;
+  if (vertices.size() < 3) return triangles;
+  triangles.reserve((vertices.size() - 2) * 3);
+  for (size_t i = 0; i + 2 < vertices.size(); ++i) {
+    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+      triangles.insert(triangles.end(),
+                       {vertices[i], vertices[i + 1 + i % 2], vertices[i + 2 - i % 2]});
+    else
+      triangles.insert(triangles.end(), {vertices[i + 1], vertices[i + 2], vertices[0]});
+  }
+  return triangles;
 }
 
 // A validated view of an accessor's bytes: every element lies inside its buffer.
@@ -332,9 +357,15 @@ class GltfFlattener {
       const tinygltf::Primitive& prim = gmesh.primitives[p];
       std::string what = path_ + ": mesh " + std::to_string(mesh_index) + " primitive " +
                          std::to_string(p);
-      if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != -1) {
-        asset_.warnings.push_back(what + ": mode " + std::to_string(prim.mode) +
-                                  " is not triangles; skipped");
+      // Triangles, strips and fans are read (strips and fans as triangles); points and lines
+      // have no surface to simplify or shade.
+      if (prim.mode < -1 || prim.mode > TINYGLTF_MODE_TRIANGLE_FAN)
+        return Error{what + ": mode " + std::to_string(prim.mode) +
+                     " is not a glTF primitive mode (0-6)"};
+      if (prim.mode >= TINYGLTF_MODE_POINTS && prim.mode < TINYGLTF_MODE_TRIANGLES) {
+        static const char* const kNames[] = {"points", "lines", "a line loop", "a line strip"};
+        asset_.warnings.push_back(what + ": mode " + std::to_string(prim.mode) + " (" +
+                                  kNames[prim.mode] + ") has no triangles; skipped");
         continue;
       }
       if (auto added = addPrimitive(prim, world, what); !added) return added;
@@ -433,7 +464,9 @@ class GltfFlattener {
       indices.resize(count);
       for (size_t i = 0; i < count; ++i) indices[i] = static_cast<uint32_t>(i);
     }
-    if (indices.size() % 3 != 0)
+    if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP || prim.mode == TINYGLTF_MODE_TRIANGLE_FAN)
+      indices = triangleListOf(indices, prim.mode);
+    else if (indices.size() % 3 != 0)
       return Error{what + ": " + std::to_string(indices.size()) +
                    (prim.indices >= 0 ? " indices" : " vertices (it has no indices)") +
                    " is not a whole number of triangles"};
@@ -920,7 +953,7 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
   context.decode = options.decode_textures;
   loader.SetImageLoader(loadImageThroughStb, &context);
   std::vector<std::string> files_read;
-  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readWholeFile,
+  loader.SetFsCallbacks({&fileExists, &tinygltf::ExpandFilePath, &readWholeFile,
                          &tinygltf::WriteWholeFile, &files_read});
   tinygltf::Model model;
   std::string error, warning;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "io/text_parse.hpp"
 
@@ -67,6 +68,15 @@ class MtlParser {
     if (equalsIgnoreCase(keyword, "newmtl")) {
       MtlMaterial material;
       material.name = std::string(tokens.rest());
+      for (const MtlMaterial& earlier : materials_)
+        if (earlier.name == material.name) {
+          warnings_.push_back(errorAt(path_, line_,
+                                      "material '" + material.name + "' is defined again (first " +
+                                          "at line " + std::to_string(earlier.line) +
+                                          "); the last definition is used")
+                                  .message);
+          break;
+        }
       material.mtl_path = path_;
       material.line = line_;
       materials_.push_back(std::move(material));
@@ -78,11 +88,19 @@ class MtlParser {
       return core::okStatus();
     }
     MtlMaterial& m = materials_[current_];
-    if (equalsIgnoreCase(keyword, "Kd")) return parseColor(keyword, tokens, m.diffuse);
-    if (equalsIgnoreCase(keyword, "Ke")) return parseColor(keyword, tokens, m.emissive);
+    // Colours and factors within glTF's ranges (a base colour in [0, 1], emission not negative,
+    // roughness and metallic in [0, 1]): clamped with a warning, so that what is written is
+    // valid glTF and renders as the glTF reader would render it.
+    if (equalsIgnoreCase(keyword, "Kd"))
+      return clamped(keyword, parseColor(keyword, tokens, m.diffuse), m.diffuse, 1.0f);
+    if (equalsIgnoreCase(keyword, "Ke"))
+      return clamped(keyword, parseColor(keyword, tokens, m.emissive), m.emissive,
+                     std::numeric_limits<float>::max());
     if (equalsIgnoreCase(keyword, "Ns")) return parseScalar(keyword, tokens, m.shininess);
-    if (equalsIgnoreCase(keyword, "Pr")) return parseScalar(keyword, tokens, m.roughness);
-    if (equalsIgnoreCase(keyword, "Pm")) return parseScalar(keyword, tokens, m.metallic);
+    if (equalsIgnoreCase(keyword, "Pr"))
+      return clamped(keyword, parseScalar(keyword, tokens, m.roughness), m.roughness, 1.0f);
+    if (equalsIgnoreCase(keyword, "Pm"))
+      return clamped(keyword, parseScalar(keyword, tokens, m.metallic), m.metallic, 1.0f);
     if (equalsIgnoreCase(keyword, "d") || equalsIgnoreCase(keyword, "Tr")) {
       std::optional<float> value;
       if (auto status = parseScalar(keyword, tokens, value); !status) return status;
@@ -101,6 +119,26 @@ class MtlParser {
     }
     // Ka, Ks, Ni, illum, Tf, map_Ka, map_d, ... have no place in metallic-roughness.
     return core::okStatus();
+  }
+
+  // `value` (when parsed) clamped to [0, high] in each component, with a warning when it was not.
+  template <class T>
+  core::Status clamped(std::string_view keyword, core::Status parsed, std::optional<T>& value,
+                       float high) {
+    if (!parsed || !value) return parsed;
+    float* components = reinterpret_cast<float*>(&*value);
+    bool changed = false;
+    for (size_t i = 0; i < sizeof(T) / sizeof(float); ++i) {
+      const float kept = std::clamp(components[i], 0.0f, high);
+      changed |= kept != components[i];
+      components[i] = kept;
+    }
+    if (changed)
+      warnings_.push_back(errorAt(path_, line_,
+                                  "'" + std::string(keyword) + "' outside [0, " +
+                                      (high == 1.0f ? "1" : "inf") + "]; clamped")
+                              .message);
+    return parsed;
   }
 
   Error numberError(std::string_view keyword, std::string_view token) const {

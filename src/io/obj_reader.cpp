@@ -264,10 +264,23 @@ class ObjParser {
           "face has " + std::to_string(polygon_.size()) + " vertices (at least 3 needed)");
     }
     MaterialGroup& group = currentGroup();
-    // Fan triangulation; exact for convex polygons, which is what OBJ exporters write.
-    for (size_t i = 1; i + 1 < polygon_.size(); ++i) {
-      group.triangles.push_back({{polygon_[0], polygon_[i], polygon_[i + 1]}, line_});
+    // A fan for convex polygons (what exporters write), ears for concave ones
+    // (text::triangulatePolygon).
+    if (polygon_.size() == 3) {
+      group.triangles.push_back({{polygon_[0], polygon_[1], polygon_[2]}, line_});
+      return core::okStatus();
     }
+    polygon_points_.resize(polygon_.size());
+    for (size_t k = 0; k < polygon_.size(); ++k)
+      polygon_points_[k] = positions_[polygon_[k].position];
+    polygon_triangles_.clear();
+    if (!text::triangulatePolygon(polygon_points_, polygon_triangles_) && !first_unclipped_line_)
+      first_unclipped_line_ = line_;
+    for (size_t i = 0; i < polygon_triangles_.size(); i += 3)
+      group.triangles.push_back(
+          {{polygon_[polygon_triangles_[i]], polygon_[polygon_triangles_[i + 1]],
+            polygon_[polygon_triangles_[i + 2]]},
+           line_});
     return core::okStatus();
   }
 
@@ -375,6 +388,12 @@ class ObjParser {
       asset_.warnings.push_back(path_ + ": " + std::to_string(corners - corners_with_normal) +
                                 " face corners have no normal; file normals dropped");
     }
+    if (first_unclipped_line_ > 0) {
+      asset_.warnings.push_back(
+          errorAt(path_, first_unclipped_line_,
+                  "a polygon " + text::kUnclippedPolygon + " (the first of them)")
+              .message);
+    }
     if (ignored_points_and_lines_ > 0) {
       asset_.warnings.push_back(path_ + ": " + std::to_string(ignored_points_and_lines_) +
                                 " point/line statements (p, l) ignored");
@@ -457,6 +476,9 @@ class ObjParser {
   std::vector<core::Vec2> texcoords_;
   std::vector<core::Vec3> normals_;
   std::vector<Corner> polygon_;  // scratch for the face being read
+  std::vector<core::Vec3> polygon_points_;   // its corners' positions
+  std::vector<uint32_t> polygon_triangles_;  // its triangles, as corner numbers
+  size_t first_unclipped_line_ = 0;  // the first polygon that crosses itself or has no plane
 
   std::vector<MaterialGroup> groups_;
   std::map<std::string, size_t> group_by_name_;

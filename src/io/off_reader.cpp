@@ -231,8 +231,15 @@ class OffParser {
         polygon.push_back(static_cast<uint32_t>(index));
       }
       // Anything after the indices is a face colour, which has no place in our mesh.
-      text::appendFan(polygon, asset_.mesh.indices);
+      if (!text::appendPolygon(polygon, asset_.mesh.positions, asset_.mesh.indices) &&
+          !first_unclipped_line_)
+        first_unclipped_line_ = line_;
     }
+    if (first_unclipped_line_ > 0)
+      asset_.warnings.push_back(
+          errorAt(path_, first_unclipped_line_,
+                  "a polygon " + text::kUnclippedPolygon + " (the first of them)")
+              .message);
     if (asset_.mesh.indices.size() > UINT32_MAX) return errorIn(path_, "too many triangles");
     return core::okStatus();
   }
@@ -241,6 +248,7 @@ class OffParser {
   core::Asset& asset_;
   OffLayout layout_;
   size_t line_ = 0;
+  size_t first_unclipped_line_ = 0;  // the first polygon that crosses itself or has no plane
 };
 
 }  // namespace

@@ -564,6 +564,7 @@ class PlyParser {
     }
     if (auto status = checkCount(element, body); !status) return status;
     std::vector<uint32_t> polygon;
+    size_t unclipped = 0;  // polygons that cross themselves or have no plane (fanned)
     for (uint64_t item = 0; item < element.count; ++item) {
       for (const Property& property : element.properties) {
         body.at(&element, item, &property);
@@ -585,10 +586,13 @@ class PlyParser {
           }
           polygon.push_back(static_cast<uint32_t>(index));
         }
-        text::appendFan(polygon, asset_.mesh.indices);
+        if (!text::appendPolygon(polygon, asset_.mesh.positions, asset_.mesh.indices)) ++unclipped;
         if (asset_.mesh.indices.size() > UINT32_MAX) return body.error("too many triangles");
       }
     }
+    if (unclipped > 0)
+      asset_.warnings.push_back(path_ + ": " + std::to_string(unclipped) + " polygon(s): each " +
+                                text::kUnclippedPolygon);
     return core::okStatus();
   }
 

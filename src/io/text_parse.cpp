@@ -183,12 +183,122 @@ core::Result<std::vector<uint8_t>> readInputFile(const std::string& path) {
   return bytes;
 }
 
-void appendFan(std::span<const uint32_t> polygon, std::vector<uint32_t>& indices) {
-  for (size_t i = 1; i + 1 < polygon.size(); ++i) {
-    indices.push_back(polygon[0]);
-    indices.push_back(polygon[i]);
-    indices.push_back(polygon[i + 1]);
+namespace {
+void appendFanCorners(size_t n, std::vector<uint32_t>& triangles) {
+  for (uint32_t i = 1; i + 1 < n; ++i) triangles.insert(triangles.end(), {0, i, i + 1});
+}
+}  // namespace
+
+bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_t>& triangles) {
+  const size_t n = corners.size();
+  if (n <= 3) {
+    appendFanCorners(n, triangles);
+    return true;
   }
+  // The Newell normal (the polygon's area vector, whatever its shape), in double.
+  double normal[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; ++i) {
+    const core::Vec3 a = corners[i], b = corners[(i + 1) % n];
+    normal[0] += (double(a.y) - b.y) * (double(a.z) + b.z);
+    normal[1] += (double(a.z) - b.z) * (double(a.x) + b.x);
+    normal[2] += (double(a.x) - b.x) * (double(a.y) + b.y);
+  }
+  // Projected along the normal's largest axis, the polygon turns counter-clockwise in (u, v)
+  // when that component is positive.
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
+  if (!(std::abs(normal[axis]) > 0) || !std::isfinite(normal[axis])) {
+    appendFanCorners(n, triangles);
+    return false;
+  }
+  const int u_axis = (axis + 1) % 3, v_axis = (axis + 2) % 3;
+  const double turn = normal[axis] > 0 ? 1.0 : -1.0;
+  std::vector<double> u(n), v(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float* p = &corners[i].x;
+    u[i] = p[u_axis], v[i] = p[v_axis];
+  }
+  // Twice the signed area of (a, b, c), positive when it turns as the polygon does.
+  auto area = [&](size_t a, size_t b, size_t c) {
+    return turn * ((u[b] - u[a]) * (v[c] - v[a]) - (v[b] - v[a]) * (u[c] - u[a]));
+  };
+  bool convex = true;
+  for (size_t i = 0; i < n && convex; ++i) convex = area((i + n - 1) % n, i, (i + 1) % n) >= 0;
+  if (convex) {  // the fan, as every reader wrote before (exact here)
+    appendFanCorners(n, triangles);
+    return true;
+  }
+  if (n > kMaxClippedCorners) {
+    appendFanCorners(n, triangles);
+    return false;
+  }
+  // Ear clipping: a corner whose triangle with its two neighbours turns the polygon's way and
+  // holds no other remaining corner is cut off; n - 2 cuts leave the triangles. A polygon
+  // that crosses itself can run out of ears: what is left is fanned.
+  std::vector<uint32_t> next(n), previous(n);
+  for (size_t i = 0; i < n; ++i)
+    next[i] = uint32_t((i + 1) % n), previous[i] = uint32_t((i + n - 1) % n);
+  auto inside = [&](size_t p, size_t a, size_t b, size_t c) {  // closed triangle
+    return area(a, b, p) >= 0 && area(b, c, p) >= 0 && area(c, a, p) >= 0;
+  };
+  // relaxed: after a round without an ear, a corner on the line of its neighbours may go too
+  // (a degenerate triangle, which the loader drops), so that collinear corners do not stop it.
+  bool relaxed = false;
+  auto is_ear = [&](uint32_t i) {
+    const uint32_t a = previous[i], c = next[i];
+    const double turned = area(a, i, c);
+    if (!(turned > 0 || (relaxed && turned == 0))) return false;
+    for (uint32_t p = next[c]; p != a; p = next[p]) {
+      // A corner at the same place as one of the ear's (a polygon touching itself) does not
+      // block it.
+      const bool shared = (u[p] == u[a] && v[p] == v[a]) || (u[p] == u[i] && v[p] == v[i]) ||
+                          (u[p] == u[c] && v[p] == v[c]);
+      if (!shared && inside(p, a, i, c)) return false;
+    }
+    return true;
+  };
+  size_t left = n;
+  uint32_t i = 0;
+  for (size_t misses = 0; left > 3;) {
+    if (misses == left) {
+      if (relaxed) break;
+      relaxed = true, misses = 0;
+    }
+    if (is_ear(i)) {
+      const uint32_t a = previous[i], c = next[i];
+      triangles.insert(triangles.end(), {a, i, c});
+      next[a] = c, previous[c] = a;
+      --left;
+      misses = 0, relaxed = false;
+      i = c;
+    } else {
+      ++misses;
+      i = next[i];
+    }
+  }
+  const bool simple = left == 3;
+  // The last triangle, or a fan of what no ear could be cut from.
+  for (uint32_t j = next[i]; next[j] != i; j = next[j])
+    triangles.insert(triangles.end(), {i, j, next[j]});
+  return simple;
+}
+
+bool appendPolygon(std::span<const uint32_t> polygon, std::span<const core::Vec3> positions,
+                   std::vector<uint32_t>& indices) {
+  std::vector<core::Vec3> corners(polygon.size());
+  for (size_t k = 0; k < polygon.size(); ++k) {
+    if (polygon[k] >= positions.size()) {  // faces before vertices: no geometry yet
+      for (size_t i = 1; i + 1 < polygon.size(); ++i)
+        indices.insert(indices.end(), {polygon[0], polygon[i], polygon[i + 1]});
+      return true;
+    }
+    corners[k] = positions[polygon[k]];
+  }
+  std::vector<uint32_t> triangles;
+  const bool simple = triangulatePolygon(corners, triangles);
+  for (uint32_t corner : triangles) indices.push_back(polygon[corner]);
+  return simple;
 }
 
 void finishSingleMaterialAsset(core::Asset& asset) {

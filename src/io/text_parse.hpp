@@ -100,9 +100,23 @@ inline std::string_view asText(const std::vector<uint8_t>& bytes) {
 
 // Mesh assembly shared by the single-material readers (PLY, OFF).
 
-// Fan-triangulates a polygon (v0 v1 v2, v0 v2 v3, ...); exact for the convex polygons these
-// formats hold.
-void appendFan(std::span<const uint32_t> polygon, std::vector<uint32_t>& indices);
+// The triangles of a polygon whose corners are at `corners`, as triples of corner numbers
+// (0..n-1) appended to `triangles`. A convex polygon is fanned from its first corner (v0 v1 v2,
+// v0 v2 v3, ...: what exporters mean by it); a concave one is cut into ears, in the plane of its
+// Newell normal, so that no triangle covers the outside of a notch. Returns false when the polygon
+// is not simple (it crosses itself, or is too long to clip: more than kMaxClippedCorners corners)
+// or has no plane (all corners on a line): it is then fanned as before.
+constexpr size_t kMaxClippedCorners = 1024;  // ear clipping is quadratic to cubic in them
+// The readers' warning about the polygons triangulatePolygon returned false for.
+inline const std::string kUnclippedPolygon =
+    "could not be cut into ears (it crosses itself, has no plane or has over " +
+    std::to_string(kMaxClippedCorners) + " corners) and was fan-triangulated";
+bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_t>& triangles);
+// triangulatePolygon for a polygon of vertex ids into `indices`, its corners' positions read from
+// `positions` (fanned when a corner has no position yet: a PLY file with its faces first).
+// Returns triangulatePolygon's answer.
+bool appendPolygon(std::span<const uint32_t> polygon, std::span<const core::Vec3> positions,
+                   std::vector<uint32_t>& indices);
 // One default material and, when there are triangles, one submesh covering them all.
 void finishSingleMaterialAsset(core::Asset& asset);
 

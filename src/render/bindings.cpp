@@ -145,8 +145,11 @@ core::Result<GlslSource> loadShaderPair(const std::string& name_or_prefix) {
        {std::tuple{".vert", &source.vertex, &source.vertex_name},
         std::tuple{".frag", &source.fragment, &source.fragment_name}}) {
     std::string path = prefix.string() + extension;
-    std::ifstream in(path);
-    if (!in) {
+    // Only a regular file: a device or pipe named like a shader would be read for ever.
+    std::ifstream in;
+    std::error_code status_error;
+    if (fs::is_regular_file(path, status_error)) in.open(path);
+    if (!in.is_open() || !in) {
       if (prefix.parent_path() == fs::path(shaderDirectory()))
         return Error{path +
                      ": shader file not found (duolod's own shaders are looked for in "

@@ -74,6 +74,8 @@ class FileIncluder : public glslang::TShader::Includer {
     return new IncludeResult("", message->data(), message->size(), message);
   }
   IncludeResult* tryOpen(const std::filesystem::path& path) {
+    std::error_code ec;  // only a regular file: a device or pipe would be read for ever
+    if (!std::filesystem::is_regular_file(path, ec)) return nullptr;
     std::ifstream in(path);
     if (!in) return nullptr;
     std::stringstream text;

@@ -193,6 +193,26 @@ core::Result<std::vector<std::string>> checkShaderInterface(const render::GlslSo
                          output_type};
   }
 
+  // The colour: duolod reads the fragment stage's output at location 0, and counts the object's
+  // pixels by its alpha. Without it (or with a vec3, alpha undefined) every pixel is undefined:
+  // garbage errors that changed from run to run, or 0 coverage and every error 0.
+  const std::vector<ir::InterfaceVariable> fragment_interface =
+      ir::interfaceVariables(fragment->module, fragment_uses);
+  const ir::InterfaceVariable* colour = nullptr;
+  for (const ir::InterfaceVariable& output : fragment_interface)
+    if (output.storage == spv::StorageClassOutput && !output.builtin && output.location &&
+        *output.location == 0 && isUsed(fragment_uses, output.variable))
+      colour = &output;
+  const std::string colour_rule =
+      " (shaders/INTERFACE.md: `layout(location = 0) out vec4 outColor`; duolod counts the "
+      "object's pixels by its alpha, 1 where the object is)";
+  if (!colour)
+    return core::Error{fragment->file + ": writes no colour output at location 0" + colour_rule};
+  if (ir::typeInfo(fragment_uses, colour->value_type).components != 4)
+    return core::Error{fragment->file + ": its colour output '" + colour->name +
+                       "' at location 0 is a " + glslTypeName(fragment_uses, colour->value_type) +
+                       ", which leaves alpha undefined" + colour_rule};
+
   // Textures: a unit duolod binds nothing to samples (0, 0, 0, 1); two sampler types on one unit
   // make OpenGL refuse every draw (GL_INVALID_OPERATION).
   std::set<uint32_t> bound;
