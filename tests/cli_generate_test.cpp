@@ -172,6 +172,47 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
 // triangles are turned back, the chain's level 0 is the turned-back mesh, and a coarser level is
 // kept (the normals derived across the misoriented edges cancelled: the original's shading was
 // noise that no coarse mesh matched).
+// The compile-ahead workers make the GP scorers' cost profiles too (the same samples, uniforms
+// and upload on another context, which renders the same bits): the levels are the same with and
+// without them, byte for byte, and some profiles did come from them.
+TEST(CliGenerate, CompilingAheadChangesNoResult) {
+  const std::string spot = test::sharedAsset("obj/spot/spot.obj");
+  if (!fs::exists(spot)) GTEST_SKIP() << "missing asset " << spot;
+  const fs::path dir = test::scratchDir("cli_generate_ahead");
+  std::vector<std::string> outputs;
+  for (bool ahead : {true, false}) {
+    const fs::path out = dir / (ahead ? "ahead" : "inline");
+    std::vector<std::string> args = {"generate",        spot,      "--shader",     "noise_phong",
+                                     "--mesh-mode",     "quadric", "--levels",     "3",
+                                     "--shader-levels", "1",       "--population", "6",
+                                     "--generations",   "2",       "--candidates", "20",
+                                     "--verbose",       "--out",   out.string()};
+    if (!ahead) args.push_back("--no-compile-ahead");
+    test::CommandRun run = test::runCommand(DUOLOD_CLI, args);
+    ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+    const std::string log = run.out + run.err;
+    const size_t at = log.find(" profiled ahead)");
+    ASSERT_NE(at, std::string::npos) << log;
+    const size_t number = log.rfind(", ", at) + 2;
+    const int profiled = std::stoi(log.substr(number, at - number));
+    if (ahead)
+      EXPECT_GT(profiled, 0) << log;
+    else
+      EXPECT_EQ(profiled, 0) << log;
+    std::string bytes;
+    for (const char* file : {"lod.bin", "level0.frag.spv", "level1.frag.spv", "level2.frag.spv"})
+      if (fs::exists(out / file))
+        bytes += std::string(file) + test::readText((out / file).string());
+    // The levels' errors and predicted costs (lod.json's other figures are timings).
+    const nlohmann::json lod = nlohmann::json::parse(test::readText((out / "lod.json").string()));
+    for (const nlohmann::json& level : lod["levels"])
+      bytes += level["error"].dump() + level["cost"]["predicted"].dump();
+    outputs.push_back(bytes);
+  }
+  EXPECT_FALSE(outputs[0].empty());
+  EXPECT_TRUE(outputs[0] == outputs[1]) << "the levels differ with compile-ahead";
+}
+
 TEST(CliGenerate, ReorientTurnsTrianglesFirst) {
   const fs::path dir = test::scratchDir("cli_generate_reorient");
   const std::string turned = (dir / "turned.obj").string();

@@ -2,13 +2,18 @@
 // answers follow from the shaders by hand, and Spearman's rank correlation on hand cases.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <thread>
 
+#include "duolod/mesh.hpp"
 #include "duolod/shader.hpp"
 #include "mesh_test_meshes.hpp"
+#include "shader/compile_ahead.hpp"
 #include "shader/evaluate.hpp"
 #include "shader/instrument.hpp"
 #include "shader/ir.hpp"
+#include "shader/scoring.hpp"
 #include "test_support.hpp"
 
 namespace duolod {
@@ -382,6 +387,74 @@ TEST_F(EvaluatorTest, InstrumentedRenderGivesThePredictedErrorOfThePlainRender) 
   wrong.count = 1;
   wrong.pixels.assign(36, 0);
   EXPECT_FALSE((*evaluator)->predictedErrorFromImages(original, wrong).ok());
+}
+
+// The compile-ahead workers make the scorer's cost profiles too (generate's searches): with the
+// scorer drawing a simplified mesh uploaded over the asset, each program's predicted cost and
+// error are the same bit for bit with the workers' profiles as with the scorer's own, and the
+// workers' profiles are the ones used.
+TEST_F(EvaluatorTest, ProfilesMadeAheadScoreAsTheScorersOwn) {
+  auto source = render::loadShaderPair(test::sourcePath("shaders/noise_phong"));
+  ASSERT_TRUE(source) << source.error().message;
+  auto vertex = shader::compileToSpirv(source->vertex, shader::Stage::kVertex, "v");
+  auto fragment = shader::compileToSpirv(source->fragment, shader::Stage::kFragment, "f");
+  ASSERT_TRUE(vertex && fragment);
+  auto original = shader::parseProgram(*vertex, *fragment);
+  ASSERT_TRUE(original) << original.error().message;
+  // The original and a few variants, each one more operation removed.
+  std::vector<std::shared_ptr<const shader::ShaderProgram>> programs = {
+      std::make_shared<const shader::ShaderProgram>(*original)};
+  shader::RuleContext context;
+  context.enabled = {true, false, false, false, false, false};
+  const std::vector<shader::RuleSite> sites = shader::enumerateSites(*original, context);
+  ASSERT_GE(sites.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    auto variant = shader::applyRule(*programs.back(), sites[sites.size() - 1 - k], context);
+    if (variant) programs.push_back(std::make_shared<const shader::ShaderProgram>(*variant));
+  }
+  ASSERT_GE(programs.size(), 3u);
+
+  mesh::SimplifyOptions half;
+  half.target_triangles = asset_.mesh.triangleCount() / 2;
+  half.record = false;
+  const core::Mesh drawn = mesh::simplifyQuadric(asset_.mesh, half).mesh;
+  auto drawn_id = renderer_->uploadMesh(asset_id_, drawn);
+  ASSERT_TRUE(drawn_id) << drawn_id.error().message;
+  auto scores = [&](bool ahead, int* profiled) {
+    std::vector<double> values;
+    auto cache = std::make_shared<shader::EvaluationCache>(*renderer_);
+    auto scoring = shader::ConfigurationScorer::create(*renderer_, cache, *drawn_id, drawn,
+                                                       *original, smallConfig());
+    EXPECT_TRUE(scoring) << scoring.error().message;
+    if (!scoring) return values;
+    if (ahead) (*scoring)->enableCompileAhead(asset_, drawn, {});
+    shader::VariantScorer scorer = (*scoring)->scorer();
+    scorer.prepare(programs);
+    for (const auto& program : programs) {
+      if (ahead)  // let the workers finish it, so that its profile is theirs
+        for (int i = 0;
+             i < 6000 && (*scoring)->compileAheadCounts().first < int(&program - &programs[0]) + 1;
+             ++i)
+          std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      auto cost = scorer.predicted_cost(*program);
+      auto error = scorer.predicted_error(*program);
+      EXPECT_TRUE(cost && error);
+      values.push_back(cost ? *cost : -1);
+      values.push_back(error ? *error : -1);
+    }
+    *profiled = (*scoring)->costProfilesAhead();
+    return values;
+  };
+  int profiled_inline = 0, profiled_ahead = 0;
+  const std::vector<double> inline_scores = scores(false, &profiled_inline);
+  const std::vector<double> ahead_scores = scores(true, &profiled_ahead);
+  EXPECT_EQ(profiled_inline, 0);
+  EXPECT_EQ(profiled_ahead, int(programs.size()));
+  ASSERT_EQ(inline_scores.size(), ahead_scores.size());
+  for (size_t i = 0; i < inline_scores.size(); ++i)
+    EXPECT_EQ(inline_scores[i], ahead_scores[i])
+        << (i % 2 ? "error" : "cost") << " of program " << i / 2;
+  renderer_->releaseAsset(*drawn_id);
 }
 
 }  // namespace

@@ -230,13 +230,14 @@ class ShaderSearchThread {
       if (!front) return failed(front.error().message);
       const double seconds = secondsSince(start);
       const shader::EvaluationCache::Counters& compiled = cache->counters();
-      char line[240];
+      char line[256];
       std::snprintf(line, sizeof line,
                     "shader search level %d (mesh %d): %zu variants on the front; so far %d "
-                    "programs compiled in %.1f s, %d cost profiles (%d compiled ahead); %.1f s",
+                    "programs compiled in %.1f s, %d cost profiles (%d compiled ahead, %d "
+                    "profiled ahead); %.1f s",
                     configuration.level, configuration.mesh, front->variants.size(),
                     compiled.programs_compiled, compiled.compile_seconds, front->cost_profiles,
-                    front->compiled_ahead, seconds);
+                    front->compiled_ahead, front->profiled_ahead, seconds);
       std::lock_guard lock(mutex_);
       if (fronts_.size() <= size_t(configuration.index)) fronts_.resize(configuration.index + 1);
       fronts_[configuration.index] = std::move(front->variants);
@@ -251,7 +252,7 @@ class ShaderSearchThread {
 
   struct Front {
     std::vector<shader::SearchVariant> variants;
-    int cost_profiles = 0, compiled_ahead = 0;
+    int cost_profiles = 0, compiled_ahead = 0, profiled_ahead = 0;
   };
   core::Result<Front> search(
       Renderer& renderer, const std::shared_ptr<shader::EvaluationCache>& cache,
@@ -263,9 +264,8 @@ class ShaderSearchThread {
         evaluationConfig(options_, configuration.distance));
     if (!scoring) return scoring.error();
     if (options_.compile_ahead) {
-      core::Asset drawn = asset_;  // what the scorer draws: this mesh, the asset's materials
-      drawn.mesh = configuration.drawn;
-      (*scoring)->enableCompileAhead(std::move(drawn),
+      // What the scorer draws: this mesh uploaded over the asset (uploadMesh above).
+      (*scoring)->enableCompileAhead(asset_, configuration.drawn,
                                      {.device = options_.device, .bindings = options_.bindings});
     }
     // Moving to parameter (He et al.): values averaged over the training domain by an
@@ -284,7 +284,7 @@ class ShaderSearchThread {
     renderer.releaseAsset(*asset);
     if (!searched) return searched.error();
     return Front{std::move(searched->variants), (*scoring)->costProfiles(),
-                 (*scoring)->compileAheadCounts().first};
+                 (*scoring)->compileAheadCounts().first, (*scoring)->costProfilesAhead()};
   }
 
   const core::Asset& asset_;

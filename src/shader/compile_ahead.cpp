@@ -13,6 +13,17 @@ namespace duolod::shader {
 CompileAhead::CompileAhead(core::Asset asset, render::Sample sample, int resolution,
                            render::ContextOptions context, int workers)
     : sample_(sample), resolution_(resolution) {
+  start(std::move(asset), context, workers);
+}
+
+CompileAhead::CompileAhead(core::Asset asset, FullProfile full, render::ContextOptions context,
+                           int workers)
+    : resolution_(full.resolution), full_(std::move(full)) {
+  if (!full_->samples.empty()) sample_ = full_->samples.front();
+  start(std::move(asset), context, workers);
+}
+
+void CompileAhead::start(core::Asset asset, render::ContextOptions context, int workers) {
   // The workers share one copy of the asset until each has uploaded it to its own context.
   auto shared = std::make_shared<const core::Asset>(std::move(asset));
   // Taking a program never allocates on a worker (run() keeps what may throw inside its try).
@@ -44,6 +55,7 @@ void CompileAhead::enqueue(std::span<const std::shared_ptr<const ShaderProgram>>
     std::lock_guard lock(mutex_);
     // Forms nobody took belong to programs whose scores were already known: drop them.
     done_.clear();
+    profiles_.clear();
     for (const std::shared_ptr<const ShaderProgram>& program : programs) {
       uint64_t hash = programHash(*program);
       bool known = inProgress(hash);
@@ -52,6 +64,13 @@ void CompileAhead::enqueue(std::span<const std::shared_ptr<const ShaderProgram>>
     }
   }
   changed_.notify_all();
+}
+
+std::optional<CompileAhead::Profiled> CompileAhead::takeProfile(uint64_t program_hash) {
+  std::lock_guard lock(mutex_);
+  auto node = profiles_.extract(program_hash);
+  if (node.empty()) return std::nullopt;
+  return std::move(node.mapped());
 }
 
 std::optional<core::Result<Variant>> CompileAhead::take(uint64_t program_hash) {
@@ -86,6 +105,10 @@ void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::Context
     if (auto created = render::Renderer::create(context); created) {
       renderer = std::move(*created);
       if (auto uploaded = renderer->uploadAsset(*asset); uploaded) asset_id = *uploaded;
+      if (full_ && asset_id >= 0) {  // the scorer's upload: the drawn mesh over the asset
+        auto drawn = renderer->uploadMesh(asset_id, full_->drawn);
+        asset_id = drawn ? *drawn : -1;
+      }
     }
   } catch (...) {  // (out of memory) as if the context had failed
     asset_id = -1;
@@ -107,6 +130,7 @@ void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::Context
     // aborted the process). The worker then stops and hands over nothing for this program: the
     // scorer makes it itself, as it does a program no worker started.
     bool handed_over = false, drawn = false;
+    std::optional<Profiled> profiled;
     try {
       core::Result<Variant> variant = evaluationVariant(*program);
       if (variant && renderer && asset_id >= 0) {
@@ -114,12 +138,26 @@ void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::Context
         auto fragment = ir::parseModule(variant->spirv.fragment);
         // The scorer's own profile draw (profileBlockCounts), on one sample: what it draws is
         // what gets compiled. Its result is not needed.
-        if (vertex && fragment)
+        if (vertex && fragment && full_ && variant->parameter_block.empty()) {
+          // The scorer's own call (ConfigurationScorer::scorer's predicted cost).
+          render::ImageBatch8 images;
+          auto profile = profileBlockCounts(*renderer, asset_id, *vertex, *fragment, full_->samples,
+                                            resolution_, variant->uniforms,
+                                            full_->keep_images ? &images : nullptr);
+          drawn = profile.ok();
+          if (drawn) {
+            profiled.emplace();
+            profiled->profile = std::move(*profile);
+            if (full_->keep_images) profiled->images = std::move(images);
+          }
+        } else if (vertex && fragment) {
           drawn = profileBlockCounts(*renderer, asset_id, *vertex, *fragment, {&sample_, 1},
                                      resolution_, variant->uniforms)
                       .ok();
+        }
       }
       std::lock_guard lock(mutex_);
+      if (profiled) profiles_.insert_or_assign(hash, std::move(*profiled));
       done_.insert_or_assign(hash, std::move(variant));
       handed_over = true;
     } catch (...) {

@@ -24,6 +24,7 @@
 #include "duolod/core.hpp"
 #include "duolod/render.hpp"
 #include "shader/evaluate.hpp"
+#include "shader/instrument.hpp"
 #include "shader/rules.hpp"
 
 namespace duolod::shader {
@@ -37,6 +38,21 @@ class CompileAhead {
   // about 3× the scorer's CPU per program), so a second one lets both cores compile.
   CompileAhead(core::Asset asset, render::Sample sample, int resolution,
                render::ContextOptions context, int workers = defaultWorkers());
+  // The scorer's whole cost profile made on the workers too: `drawn` is uploaded over `asset`'s
+  // materials exactly as the scorer's own draw (Renderer::uploadMesh: same vertex order, the
+  // asset's bounding sphere), and each program without a parameter block is profiled on
+  // `samples` at `resolution` with its uniforms, as ConfigurationScorer's predicted cost does
+  // (its images kept when `keep_images`). A context renders what another renders, bit for bit
+  // (SortByErrorPrefetch relies on it too), so the scorer takes the profile instead of
+  // compiling and drawing the instrumented copy a second time on its own thread.
+  struct FullProfile {
+    core::Mesh drawn;
+    std::vector<render::Sample> samples;
+    int resolution = 0;
+    bool keep_images = false;
+  };
+  CompileAhead(core::Asset asset, FullProfile full, render::ContextOptions context,
+               int workers = defaultWorkers());
   // One per hardware thread, at least one.
   static int defaultWorkers();
   ~CompileAhead();
@@ -48,6 +64,12 @@ class CompileAhead {
   // The evaluation form of the program with this hash if the worker made it (waiting if it is
   // making it now); nothing if it has not started on it (it is then dropped from the queue).
   std::optional<core::Result<Variant>> take(uint64_t program_hash);
+  // After take() handed a form over: that program's full profile (FullProfile mode), if made.
+  struct Profiled {
+    BlockProfile profile;
+    std::optional<render::ImageBatch8> images;
+  };
+  std::optional<Profiled> takeProfile(uint64_t program_hash);
 
   struct Counters {
     int started = 0;   // programs the workers took off the queue
@@ -57,6 +79,7 @@ class CompileAhead {
   Counters counters() const;
 
  private:
+  void start(core::Asset asset, render::ContextOptions context, int workers);
   void run(std::shared_ptr<const core::Asset> asset, render::ContextOptions context);
   bool inProgress(uint64_t hash) const;  // under mutex_
 
@@ -66,6 +89,8 @@ class CompileAhead {
   std::condition_variable changed_;
   std::deque<std::pair<uint64_t, std::shared_ptr<const ShaderProgram>>> queue_;
   std::unordered_map<uint64_t, core::Result<Variant>> done_;
+  std::optional<FullProfile> full_;
+  std::unordered_map<uint64_t, Profiled> profiles_;  // FullProfile mode, by program
   std::vector<uint64_t> in_progress_;  // the programs the workers are making now
   bool stop_ = false;
   Counters counters_;

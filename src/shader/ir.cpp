@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <unordered_map>
 
 namespace duolod::shader::ir {
 namespace {
@@ -433,7 +434,39 @@ void Module::setName(Id id, const std::string& text) {
   names.push_back(std::move(instruction));
 }
 
+namespace {
+// The scoped name indexes of NameIndexScope on this thread (nested scopes stack).
+struct NameIndex {
+  const Module* module;
+  std::unordered_map<Id, size_t> first;  // OpName's target -> its first entry in names
+  const NameIndex* outer;
+};
+thread_local const NameIndex* t_name_index = nullptr;
+}  // namespace
+
+NameIndexScope::NameIndexScope(const Module& module) {
+  auto* index = new NameIndex{&module, {}, t_name_index};
+  for (size_t i = 0; i < module.names.size(); ++i) {
+    const Instruction& instruction = module.names[i];
+    if (instruction.opcode == spv::OpName && !instruction.operands.empty())
+      index->first.emplace(instruction.operands[0], i);
+  }
+  t_name_index = index;
+  index_ = index;
+}
+
+NameIndexScope::~NameIndexScope() {
+  auto* index = static_cast<const NameIndex*>(index_);
+  t_name_index = index->outer;
+  delete index;
+}
+
 std::string Module::name(Id id) const {
+  for (const NameIndex* index = t_name_index; index; index = index->outer)
+    if (index->module == this) {
+      auto found = index->first.find(id);
+      return found == index->first.end() ? std::string() : names[found->second].literalString(1);
+    }
   for (const Instruction& instruction : names)
     if (instruction.opcode == spv::OpName && instruction.operands[0] == id)
       return instruction.literalString(1);

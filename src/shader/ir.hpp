@@ -376,4 +376,18 @@ class SliceSummaries {
   std::unique_ptr<Impl> impl_;
 };
 
+// While it lives, Module::name on `module` (this very object, on this thread) looks names up in an
+// index made at construction instead of scanning `names`: for read-only passes that name ids by
+// the hundred (enumerateSites' descriptions). The module must not change meanwhile.
+class NameIndexScope {
+ public:
+  explicit NameIndexScope(const Module& module);
+  ~NameIndexScope();
+  NameIndexScope(const NameIndexScope&) = delete;
+  NameIndexScope& operator=(const NameIndexScope&) = delete;
+
+ private:
+  const void* index_;
+};
+
 }  // namespace duolod::shader::ir

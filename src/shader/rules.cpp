@@ -460,6 +460,8 @@ std::vector<RuleSite> enumerateSites(const ShaderProgram& program, const RuleCon
   const std::array<Finder, kRuleKindCount> finders = {
       &findOperationRemovalSites, &findMoveToParameterSites, &findPerVertexSites,
       &findTextureAverageSites,   &findTextureMipSites,      &findLoopTruncationSites};
+  // The program is read-only here, and the sites' descriptions name ids by the hundred.
+  const ir::NameIndexScope vertex_names(program.vertex), fragment_names(program.fragment);
   std::vector<RuleSite> sites;
   for (int kind = 0; kind < kRuleKindCount; ++kind) {
     if (!context.enabled[static_cast<size_t>(kind)] || !finders[static_cast<size_t>(kind)])

@@ -116,6 +116,22 @@ void ConfigurationScorer::enableCompileAhead(core::Asset asset, render::ContextO
                                                   evaluator_->footprint(), context);
 }
 
+void ConfigurationScorer::enableCompileAhead(core::Asset asset, const core::Mesh& drawn,
+                                             render::ContextOptions context) {
+  if (cost_samples_.empty()) return;
+  // As the predicted cost's `shared` test, less the variant's parameter block (the workers
+  // profile only variants without one).
+  const bool keep_images = cost_samples_.size() == evaluator_->predictedSamples().size() &&
+                           evaluator_->predictedResolution() == evaluator_->footprint();
+  compile_ahead_ = std::make_unique<CompileAhead>(
+      std::move(asset),
+      CompileAhead::FullProfile{.drawn = drawn,
+                                .samples = cost_samples_,
+                                .resolution = evaluator_->footprint(),
+                                .keep_images = keep_images},
+      context);
+}
+
 std::pair<int, int> ConfigurationScorer::compileAheadCounts() const {
   if (!compile_ahead_) return {0, 0};
   CompileAhead::Counters counters = compile_ahead_->counters();
@@ -126,8 +142,10 @@ const core::Result<Variant>& ConfigurationScorer::optimised(const ShaderProgram&
   uint64_t hash = programHash(program);
   if (hash != memo_hash_ || !memo_) {
     memo_hash_ = hash;
+    memo_profile_.reset();
     std::optional<core::Result<Variant>> ahead;
     if (compile_ahead_) ahead = compile_ahead_->take(hash);
+    if (ahead) memo_profile_ = compile_ahead_->takeProfile(hash);
     memo_ = ahead ? std::move(*ahead) : evaluationVariant(program);
   }
   return memo_;
@@ -160,9 +178,18 @@ VariantScorer ConfigurationScorer::scorer() {
                         evaluator_->predictedResolution() == evaluator_->footprint() &&
                         variant->parameter_block.empty();
     render::ImageBatch8 images;
-    auto profile = profileBlockCounts(*renderer_, asset_, *vertex, *fragment, cost_samples_,
-                                      evaluator_->footprint(), variant->uniforms,
-                                      shared ? &images : nullptr);
+    core::Result<BlockProfile> profile = core::Error{"no profile"};
+    if (memo_profile_ && (!shared || memo_profile_->images)) {
+      // The workers' profile of this very program (CompileAhead::FullProfile).
+      profile = std::move(memo_profile_->profile);
+      if (shared) images = std::move(*memo_profile_->images);
+      memo_profile_.reset();
+      ++cost_profiles_ahead_;
+    } else {
+      profile = profileBlockCounts(*renderer_, asset_, *vertex, *fragment, cost_samples_,
+                                   evaluator_->footprint(), variant->uniforms,
+                                   shared ? &images : nullptr);
+    }
     if (!profile) return profile.error();
     ++cost_profiles_;
     if (shared)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "duolod/render.hpp"
+#include "shader/compile_ahead.hpp"
 #include "shader/evaluate.hpp"
 #include "shader/rules.hpp"
 #include "shader/search.hpp"
@@ -53,11 +54,17 @@ class ConfigurationScorer {
       int resolution = 64);
   int averageRenders() const;
   int costProfiles() const { return cost_profiles_; }
+  // Of them, the profiles the compile-ahead workers made (enableCompileAhead with `drawn`).
+  int costProfilesAhead() const { return cost_profiles_ahead_; }
   // Compiles the programs the search announces (VariantScorer::prepare) ahead in worker threads,
   // one per core, each with its own GL context (compile_ahead.hpp): `asset` is what the scorer draws (this
   // configuration's mesh with the asset's materials and textures), `context` the device. Scores
   // are the same with or without it.
   void enableCompileAhead(core::Asset asset, render::ContextOptions context);
+  // The same, when the scorer draws `drawn` uploaded over `asset` (Renderer::uploadMesh): the
+  // workers then make the whole cost profile too (CompileAhead::FullProfile).
+  void enableCompileAhead(core::Asset asset, const core::Mesh& drawn,
+                          render::ContextOptions context);
   // Programs the workers compiled, and evaluation forms they handed over (0, 0 without them).
   std::pair<int, int> compileAheadCounts() const;
   int footprint() const { return evaluator_->footprint(); }
@@ -73,10 +80,11 @@ class ConfigurationScorer {
   std::unique_ptr<VariantEvaluator> evaluator_;
   std::unique_ptr<ValueAverager> averager_;
   std::vector<render::Sample> cost_samples_;
-  int cost_profiles_ = 0;
+  int cost_profiles_ = 0, cost_profiles_ahead_ = 0;
   std::unique_ptr<CompileAhead> compile_ahead_;
   uint64_t memo_hash_ = 0;
   core::Result<Variant> memo_ = core::Error{"nothing scored yet"};
+  std::optional<CompileAhead::Profiled> memo_profile_;  // the workers' profile of memo_'s program
 };
 
 }  // namespace duolod::shader
