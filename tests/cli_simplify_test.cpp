@@ -387,6 +387,30 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// A cluster triangle target that only an empty mesh meets (every grid that keeps a triangle keeps
+// more): the coarsest grid that keeps any is written, above the target, with the warning; it
+// failed with "the result has no triangles (grid 1 ...)" although grid 2 keeps some.
+TEST(CliSimplify, ClusterTargetBelowEveryGridThatKeepsATriangle) {
+  fs::path dir = test::scratchDir("cluster_tiny_target");
+  const std::string sphere = writeSphere(dir);
+  const std::string out = (dir / "tiny.glb").string();
+  test::CommandRun run = runCli({"simplify", sphere, out, "--mode", "cluster", "--triangles", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  auto output = io::loadAsset(out);
+  ASSERT_TRUE(output) << output.error().message;
+  EXPECT_GT(output->mesh.triangleCount(), 1u);
+  EXPECT_TRUE(test::contains(run.err, "the target of 1 triangles was not reached")) << run.err;
+  // A coarser grid keeps nothing.
+  const std::string grid = lineStarting(run.out, "simplify");
+  const size_t at = grid.find("grid ");
+  ASSERT_NE(at, std::string::npos) << run.out;
+  const int used = std::stoi(grid.substr(at + 5));
+  test::CommandRun coarser = runCli({"simplify", sphere, (dir / "coarser.glb").string(), "--mode",
+                                     "cluster", "--grid", std::to_string(used - 1)});
+  EXPECT_EQ(coarser.exit_code, 1);
+  EXPECT_TRUE(test::contains(coarser.err, "the result has no triangles")) << coarser.err;
+}
+
 // The other modes and targets on small spheres, each reloading with the count it reports; with
 // --pixels the image error at that distance is reported too. Image mode never collapses an edge
 // longer than 1 pixel, so its sphere is finer (1,920 triangles, 64 segments: edges under 1 px at a

@@ -53,6 +53,19 @@ TEST(FileSet, ARenameFailingPartWayPutsEveryFileBack) {
   EXPECT_EQ(treeOf(dir), (std::vector<std::string>{"a.txt", "c.txt/", "c.txt/inside"}));
 }
 
+// A valid name of 250 bytes: its temporary (NAME.tmp-PID-RANDOM) would pass the file system's
+// 255-byte limit, so the temporary's name is shortened ("File name too long" before).
+TEST(FileSet, LongFileNamesAreWritten) {
+  const fs::path dir = test::scratchDir("long_names");
+  const fs::path target = dir / (std::string(246, 'n') + ".obj");
+  ASSERT_EQ(target.filename().string().size(), 250u);
+  ASSERT_TRUE(io::writeFileAtomic(target.string(), std::string_view("v 0 0 0\n")));
+  EXPECT_EQ(test::readText(target.string()), "v 0 0 0\n");
+  size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 1u);  // no temporary left beside it
+}
+
 TEST(FileSet, ACommittedSetLeavesOnlyItsFiles) {
   const fs::path dir = test::scratchDir("fileset_commit");
   writeText(dir / "a.txt", "old a");

@@ -174,6 +174,9 @@ std::vector<MalformedCase> malformedCases() {
       {"non_numeric.ply",
        ply_ascii + ascii_triangle_vertices + "end_header\n0 0 0\n1 zero 0\n0 1 0\n",
        "expected a number"},
+      {"huge_count.ply",  // the message points at the element's header line
+       ply_ascii + "comment many\nelement vertex 1000000\n" + kPlyXyzHeader + "end_header\n0 0 0\n",
+       "huge_count.ply:4: header declares 1000000 'vertex' items"},
       {"no_z.ply",
        ply_ascii + "element vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n",
        "lacks"},

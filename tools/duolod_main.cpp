@@ -921,6 +921,29 @@ mesh::SimplifyResult clusterToTarget(const core::Mesh& input, size_t target_tria
       bad = middle;
     }
   }
+  // The finest grid under a triangle target can leave no triangle at all (every one with two
+  // corners in one cell) where a finer one keeps some: the coarsest grid that keeps any is taken
+  // then, above the target (which the simplify line and a warning say), rather than nothing.
+  if (by_triangles && best.mesh.triangleCount() == 0) {
+    int empty = good, kept = 65536;
+    mesh::SimplifyResult finest = mesh::simplifyCluster(input, {.grid_resolution = kept});
+    if (finest.mesh.triangleCount() > 0) {
+      best = std::move(finest);
+      while (kept - empty > 1) {
+        const int middle = empty + (kept - empty) / 2;
+        mesh::SimplifyResult trial = mesh::simplifyCluster(input, {.grid_resolution = middle});
+        if (trial.mesh.triangleCount() > 0) {
+          kept = middle;
+          best = std::move(trial);
+        } else {
+          empty = middle;
+        }
+      }
+      good = kept;
+    } else {
+      good = 65536;  // none keeps any: said so
+    }
+  }
   *grid_used = good;
   return best;
 }
@@ -1123,7 +1146,12 @@ int runSimplify(SimplifyFlags& flags) {
     const mesh::SimplifyStats& s = result.stats;
     const size_t refused = s.rejected_topology + s.rejected_flip + s.rejected_border +
                            image_stats.rejected_long_edges + image_stats.rejected_wide_regions;
-    if (refused == 0)  // no edge was a candidate at all (a cube's corners, say)
+    if (flags.mode == "cluster")  // the grid is the only control (clusterToTarget)
+      std::snprintf(text, sizeof text,
+                    "; target %zu not reached (the coarsest grid that keeps any triangle keeps "
+                    "this many)",
+                    target_triangles);
+    else if (refused == 0)  // no edge was a candidate at all (a cube's corners, say)
       std::snprintf(text, sizeof text,
                     "; target %zu not reached (no edge may collapse: every vertex left is a "
                     "corner of feature lines, seams, material or locked borders)",
@@ -1166,8 +1194,11 @@ int runSimplify(SimplifyFlags& flags) {
   // corners in one cell); the collapse modes keep at least one triangle per part.
   if (output_triangles == 0 && input_triangles > 0)
     return fail("the result has no triangles (" + detail.substr(0, detail.find(',')) +
-                ": every triangle has two corners in one cell); nothing written. Use a finer "
-                "--grid or a larger target");
+                ": every triangle has two corners in one cell); nothing written. " +
+                (detail.starts_with("grid 65536,")
+                     ? std::string("Even the finest grid keeps none (the mesh's triangles are "
+                                   "tiny against its bounding box): use --mode quadric")
+                     : std::string("Use a finer --grid or a larger target")));
 
   // The output keeps the input's materials and textures (and its source path, so that the writers
   // refuse to replace the input or the files beside it).

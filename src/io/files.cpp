@@ -188,10 +188,15 @@ class UnfinishedOutputs {
 // between the two is atomic).
 fs::path uniqueSibling(const fs::path& path, const char* tag) {
   std::random_device entropy;
+  // A file name holds at most 255 bytes on the usual file systems: the name is shortened so that
+  // the suffix fits (a valid 250-byte output name failed with "File name too long").
+  constexpr size_t kNameMax = 255;
+  const std::string name = path.filename().string();
   for (;;) {
-    fs::path sibling = path;
-    sibling += std::string(tag) + "-" + std::to_string(::getpid()) + "-" +
-               std::to_string(entropy() % 1000000);
+    const std::string suffix = std::string(tag) + "-" + std::to_string(::getpid()) + "-" +
+                               std::to_string(entropy() % 1000000);
+    fs::path sibling = path.parent_path() /
+                       (name.substr(0, kNameMax - std::min(kNameMax, suffix.size())) + suffix);
     std::error_code ec;
     if (!fs::exists(fs::symlink_status(sibling, ec))) return sibling;
   }

@@ -1007,6 +1007,17 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
     while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
     if (error.empty()) error = "not a valid glTF file";
     std::replace(error.begin(), error.end(), '\n', ';');
+    // tinygltf quotes a data uri whole ("Failed to decode 'uri' : data:...;base64,<megabytes>"):
+    // its payload is cut to its start.
+    for (size_t at = error.find("data:"); at != std::string::npos;
+         at = error.find("data:", at + 1)) {
+      const size_t comma = error.find(',', at);
+      if (comma == std::string::npos) break;
+      const size_t end = std::min(error.find_first_of(" ';\"", comma), error.size());
+      if (end - comma > 48)
+        error.replace(comma + 33, end - comma - 33,
+                      "... (" + std::to_string(end - comma - 1) + " characters)");
+    }
     return Error{path + ": " + error};
   }
   // glTF 2 only (1.0's materials and techniques are another format), and no extension the file

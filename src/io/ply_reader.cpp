@@ -458,9 +458,11 @@ class PlyParser {
   core::Status checkCount(const Element& element, BodyReader& body) {
     size_t minimum = body.ascii() ? element.properties.size() : element.minimumBinarySize();
     if (minimum > 0 && element.count > body.bytesLeft() / minimum) {
-      return body.error("header declares " + std::to_string(element.count) + " '" + element.name +
-                        "' items, more than the " + std::to_string(body.bytesLeft()) +
-                        " bytes left in the file can hold");
+      // At the header's element line (the body's position is not where the count was given).
+      return errorAt(path_, element.line,
+                     "header declares " + std::to_string(element.count) + " '" + element.name +
+                         "' items, more than the " + std::to_string(body.bytesLeft()) +
+                         " bytes left in the file can hold");
     }
     return core::okStatus();
   }
