@@ -690,6 +690,23 @@ TEST(GltfReader, TextureTransformIsAWarning) {
   auto plain = io::loadAsset(texturedTriangle(false).write(dir, "plain"));
   ASSERT_TRUE(plain) << plain.error().message;
   EXPECT_FALSE(hasWarningContaining(*plain, "KHR_texture_transform"));
+  EXPECT_FALSE(hasWarningContaining(*plain, "outside the asset's folder"));
+}
+
+// A uri that leaves the asset's folder is read (the spec allows it) and said: a pipeline that
+// converts files it did not make would copy what it names into its outputs unawares.
+TEST(GltfReader, UrisOutsideTheAssetsFolderAreWarnedAbout) {
+  fs::path dir = test::scratchDir("g_outside");
+  core::ImageRGBA8 checker{2, 2, std::vector<uint8_t>(16, 255)};
+  ASSERT_TRUE(io::writePng(checker, (dir / "checker.png").string()));
+  fs::create_directories(dir / "sub");
+  HandGltf g = texturedTriangle(false);
+  g.doc["images"] = {{{"uri", "../checker.png"}}};
+  auto asset = io::loadAsset(g.write(dir / "sub", "up"));
+  ASSERT_TRUE(asset) << asset.error().message;
+  EXPECT_TRUE(
+      hasWarningContaining(*asset, "image 0's uri '../checker.png' is outside the asset's folder"));
+  EXPECT_EQ(asset->textures.size(), 1u);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -44,7 +44,8 @@ CLI::Validator numberWhere(const std::string& need, std::function<bool(double)> 
         const double value = std::strtod(text.c_str(), &end);
         if (text.empty() || end != text.c_str() + text.size())
           return "'" + text + "' is not a number";
-        if (!std::isfinite(value) || !acceptable(value)) return "must be " + need + ", got " + text;
+        if (!std::isfinite(value)) return "must be a finite number " + need + ", got " + text;
+        if (!acceptable(value)) return "must be " + need + ", got " + text;
         return {};
       },
       need);

@@ -843,6 +843,22 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
                    (asset.warnings.empty() ? std::string() : " (" + asset.warnings.front() + ")"))};
   if (size_t off = core::normalizeNormals(mesh); off > 0)
     asset.warnings.push_back(std::to_string(off) + " normals were not of unit length; normalized");
+  // A zero normal (OBJ's `vn 0 0 0`) has no direction to light by: it takes the surface's
+  // angle-weighted normal there, as a file without normals gets.
+  if (!mesh.normals.empty()) {
+    std::vector<uint32_t> zero;
+    for (uint32_t v = 0; v < mesh.normals.size(); ++v)
+      if (!(core::dot(mesh.normals[v], mesh.normals[v]) > 0)) zero.push_back(v);
+    if (!zero.empty()) {
+      core::Mesh surface;
+      surface.positions = mesh.positions;
+      surface.indices = mesh.indices;
+      core::computeNormals(surface);
+      for (uint32_t v : zero) mesh.normals[v] = surface.normals[v];
+      asset.warnings.push_back(std::to_string(zero.size()) +
+                               " normals were zero; the surface's normals used there");
+    }
+  }
   if (options.weld) core::weldVertices(mesh);
   if (options.generate_normals && mesh.normals.empty()) core::computeNormals(mesh);
   if (options.generate_tangents && mesh.tangents.empty() && !mesh.normals.empty() &&

@@ -1042,6 +1042,25 @@ core::Result<core::Asset> readGltf(const std::string& path, const LoadOptions& o
               .lexically_normal()
               .string());
   if (!warning.empty()) asset.warnings.push_back(warning);
+  // A uri that leaves the asset's folder (absolute, or up through ..) is read as the spec allows,
+  // but said: a pipeline converting files it did not make would otherwise copy whatever such a
+  // uri names into its outputs unawares.
+  {
+    auto outside = [&](const std::string& uri) {
+      if (uri.empty() || uri.starts_with("data:")) return false;
+      const std::filesystem::path relative =
+          std::filesystem::path(fileNameOfUri(uri)).lexically_normal();
+      return relative.is_absolute() || (!relative.empty() && *relative.begin() == "..");
+    };
+    for (size_t i = 0; i < model.buffers.size(); ++i)
+      if (outside(model.buffers[i].uri))
+        asset.warnings.push_back(path + ": buffer " + std::to_string(i) + "'s uri '" +
+                                 model.buffers[i].uri + "' is outside the asset's folder");
+    for (size_t i = 0; i < model.images.size(); ++i)
+      if (outside(model.images[i].uri))
+        asset.warnings.push_back(path + ": image " + std::to_string(i) + "'s uri '" +
+                                 model.images[i].uri + "' is outside the asset's folder");
+  }
   if (auto materials = readMaterials(model, path, context.encoded, asset); !materials)
     return materials.error();
   GltfFlattener flattener(model, path, asset);
