@@ -294,8 +294,11 @@ TEST(CliSimplify, FilesBesideTheOutputAndItsFolderAreChecked) {
         (dir / (std::string(kept) == "out.bin" ? "out.gltf" : "out.obj")).string();
     test::CommandRun run = runCli({"simplify", sphere, out, "--ratio", "0.5"});
     EXPECT_EQ(run.exit_code, 1) << run.err;
-    EXPECT_TRUE(test::contains(run.err, std::string(kept) + ": already exists (use --force"))
+    EXPECT_TRUE(test::contains(run.err, std::string(kept) + ": already exists, written beside"))
         << run.err;
+    EXPECT_TRUE(test::contains(run.err, "(use --force to replace it)")) << run.err;
+    // Found before the work (it was found by the writer, after an image-mode run's minutes).
+    EXPECT_FALSE(test::contains(run.out, "simplify")) << run.out;
     EXPECT_EQ(test::readText(dir / kept), "precious");
     EXPECT_FALSE(fs::exists(out));
     test::CommandRun forced = runCli({"simplify", sphere, out, "--ratio", "0.5", "--force"});

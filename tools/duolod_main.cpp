@@ -995,12 +995,38 @@ void printGeometryReport(const core::Mesh& input, const core::Mesh& output) {
       secondsSince(start));
 }
 
+// The files a mesh output writes beside OUT (io::writeObj's .mtl, writeGltf's .bin, either's
+// STEM_textureN images): one that exists without --force fails the write, found before the work.
+core::Status checkSideFiles(const std::string& out, bool force, bool textures) {
+  if (force) return core::okStatus();
+  const fs::path target(out);
+  const std::string extension = lowerExtension(out);
+  std::vector<fs::path> side;
+  if (extension == ".obj") side.push_back(fs::path(target).replace_extension(".mtl"));
+  if (extension == ".gltf") side.push_back(fs::path(target).replace_extension(".bin"));
+  std::error_code ec;
+  for (const fs::path& file : side)
+    if (fs::exists(file, ec))
+      return core::Error{file.string() + ": already exists, written beside " + out +
+                         " (use --force to replace it)"};
+  if (textures && (extension == ".obj" || extension == ".gltf")) {
+    const std::string prefix = target.stem().string() + "_texture";
+    const fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    for (const fs::path& entry : entriesOf(folder))
+      if (entry.filename().string().starts_with(prefix))
+        return core::Error{entry.string() + ": already exists, and " + out +
+                           "'s textures are written under that name (use --force to replace it)"};
+  }
+  return core::okStatus();
+}
+
 int runSimplify(SimplifyFlags& flags) {
   if (auto ok = flags.check(); !ok) return fail(ok.error().message);
   // Before the work, not after it (an image-mode run takes minutes).
   if (auto ok = io::checkWritablePath(flags.out); !ok) return fail(ok.error().message);
   if (auto ok = checkOutputPath(flags.out, {flags.in}, flags.force); !ok)
     return fail(ok.error().message);
+  if (auto ok = checkSideFiles(flags.out, flags.force, false); !ok) return fail(ok.error().message);
 
   auto start = std::chrono::steady_clock::now();
   // A file of positions only (OFF, a bare OBJ or PLY): the quadric and cluster modes simplify the
@@ -1017,6 +1043,8 @@ int runSimplify(SimplifyFlags& flags) {
                                            .generate_normals = false,
                                            .generate_tangents = false});
   if (!asset) return fail(asset.error().message);
+  if (auto ok = checkSideFiles(flags.out, flags.force, !asset->textures.empty()); !ok)
+    return fail(ok.error().message);
   // Before normals are derived, so that they follow the turned triangles.
   const std::string reoriented = flags.reorient ? reorientLine(asset->mesh) : std::string();
   const bool positions_only = asset->mesh.normals.empty() && asset->mesh.tangents.empty() &&
