@@ -99,6 +99,67 @@ TEST(ObjReader, ConcavePolygonsWithCollinearCornersAndClockwiseTurns) {
   }
 }
 
+TEST(ObjReader, PolygonsThatTouchThemselvesOrRepeatACorner) {
+  // The dart with its notch corner repeated: the zero-length edge hid the notch, and the fan
+  // folded a triangle over it. Ears again, the repeat left out.
+  core::Asset repeated =
+      readObjOk(writeScratchFile("dart_repeat.obj", std::string(kDart) + "f 1 2 3 4 4\n"));
+  ASSERT_EQ(repeated.mesh.triangleCount(), 4u);  // the dart's own two, then these two
+  core::Mesh second = repeated.mesh;
+  second.indices.erase(second.indices.begin(), second.indices.begin() + 6);
+  double smallest = 0, largest = 0;
+  EXPECT_DOUBLE_EQ(signedDoubleArea(second, smallest, largest), 3.0);
+  EXPECT_GE(smallest, 0.0);
+  // Two squares meeting at a corner, as one polygon (and a pentagram, which turns the same way
+  // at every corner): no triangulation by the polygon's corners turns every triangle its way, so
+  // they are fanned with the warning, not cut into an ear outside the polygon silently.
+  for (const char* polygon :
+       {"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 2 1 0\nv 2 2 0\nv 1 2 0\nv 1 1 0\nv 0 1 0\n"
+        "f 1 2 3 4 5 6 7 8\n",
+        "v 1 0 0\nv -0.809 -0.588 0\nv 0.309 0.951 0\nv 0.309 -0.951 0\nv -0.809 0.588 0\n"
+        "f 1 2 3 4 5\n"}) {
+    core::Asset asset = readObjOk(writeScratchFile("touching.obj", polygon));
+    EXPECT_TRUE(hasWarningContaining(asset, "could not be cut into ears")) << polygon;
+  }
+}
+
+TEST(ObjReader, ConvexPolygonsWithCornersOnTheirEdgesAreFannedInAnyPlane) {
+  // A square with its edges' midpoints, turned in space: rounding leaves the midpoints a turn of
+  // about 1e-9 either way, which made some of them concave (cut into other triangles).
+  const double square[8][2] = {{0, 0}, {0.5, 0}, {1, 0}, {1, 0.5},
+                               {1, 1}, {0.5, 1}, {0, 1}, {0, 0.5}};
+  for (int turn = 0; turn < 100; ++turn) {
+    const double a = 0.37 * turn, b = 0.11 * turn;  // about z, then about x
+    std::string text;
+    for (const auto& p : square) {
+      const double x = p[0] * std::cos(a) - p[1] * std::sin(a);
+      const double y = p[0] * std::sin(a) + p[1] * std::cos(a);
+      char line[96];
+      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", x, y * std::cos(b), y * std::sin(b));
+      text += line;
+    }
+    core::Asset asset = readObjOk(writeScratchFile("tilted.obj", text + "f 1 2 3 4 5 6 7 8\n"));
+    EXPECT_EQ(asset.mesh.indices,
+              (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 5, 0, 5, 6, 0, 6, 7}))
+        << "turn " << turn;
+  }
+}
+
+TEST(ObjReader, PolygonCornersPastTheVerticesAreAnErrorNotACrash) {
+  // Positive indices are checked after the file; a polygon's corners were read before.
+  auto asset = io::readObj(
+      writeScratchFile("far_corner.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3 2000000000\n"),
+      noTextures());
+  ASSERT_FALSE(asset);
+  EXPECT_NE(asset.error().message.find("far_corner.obj:4: face index 2000000000 out of range"),
+            std::string::npos)
+      << asset.error().message;
+  // A face before its vertices is valid OBJ: fanned, as its corners have no place yet.
+  core::Asset late =
+      readObjOk(writeScratchFile("late.obj", "f 1 2 3 4\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"));
+  EXPECT_EQ(late.mesh.triangleCount(), 2u);
+}
+
 TEST(ObjReader, SelfCrossingPolygonIsFannedWithAWarning) {
   // A bow tie: its two halves turn opposite ways, so its area vector is zero.
   core::Asset asset =

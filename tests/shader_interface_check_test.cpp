@@ -102,6 +102,39 @@ layout(binding = 2) uniform samplerCube uEnv;
   EXPECT_EQ(bound->size(), 4u);
 }
 
+// duolod reads the colour at location 0 and counts the object's pixels by its alpha: a fragment
+// stage must write a float vec4 there (an array's element 0 is what location 0 gets).
+TEST(ShaderInterfaceCheck, TheColourIsAVec4AtLocationZero) {
+  const std::string in = "#version 450 core\nlayout(location = 0) in vec3 vA;\n";
+  struct Case {
+    const char* body;
+    const char* refusal;  // nullptr: accepted
+  };
+  const Case cases[] = {
+      {"layout(location = 0) out vec4 outColor[2];\n"
+       "void main() { outColor[0] = vec4(vA, 1.0); outColor[1] = vec4(1.0); }\n",
+       nullptr},
+      {"void main() {}\n", "test.frag: writes no colour output at location 0"},
+      {"layout(location = 3) out vec4 outColor;\nvoid main() { outColor = vec4(vA, 1.0); }\n",
+       "test.frag: writes no colour output at location 0"},
+      {"layout(location = 0) out vec3 outColor;\nvoid main() { outColor = vA; }\n",
+       "its colour output 'outColor' at location 0 is a vec3, which leaves alpha undefined"},
+      {"layout(location = 0) out uvec4 outColor;\nvoid main() { outColor = uvec4(vA, 1.0); }\n",
+       "is a uvec4, which a colour attachment cannot take"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.body);
+    auto checked = checkShaderInterface(pair(vertexStage(), in + c.body));
+    if (!c.refusal) {
+      EXPECT_TRUE(checked.ok()) << checked.error().message;
+      continue;
+    }
+    ASSERT_FALSE(checked.ok());
+    EXPECT_NE(checked.error().message.find(c.refusal), std::string::npos)
+        << checked.error().message;
+  }
+}
+
 TEST(ShaderInterfaceCheck, PairsThatCannotRenderRightAreErrors) {
   auto missing = checkShaderInterface(
       pair(vertexStage(),

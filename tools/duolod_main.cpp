@@ -1012,10 +1012,13 @@ core::Status checkSideFiles(const std::string& out, bool force, bool textures) {
   if (textures && (extension == ".obj" || extension == ".gltf")) {
     const std::string prefix = target.stem().string() + "_texture";
     const fs::path folder = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-    for (const fs::path& entry : entriesOf(folder))
-      if (entry.filename().string().starts_with(prefix))
+    for (const fs::path& entry : entriesOf(folder)) {
+      const std::string name = entry.filename().string();  // STEM_textureN.EXT
+      if (name.starts_with(prefix) && name.size() > prefix.size() &&
+          std::isdigit(static_cast<unsigned char>(name[prefix.size()])))
         return core::Error{entry.string() + ": already exists, and " + out +
                            "'s textures are written under that name (use --force to replace it)"};
+    }
   }
   return core::okStatus();
 }

@@ -25,6 +25,18 @@ namespace duolod::io {
 namespace fs = std::filesystem;
 using core::Error;
 
+namespace {
+// The reader's warning that says why a file has no triangles (primitives or statements it
+// skipped), as " (warning)"; "" when none does.
+std::string whyNoTriangles(const std::vector<std::string>& warnings) {
+  for (const std::string& warning : warnings)
+    if (warning.find("skipped") != std::string::npos ||
+        warning.find("ignored") != std::string::npos)
+      return " (" + warning + ")";
+  return "";
+}
+}  // namespace
+
 core::Result<std::vector<uint8_t>> readFileBytes(const std::string& path) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);  // follows symbolic links
@@ -833,18 +845,14 @@ core::Result<core::Asset> loadAsset(const std::string& path, const LoadOptions& 
   if (degenerate > 0)
     asset.warnings.push_back(std::to_string(degenerate) + " degenerate triangles removed");
   if (mesh.triangleCount() == 0)
-    return Error{
-        path +
-        (degenerate > 0
-             ? ": all " + std::to_string(degenerate) + " triangles are degenerate (zero area)"
-             : ": the file contains no triangles" +
-                   // why, when the reader said (skipped primitives,
-                   // ignored statements)
-                   (asset.warnings.empty() ? std::string() : " (" + asset.warnings.front() + ")"))};
+    return Error{path + (degenerate > 0 ? ": all " + std::to_string(degenerate) +
+                                              " triangles are degenerate (zero area)"
+                                        : ": the file contains no triangles" +
+                                              whyNoTriangles(asset.warnings))};
   if (size_t off = core::normalizeNormals(mesh); off > 0)
     asset.warnings.push_back(std::to_string(off) + " normals were not of unit length; normalized");
   // A zero normal (OBJ's `vn 0 0 0`) has no direction to light by: it takes the surface's
-  // angle-weighted normal there, as a file without normals gets.
+  // angle-weighted normal there (of the unwelded mesh: across a seam, its own side's).
   if (!mesh.normals.empty()) {
     std::vector<uint32_t> zero;
     for (uint32_t v = 0; v < mesh.normals.size(); ++v)

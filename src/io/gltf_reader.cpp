@@ -464,9 +464,9 @@ class GltfFlattener {
       indices.resize(count);
       for (size_t i = 0; i < count; ++i) indices[i] = static_cast<uint32_t>(i);
     }
-    if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP || prim.mode == TINYGLTF_MODE_TRIANGLE_FAN)
-      indices = triangleListOf(indices, prim.mode);
-    else if (indices.size() % 3 != 0)
+    const bool strip_or_fan =
+        prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP || prim.mode == TINYGLTF_MODE_TRIANGLE_FAN;
+    if (!strip_or_fan && indices.size() % 3 != 0)
       return Error{what + ": " + std::to_string(indices.size()) +
                    (prim.indices >= 0 ? " indices" : " vertices (it has no indices)") +
                    " is not a whole number of triangles"};
@@ -474,6 +474,7 @@ class GltfFlattener {
       if (indices[i] >= count)
         return Error{what + ": index " + std::to_string(i) + " = " + std::to_string(indices[i]) +
                      " is out of range (" + std::to_string(count) + " vertices)"};
+    if (strip_or_fan) indices = triangleListOf(indices, prim.mode);
     const bool mirrored = determinant3(world) < 0;
     int material = prim.material;
     if (material < -1 || material >= static_cast<int>(model_.materials.size()))

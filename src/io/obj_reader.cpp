@@ -271,11 +271,20 @@ class ObjParser {
       return core::okStatus();
     }
     polygon_points_.resize(polygon_.size());
-    for (size_t k = 0; k < polygon_.size(); ++k)
-      polygon_points_[k] = positions_[polygon_[k].position];
     polygon_triangles_.clear();
-    if (!text::triangulatePolygon(polygon_points_, polygon_triangles_) && !first_unclipped_line_)
+    bool placed = true;  // positive indices are range-checked after the file (a face may come
+                         // before its vertices): such a polygon is fanned, as before
+    for (size_t k = 0; k < polygon_.size() && placed; ++k) {
+      placed = static_cast<size_t>(polygon_[k].position) < positions_.size();
+      if (placed) polygon_points_[k] = positions_[polygon_[k].position];
+    }
+    if (!placed) {
+      for (uint32_t i = 1; i + 1 < polygon_.size(); ++i)
+        polygon_triangles_.insert(polygon_triangles_.end(), {0, i, i + 1});
+    } else if (!text::triangulatePolygon(polygon_points_, polygon_triangles_) &&
+               !first_unclipped_line_) {
       first_unclipped_line_ = line_;
+    }
     for (size_t i = 0; i < polygon_triangles_.size(); i += 3)
       group.triangles.push_back(
           {{polygon_[polygon_triangles_[i]], polygon_[polygon_triangles_[i + 1]],

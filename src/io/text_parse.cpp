@@ -190,15 +190,28 @@ void appendFanCorners(size_t n, std::vector<uint32_t>& triangles) {
 }  // namespace
 
 bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_t>& triangles) {
-  const size_t n = corners.size();
-  if (n <= 3) {
-    appendFanCorners(n, triangles);
+  const size_t count = corners.size();
+  if (count <= 3) {
+    appendFanCorners(count, triangles);
     return true;
   }
+  auto fanned = [&](bool simple) {
+    appendFanCorners(count, triangles);
+    return simple;
+  };
+  // The distinct corners: a corner repeated right after itself adds a zero-length edge, whose
+  // zero turn would hide a notch from the convexity test.
+  std::vector<uint32_t> kept;
+  kept.reserve(count);
+  for (uint32_t k = 0; k < count; ++k)
+    if (kept.empty() || !(corners[k] == corners[kept.back()])) kept.push_back(k);
+  while (kept.size() > 1 && corners[kept.back()] == corners[kept.front()]) kept.pop_back();
+  const size_t n = kept.size();
+  if (n < 3) return fanned(false);
   // The Newell normal (the polygon's area vector, whatever its shape), in double.
   double normal[3] = {0, 0, 0};
   for (size_t i = 0; i < n; ++i) {
-    const core::Vec3 a = corners[i], b = corners[(i + 1) % n];
+    const core::Vec3 a = corners[kept[i]], b = corners[kept[(i + 1) % n]];
     normal[0] += (double(a.y) - b.y) * (double(a.z) + b.z);
     normal[1] += (double(a.z) - b.z) * (double(a.x) + b.x);
     normal[2] += (double(a.x) - b.x) * (double(a.y) + b.y);
@@ -208,35 +221,48 @@ bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_
   int axis = 0;
   for (int k = 1; k < 3; ++k)
     if (std::abs(normal[k]) > std::abs(normal[axis])) axis = k;
-  if (!(std::abs(normal[axis]) > 0) || !std::isfinite(normal[axis])) {
-    appendFanCorners(n, triangles);
-    return false;
-  }
+  if (!(std::abs(normal[axis]) > 0) || !std::isfinite(normal[axis])) return fanned(false);
   const int u_axis = (axis + 1) % 3, v_axis = (axis + 2) % 3;
   const double turn = normal[axis] > 0 ? 1.0 : -1.0;
   std::vector<double> u(n), v(n);
   for (size_t i = 0; i < n; ++i) {
-    const float* p = &corners[i].x;
+    const float* p = &corners[kept[i]].x;
     u[i] = p[u_axis], v[i] = p[v_axis];
   }
-  // Twice the signed area of (a, b, c), positive when it turns as the polygon does.
+  // Twice the signed area of (a, b, c), positive when it turns as the polygon does; and what
+  // counts as straight (a turn below 1e-5 radians): rounding leaves a corner on an edge (a
+  // T-junction) of a tilted polygon a small turn either way, which must not make a convex
+  // polygon concave (a file's 6 decimals: ~1e-6 of an edge).
   auto area = [&](size_t a, size_t b, size_t c) {
     return turn * ((u[b] - u[a]) * (v[c] - v[a]) - (v[b] - v[a]) * (u[c] - u[a]));
   };
+  auto straight = [&](size_t a, size_t b, size_t c) {
+    return 1e-5 * std::hypot(u[b] - u[a], v[b] - v[a]) * std::hypot(u[c] - u[b], v[c] - v[b]);
+  };
   bool convex = true;
-  for (size_t i = 0; i < n && convex; ++i) convex = area((i + n - 1) % n, i, (i + 1) % n) >= 0;
-  if (convex) {  // the fan, as every reader wrote before (exact here)
-    appendFanCorners(n, triangles);
-    return true;
+  for (size_t i = 0; i < n && convex; ++i) {
+    const size_t a = (i + n - 1) % n, c = (i + 1) % n;
+    convex = area(a, i, c) >= -straight(a, i, c);
   }
-  if (n > kMaxClippedCorners) {
-    appendFanCorners(n, triangles);
-    return false;
+  if (convex && n >= 5) {
+    // Every turn the same way, but around twice or more (a pentagram): the turns must add up to
+    // one full turn.
+    double total = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const size_t a = (i + n - 1) % n, c = (i + 1) % n;
+      const double du0 = u[i] - u[a], dv0 = v[i] - v[a], du1 = u[c] - u[i], dv1 = v[c] - v[i];
+      total += std::atan2(turn * (du0 * dv1 - dv0 * du1), du0 * du1 + dv0 * dv1);
+    }
+    if (total > 3 * M_PI) return fanned(false);
   }
+  if (convex) return fanned(true);  // as every reader wrote before (exact here)
+  if (n > kMaxClippedCorners) return fanned(false);
   // Ear clipping: a corner whose triangle with its two neighbours turns the polygon's way and
   // holds no other remaining corner is cut off; n - 2 cuts leave the triangles. A polygon
-  // that crosses itself can run out of ears: what is left is fanned.
-  std::vector<uint32_t> next(n), previous(n);
+  // that crosses itself can run out of ears, or cut one outside itself (it touches itself at a
+  // corner): it is then fanned, as before, and said so.
+  std::vector<uint32_t> next(n), previous(n), cut;
+  cut.reserve((n - 2) * 3);
   for (size_t i = 0; i < n; ++i)
     next[i] = uint32_t((i + 1) % n), previous[i] = uint32_t((i + n - 1) % n);
   auto inside = [&](size_t p, size_t a, size_t b, size_t c) {  // closed triangle
@@ -247,8 +273,8 @@ bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_
   bool relaxed = false;
   auto is_ear = [&](uint32_t i) {
     const uint32_t a = previous[i], c = next[i];
-    const double turned = area(a, i, c);
-    if (!(turned > 0 || (relaxed && turned == 0))) return false;
+    const double turned = area(a, i, c), tolerance = straight(a, i, c);
+    if (!(turned > tolerance || (relaxed && turned >= -tolerance))) return false;
     for (uint32_t p = next[c]; p != a; p = next[p]) {
       // A corner at the same place as one of the ear's (a polygon touching itself) does not
       // block it.
@@ -267,7 +293,7 @@ bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_
     }
     if (is_ear(i)) {
       const uint32_t a = previous[i], c = next[i];
-      triangles.insert(triangles.end(), {a, i, c});
+      cut.insert(cut.end(), {a, i, c});
       next[a] = c, previous[c] = a;
       --left;
       misses = 0, relaxed = false;
@@ -277,15 +303,22 @@ bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_
       i = next[i];
     }
   }
-  const bool simple = left == 3;
-  // The last triangle, or a fan of what no ear could be cut from.
-  for (uint32_t j = next[i]; next[j] != i; j = next[j])
-    triangles.insert(triangles.end(), {i, j, next[j]});
-  return simple;
+  if (left != 3) return fanned(false);
+  cut.insert(cut.end(), {i, next[i], next[next[i]]});
+  // Every triangle must turn the polygon's way (the ears do; the last one, left over, may not).
+  for (size_t t = 0; t < cut.size(); t += 3)
+    if (area(cut[t], cut[t + 1], cut[t + 2]) < -straight(cut[t], cut[t + 1], cut[t + 2]))
+      return fanned(false);
+  for (uint32_t corner : cut) triangles.push_back(kept[corner]);
+  return true;
 }
 
 bool appendPolygon(std::span<const uint32_t> polygon, std::span<const core::Vec3> positions,
                    std::vector<uint32_t>& indices) {
+  if (polygon.size() == 3) {
+    indices.insert(indices.end(), polygon.begin(), polygon.end());
+    return true;
+  }
   std::vector<core::Vec3> corners(polygon.size());
   for (size_t k = 0; k < polygon.size(); ++k) {
     if (polygon[k] >= positions.size()) {  // faces before vertices: no geometry yet

@@ -208,10 +208,19 @@ core::Result<std::vector<std::string>> checkShaderInterface(const render::GlslSo
       "object's pixels by its alpha, 1 where the object is)";
   if (!colour)
     return core::Error{fragment->file + ": writes no colour output at location 0" + colour_rule};
-  if (ir::typeInfo(fragment_uses, colour->value_type).components != 4)
+  // (An array's element 0 is what location 0 gets.)
+  Id colour_type = colour->value_type;
+  arrayLength(fragment_uses, colour_type);
+  const ir::TypeInfo colour_info = ir::typeInfo(fragment_uses, colour_type);
+  const ir::Instruction* colour_scalar = fragment_uses.def(colour_info.scalar_type);
+  if (colour_info.components != 4 || !colour_scalar || colour_scalar->opcode != spv::OpTypeFloat) {
+    const std::string type = glslTypeName(fragment_uses, colour_type);
     return core::Error{fragment->file + ": its colour output '" + colour->name +
-                       "' at location 0 is a " + glslTypeName(fragment_uses, colour->value_type) +
-                       ", which leaves alpha undefined" + colour_rule};
+                       "' at location 0 is " + (type.empty() ? "not a vec4" : "a " + type) +
+                       (colour_info.components != 4 ? ", which leaves alpha undefined"
+                                                    : ", which a colour attachment cannot take") +
+                       colour_rule};
+  }
 
   // Textures: a unit duolod binds nothing to samples (0, 0, 0, 1); two sampler types on one unit
   // make OpenGL refuse every draw (GL_INVALID_OPERATION).

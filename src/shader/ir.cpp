@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <unordered_map>
 
 namespace duolod::shader::ir {
@@ -445,14 +446,14 @@ thread_local const NameIndex* t_name_index = nullptr;
 }  // namespace
 
 NameIndexScope::NameIndexScope(const Module& module) {
-  auto* index = new NameIndex{&module, {}, t_name_index};
+  auto index = std::make_unique<NameIndex>(NameIndex{&module, {}, t_name_index});
   for (size_t i = 0; i < module.names.size(); ++i) {
     const Instruction& instruction = module.names[i];
     if (instruction.opcode == spv::OpName && !instruction.operands.empty())
       index->first.emplace(instruction.operands[0], i);
   }
-  t_name_index = index;
-  index_ = index;
+  t_name_index = index.get();
+  index_ = index.release();
 }
 
 NameIndexScope::~NameIndexScope() {
