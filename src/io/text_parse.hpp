@@ -104,12 +104,14 @@ inline std::string_view asText(const std::vector<uint8_t>& bytes) {
 // (0..n-1) appended to `triangles`. A convex polygon is fanned from its first corner (v0 v1 v2,
 // v0 v2 v3, ...: what exporters mean by it); a concave one is cut into ears, in the plane of its
 // Newell normal, so that no triangle covers the outside of a notch. Returns false when the polygon
-// is not simple (it crosses itself, or is too long to clip: more than kMaxClippedCorners corners)
-// or has no plane (all corners on a line): it is then fanned as before.
+// is not simple (it crosses or touches itself, winds around twice, or is too long to clip: more
+// than kMaxClippedCorners corners) or has no plane (all corners on a line): it is then fanned as
+// before. Corners repeated one after the other count once.
 constexpr size_t kMaxClippedCorners = 1024;  // ear clipping is quadratic to cubic in them
 // The readers' warning about the polygons triangulatePolygon returned false for.
 inline const std::string kUnclippedPolygon =
-    "could not be cut into ears (it crosses itself, has no plane or has over " +
+    "could not be cut into ears (it crosses or touches itself, winds around twice, has no "
+    "plane or has over " +
     std::to_string(kMaxClippedCorners) + " corners) and was fan-triangulated";
 bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_t>& triangles);
 // triangulatePolygon for a polygon of vertex ids into `indices`, its corners' positions read from
