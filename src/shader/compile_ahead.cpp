@@ -107,6 +107,9 @@ void CompileAhead::run(std::shared_ptr<const core::Asset> asset, render::Context
       if (auto uploaded = renderer->uploadAsset(*asset); uploaded) asset_id = *uploaded;
       if (full_ && asset_id >= 0) {  // the scorer's upload: the drawn mesh over the asset
         auto drawn = renderer->uploadMesh(asset_id, full_->drawn);
+        // The asset's own geometry is not drawn here: released (the drawn mesh keeps its
+        // textures and bounding sphere), so that a worker holds one mesh, not two.
+        renderer->releaseAsset(asset_id);
         asset_id = drawn ? *drawn : -1;
       }
     }
