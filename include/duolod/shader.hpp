@@ -138,5 +138,15 @@ enum class OptimizationLevel {
 core::Result<std::vector<uint32_t>> optimizeForEvaluation(
     const std::vector<uint32_t>& words, const std::string& what,
     OptimizationLevel level = OptimizationLevel::kPerformance);
+// While one of these lives (on any thread), optimizeForEvaluation remembers its successful
+// results by input (a search optimises the same stages again and again; up to 64 MB); when the
+// last one ends the memory is released. lod::generateLod and shader::runShaderLod hold one.
+class OptimizationMemoScope {
+ public:
+  OptimizationMemoScope();
+  ~OptimizationMemoScope();
+  OptimizationMemoScope(const OptimizationMemoScope&) = delete;
+  OptimizationMemoScope& operator=(const OptimizationMemoScope&) = delete;
+};
 
 }  // namespace duolod::shader

@@ -1479,6 +1479,7 @@ core::Result<GenerateResult> generateLod(const core::Asset& asset, const render:
                                          const GenerateOptions& options) {
   if (asset.mesh.indices.empty()) return core::Error{"generate: the asset has no triangles"};
   if (auto valid = checkGenerateOptions(options); !valid) return valid.error();
+  const shader::OptimizationMemoScope memo;  // released when the run ends
   Generator generator(asset, options);
   return generator.run(shader);
 }

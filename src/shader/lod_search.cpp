@@ -24,6 +24,7 @@ using core::internal::secondsSince;
 
 core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const render::GlslSource& source,
                                            const ShaderLodOptions& options) {
+  const OptimizationMemoScope memo;  // released when the search ends
   auto start = std::chrono::steady_clock::now();
   if (!(options.distance > 0)) return core::Error{"shader LOD: the distance must be positive"};
   auto vertex_words = compileToSpirv(source.vertex, Stage::kVertex, source.vertex_name);

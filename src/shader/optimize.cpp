@@ -15,17 +15,31 @@ namespace {
 // pure function of the words and the level, and a GP search optimises the same stage again and
 // again (a rule changes one stage, so the other is its parent's; configurations meet the same
 // variants; generate re-makes its candidates' evaluation forms after the searches). Failures are
-// not kept (their message names the caller's `what`). Bounded: cleared when it passes kMemoWords.
+// not kept (their message names the caller's `what`). Bounded: cleared when it passes kMemoWords,
+// and kept only while an OptimizationMemoScope lives (a library embedded in a long-running host
+// gets its memory back after each generateLod / runShaderLod).
 class OptimizationMemo {
  public:
   static OptimizationMemo& instance() {
     static OptimizationMemo memo;
     return memo;
   }
+  void open() {
+    std::lock_guard lock(mutex_);
+    ++scopes_;
+  }
+  void close() {
+    std::lock_guard lock(mutex_);
+    if (--scopes_ == 0) {
+      entries_ = {};
+      stored_words_ = 0;
+    }
+  }
   std::optional<std::vector<uint32_t>> find(const std::vector<uint32_t>& words,
                                             OptimizationLevel level) {
     const uint64_t key = keyOf(words, level);
     std::lock_guard lock(mutex_);
+    if (scopes_ == 0) return std::nullopt;
     auto [first, last] = entries_.equal_range(key);
     for (auto entry = first; entry != last; ++entry)
       if (entry->second.level == level && entry->second.input == words) return entry->second.output;
@@ -35,6 +49,7 @@ class OptimizationMemo {
              const std::vector<uint32_t>& optimized) {
     const uint64_t key = keyOf(words, level);
     std::lock_guard lock(mutex_);
+    if (scopes_ == 0) return;
     if (stored_words_ + words.size() + optimized.size() > kMemoWords) {
       entries_.clear();
       stored_words_ = 0;
@@ -59,9 +74,17 @@ class OptimizationMemo {
   std::mutex mutex_;
   std::unordered_multimap<uint64_t, Entry> entries_;
   size_t stored_words_ = 0;
+  int scopes_ = 0;  // OptimizationMemoScope objects alive
 };
 
 }  // namespace
+
+OptimizationMemoScope::OptimizationMemoScope() {
+  OptimizationMemo::instance().open();
+}
+OptimizationMemoScope::~OptimizationMemoScope() {
+  OptimizationMemo::instance().close();
+}
 
 core::Result<std::vector<uint32_t>> optimizeForEvaluation(const std::vector<uint32_t>& words,
                                                           const std::string& what,
