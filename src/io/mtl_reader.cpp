@@ -439,12 +439,12 @@ core::Result<core::Material> buildMaterial(const MtlMaterial& source, const Load
     material.emissive_factor = {1, 1, 1};  // the map alone should show
   }
   if (source.roughness) {
-    material.roughness_factor = std::clamp(*source.roughness, 0.0f, 1.0f);
+    material.roughness_factor = *source.roughness;  // in [0, 1] since parsing
   } else if (!source.roughness_map && source.shininess) {
     material.roughness_factor = roughnessFromShininess(*source.shininess);
   }
   if (source.metallic) {
-    material.metallic_factor = std::clamp(*source.metallic, 0.0f, 1.0f);
+    material.metallic_factor = *source.metallic;  // in [0, 1] since parsing
   } else if (source.metallic_map) {
     material.metallic_factor = 1.0f;  // the map alone should show
   }

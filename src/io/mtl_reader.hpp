@@ -29,8 +29,8 @@ struct MtlMaterial {
   std::optional<core::Vec3> diffuse;   // Kd
   std::optional<core::Vec3> emissive;  // Ke
   std::optional<float> shininess;      // Ns (Phong exponent)
-  std::optional<float> roughness;      // Pr
-  std::optional<float> metallic;       // Pm
+  std::optional<float> roughness;      // Pr, in [0, 1] (clamped when parsed)
+  std::optional<float> metallic;       // Pm, in [0, 1] (clamped when parsed)
   std::optional<TextureRef> diffuse_map, emissive_map, normal_map, roughness_map, metallic_map;
 };
 

@@ -279,8 +279,7 @@ class ObjParser {
       if (placed) polygon_points_[k] = positions_[polygon_[k].position];
     }
     if (!placed) {
-      for (uint32_t i = 1; i + 1 < polygon_.size(); ++i)
-        polygon_triangles_.insert(polygon_triangles_.end(), {0, i, i + 1});
+      text::appendFanCorners(polygon_.size(), polygon_triangles_);
     } else if (!text::triangulatePolygon(polygon_points_, polygon_triangles_) &&
                !first_unclipped_line_) {
       first_unclipped_line_ = line_;
@@ -487,7 +486,7 @@ class ObjParser {
   std::vector<Corner> polygon_;  // scratch for the face being read
   std::vector<core::Vec3> polygon_points_;   // its corners' positions
   std::vector<uint32_t> polygon_triangles_;  // its triangles, as corner numbers
-  size_t first_unclipped_line_ = 0;  // the first polygon that crosses itself or has no plane
+  size_t first_unclipped_line_ = 0;  // the first polygon not cut into ears (triangulatePolygon)
 
   std::vector<MaterialGroup> groups_;
   std::map<std::string, size_t> group_by_name_;

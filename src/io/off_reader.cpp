@@ -248,7 +248,7 @@ class OffParser {
   core::Asset& asset_;
   OffLayout layout_;
   size_t line_ = 0;
-  size_t first_unclipped_line_ = 0;  // the first polygon that crosses itself or has no plane
+  size_t first_unclipped_line_ = 0;  // the first polygon not cut into ears (triangulatePolygon)
 };
 
 }  // namespace

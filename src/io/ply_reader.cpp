@@ -566,7 +566,7 @@ class PlyParser {
     }
     if (auto status = checkCount(element, body); !status) return status;
     std::vector<uint32_t> polygon;
-    size_t unclipped = 0;  // polygons that cross themselves or have no plane (fanned)
+    size_t unclipped = 0;  // polygons not cut into ears (triangulatePolygon): fanned
     for (uint64_t item = 0; item < element.count; ++item) {
       for (const Property& property : element.properties) {
         body.at(&element, item, &property);

@@ -183,11 +183,9 @@ core::Result<std::vector<uint8_t>> readInputFile(const std::string& path) {
   return bytes;
 }
 
-namespace {
 void appendFanCorners(size_t n, std::vector<uint32_t>& triangles) {
   for (uint32_t i = 1; i + 1 < n; ++i) triangles.insert(triangles.end(), {0, i, i + 1});
 }
-}  // namespace
 
 bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_t>& triangles) {
   const size_t count = corners.size();
@@ -320,16 +318,17 @@ bool appendPolygon(std::span<const uint32_t> polygon, std::span<const core::Vec3
     return true;
   }
   std::vector<core::Vec3> corners(polygon.size());
-  for (size_t k = 0; k < polygon.size(); ++k) {
-    if (polygon[k] >= positions.size()) {  // faces before vertices: no geometry yet
-      for (size_t i = 1; i + 1 < polygon.size(); ++i)
-        indices.insert(indices.end(), {polygon[0], polygon[i], polygon[i + 1]});
-      return true;
-    }
-    corners[k] = positions[polygon[k]];
-  }
   std::vector<uint32_t> triangles;
-  const bool simple = triangulatePolygon(corners, triangles);
+  bool placed = true;
+  for (size_t k = 0; k < polygon.size() && placed; ++k) {
+    placed = polygon[k] < positions.size();  // faces before vertices: no geometry yet
+    if (placed) corners[k] = positions[polygon[k]];
+  }
+  bool simple = true;
+  if (placed)
+    simple = triangulatePolygon(corners, triangles);
+  else
+    appendFanCorners(polygon.size(), triangles);
   for (uint32_t corner : triangles) indices.push_back(polygon[corner]);
   return simple;
 }

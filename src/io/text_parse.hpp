@@ -107,6 +107,8 @@ inline std::string_view asText(const std::vector<uint8_t>& bytes) {
 // is not simple (it crosses or touches itself, winds around twice, or is too long to clip: more
 // than kMaxClippedCorners corners) or has no plane (all corners on a line): it is then fanned as
 // before. Corners repeated one after the other count once.
+// The fan of a polygon of n corners (0 1 2, 0 2 3, ...), as corner numbers.
+void appendFanCorners(size_t n, std::vector<uint32_t>& triangles);
 constexpr size_t kMaxClippedCorners = 1024;  // ear clipping is quadratic to cubic in them
 // The readers' warning about the polygons triangulatePolygon returned false for.
 inline const std::string kUnclippedPolygon =
