@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -175,6 +176,9 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
 // The compile-ahead workers make the GP scorers' cost profiles too (the same samples, uniforms
 // and upload on another context, which renders the same bits): the levels are the same with and
 // without them, byte for byte, and some profiles did come from them.
+// Also (the same runs): pair renders are dropped once no level's pair set can compare them in a
+// transition (eq. 5), so fewer bytes are held at once than were made, and the shader-only
+// baseline, whose pair sets were known as the joint search went, renders nothing again.
 TEST(CliGenerate, CompilingAheadChangesNoResult) {
   const std::string spot = test::sharedAsset("obj/spot/spot.obj");
   if (!fs::exists(spot)) GTEST_SKIP() << "missing asset " << spot;
@@ -199,6 +203,19 @@ TEST(CliGenerate, CompilingAheadChangesNoResult) {
       EXPECT_GT(profiled, 0) << log;
     else
       EXPECT_EQ(profiled, 0) << log;
+    const size_t baseline_at = log.find("shader-only baseline: ");
+    ASSERT_NE(baseline_at, std::string::npos) << log;
+    const std::string baseline = log.substr(baseline_at, log.find('\n', baseline_at) - baseline_at);
+    EXPECT_TRUE(test::contains(baseline, "(0 renders for them)")) << baseline;
+    const size_t kept_at = log.find("pair renders kept for the transitions: at most ");
+    ASSERT_NE(kept_at, std::string::npos) << log;
+    double kept_mb = 0, made_mb = 0;
+    ASSERT_EQ(std::sscanf(log.c_str() + kept_at,
+                          "pair renders kept for the transitions: at most %lf MB at once of %lf MB",
+                          &kept_mb, &made_mb),
+              2)
+        << log;
+    EXPECT_LT(kept_mb, 0.9 * made_mb) << log;
     std::string bytes;
     for (const char* file : {"lod.bin", "level0.frag.spv", "level1.frag.spv", "level2.frag.spv"})
       if (fs::exists(out / file))

@@ -3,6 +3,7 @@
 // out by hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "lod/separate.hpp"
@@ -170,6 +171,53 @@ TEST(LodSeparate, SmoothingNeverRaisesTheTotalTransitionError) {
     for (size_t level = 0; level < smooth->chosen.size(); ++level)
       EXPECT_TRUE(smooth->chosen[level].within_bound || smooth->fallback_to_original[level]);
   }
+}
+
+// The hook sees each level's pair set as it is chosen, in level order, before the smoothest path
+// asks for any transition (generate drops the other renders then); one level searched alone
+// chooses what the whole run chooses there.
+TEST(LodSeparate, EachLevelsPairSetIsSeenBeforeAnyTransitionAndAloneIsTheSame) {
+  int evaluations = 0;
+  lod::SeparateProblem problem = additiveProblem({0.0, 2.5, 5.0, 9.5}, &evaluations);
+  std::vector<int> seen_levels;
+  std::vector<std::vector<lod::EvaluatedPair>> seen_pairs;
+  bool transition_before_last_level = false;
+  const lod::TransitionEvaluator transition = problem.transition;
+  problem.transition = [&](int level, const lod::EvaluatedPair& from,
+                           const lod::EvaluatedPair& to) {
+    transition_before_last_level |= seen_levels.size() < 4;
+    return transition(level, from, to);
+  };
+  lod::SeparateOptions options;
+  options.time_tolerance = 0.3;  // several pairs per level
+  options.on_level_pairs = [&](int level, const std::vector<lod::EvaluatedPair>& pairs) {
+    seen_levels.push_back(level);
+    seen_pairs.push_back(pairs);
+  };
+  auto solution = lod::optimizeSeparate(problem, options);
+  ASSERT_TRUE(solution.ok()) << solution.error().message;
+  EXPECT_EQ(seen_levels, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_FALSE(transition_before_last_level);
+  size_t most_pairs = 0;
+  for (int level = 0; level < 4; ++level) {
+    const std::vector<lod::EvaluatedPair>& chosen = solution->level_pairs[level];
+    ASSERT_EQ(seen_pairs[level].size(), chosen.size()) << "level " << level;
+    most_pairs = std::max(most_pairs, chosen.size());
+    lod::SeparateSolution alone;
+    ASSERT_TRUE(lod::searchLevel(problem, options, level, alone).ok());
+    ASSERT_EQ(alone.level_pairs.size(), 1u);
+    ASSERT_EQ(alone.level_pairs[0].size(), chosen.size()) << "level " << level;
+    for (size_t k = 0; k < chosen.size(); ++k) {
+      for (const auto* pairs : {&seen_pairs[level], &alone.level_pairs[0]}) {
+        EXPECT_EQ((*pairs)[k].mesh, chosen[k].mesh) << "level " << level;
+        EXPECT_EQ((*pairs)[k].shader, chosen[k].shader) << "level " << level;
+      }
+    }
+    EXPECT_EQ(alone.fallback_to_original[0], solution->fallback_to_original[level]);
+  }
+  EXPECT_GT(most_pairs, 1u);  // the tolerance did give the path a choice
+  lod::SeparateSolution none;
+  EXPECT_FALSE(lod::searchLevel(problem, options, 4, none).ok());
 }
 
 TEST(LodSeparate, MergesLevelsThatGainLessThanW) {

@@ -454,6 +454,11 @@ struct GenerateResult {
   std::vector<HeldOutCheck> dropped;
   GenerateTimings timings;
   int pair_evaluations = 0, transition_evaluations = 0, shader_candidates = 0;
+  // Renders made for the transition errors alone (pairs not rendered at that distance before, or
+  // whose render was dropped), and the most bytes of pair renders held at once for them (only
+  // those of the levels' pair sets are kept once a level's search ends).
+  int transition_renders = 0;
+  size_t kept_render_bytes_peak = 0;
   std::vector<int> mesh_candidates;  // per level
   std::string device, cost_source;
   ReportData report;

@@ -16,6 +16,7 @@
 // from the pair's own vertex and fragment invocation counts, or measured on the wall clock.
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
@@ -387,8 +388,22 @@ class Generator {
   size_t next_search_level_ = 0;    // the first of them not yet handed to shader_search_
   std::vector<ShaderCandidate> shaders_;
   std::map<std::tuple<int, int, int, int>, PairRecord> pairs_;
+  // Pair renders kept for the transition errors (eq. 5), by (distance level, set, mesh, shader).
+  // Only the renders of pairs in some optimization's level pair sets are compared there
+  // (wantRendersOf): a level's other renders are dropped as its search ends (dropUnwanted), and
+  // one found missing later is rendered again (renders are deterministic). Kept all, spot's
+  // default run peaked at 1.24 GB, 0.2 GB more.
   std::map<std::tuple<int, int, int, int>, render::ImageBatch8> images_;
-  int pair_evaluations_ = 0, transition_evaluations_ = 0;
+  std::set<std::tuple<int, int, int, int>> wanted_images_;
+  size_t kept_bytes_ = 0, kept_bytes_peak_ = 0, rendered_bytes_ = 0;  // of images_' pixels
+  const render::ImageBatch8& keepRender(const std::tuple<int, int, int, int>& key,
+                                        render::ImageBatch8 images);
+  void wantRendersOf(LodScope scope, int level, const std::vector<EvaluatedPair>& pairs);
+  void dropUnwanted(int level);
+  int setIn(LodScope scope, int level) const {
+    return scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
+  }
+  int pair_evaluations_ = 0, transition_evaluations_ = 0, transition_renders_ = 0;
   double shader_search_seconds_ = 0;
 };
 
@@ -685,7 +700,7 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
   ++pair_evaluations_;
   // Kept: the transition error (eq. 5) compares pairs at these very distances (a few MB each;
   // the renders are what costs).
-  auto kept = images_.emplace(key, std::move(*images)).first;
+  const render::ImageBatch8& kept = keepRender(key, std::move(*images));
   ShaderCandidate& candidate = shaders_[shader];
   if (auto profiled = profile(candidate); !profiled) return profiled.error();
   const LevelState& level = levels_[distance_level];
@@ -695,7 +710,7 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
       .fragment_ops = candidate.fragment_ops,
       .vertex_invocations = static_cast<double>(work.vertex_invocations) / draws,
       .fragment_invocations = static_cast<double>(work.fragment_invocations) / draws};
-  PairRecord record{.error = metric::imageError(kept->second, level.reference),
+  PairRecord record{.error = metric::imageError(kept, level.reference),
                     .cost = shader::predictCost(features, shader::calibratedCostWeights())};
   pairs_.emplace(key, record);
   return record;
@@ -713,7 +728,8 @@ core::Result<double> Generator::transitionError(int level, int from_set,
     if (found == images_.end()) {
       auto images = renderPair(at, set, pair.mesh, pair.shader, nullptr);
       if (!images) return images.error();
-      found = images_.emplace(key, std::move(*images)).first;
+      ++transition_renders_;
+      return &keepRender(key, std::move(*images));
     }
     return &found->second;
   };
@@ -723,6 +739,41 @@ core::Result<double> Generator::transitionError(int level, int from_set,
   if (!b) return b.error();
   ++transition_evaluations_;
   return metric::imageError(**a, **b).epsilon;
+}
+
+// A transition at level L (eq. 5) compares a pair of level L's set with one of level L + 1's, both
+// rendered at d_{L+1}: a level's pairs are wanted at the next level's distance, and (but level 0's,
+// which nothing precedes) at their own.
+void Generator::wantRendersOf(LodScope scope, int level, const std::vector<EvaluatedPair>& pairs) {
+  for (const EvaluatedPair& pair : pairs) {
+    const int set = pair.mesh == 0 ? 0 : setIn(scope, level);  // as in evaluatePair
+    if (level > 0) wanted_images_.insert({level, set, pair.mesh, pair.shader});
+    if (size_t(level) + 1 < levels_.size())
+      wanted_images_.insert({level + 1, set, pair.mesh, pair.shader});
+  }
+}
+
+void Generator::dropUnwanted(int level) {
+  for (auto it = images_.lower_bound({level, INT_MIN, INT_MIN, INT_MIN});
+       it != images_.end() && std::get<0>(it->first) == level;) {
+    if (wanted_images_.count(it->first)) {
+      ++it;
+      continue;
+    }
+    kept_bytes_ -= it->second.pixels.size();
+    it = images_.erase(it);
+  }
+}
+
+const render::ImageBatch8& Generator::keepRender(const std::tuple<int, int, int, int>& key,
+                                                 render::ImageBatch8 images) {
+  auto [it, added] = images_.emplace(key, std::move(images));
+  if (added) {
+    kept_bytes_ += it->second.pixels.size();
+    rendered_bytes_ += it->second.pixels.size();
+    kept_bytes_peak_ = std::max(kept_bytes_peak_, kept_bytes_);
+  }
+  return it->second;
 }
 
 SeparateProblem Generator::problem(LodScope scope) {
@@ -737,9 +788,7 @@ SeparateProblem Generator::problem(LodScope scope) {
       sizes.push_back(double(candidate->triangles));
   }
   problem.shader_count = scope == LodScope::kMeshOnly ? 1 : static_cast<int>(shaders_.size());
-  auto setOf = [this, scope](int level) {
-    return scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
-  };
+  auto setOf = [this, scope](int level) { return setIn(scope, level); };
   problem.evaluate = [this, setOf](int level, int mesh,
                                    int shader) -> core::Result<PairEvaluation> {
     auto record = evaluatePair(level, setOf(level), mesh, shader);
@@ -898,20 +947,37 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   // their own thread (the caller's thread would only wait); its renders are also the joint
   // walk's first column (S_0 errs least on M_0).
   std::map<LodScope, SeparateSolution> baselines;
+  auto keepRendersOf = [this](LodScope scope) {
+    return [this, scope](int level, const std::vector<EvaluatedPair>& pairs) {
+      wantRendersOf(scope, level, pairs);
+      dropUnwanted(level);
+    };
+  };
+  // What an optimization step rendered and compared, for the log.
+  struct Tally {
+    int pair_renders = 0, transitions = 0, transition_renders = 0;
+  };
+  auto tally = [this] {
+    return Tally{pair_evaluations_, transition_evaluations_, transition_renders_};
+  };
+  auto describe = [&](const char* what, const Tally& before, Clock::time_point since) {
+    char line[240];
+    std::snprintf(
+        line, sizeof line, "%s: %d pair renders, %d transitions (%d renders for them), %.1f s",
+        what, pair_evaluations_ - before.pair_renders, transition_evaluations_ - before.transitions,
+        transition_renders_ - before.transition_renders, secondsSince(since));
+    return std::string(line);
+  };
   if (options_.scope == LodScope::kJoint && shader_search_) {
     const auto baseline_start = Clock::now();
-    const int renders_before = pair_evaluations_, transitions_before = transition_evaluations_;
+    const Tally before = tally();
+    separate.on_level_pairs = keepRendersOf(LodScope::kMeshOnly);
     auto baseline = optimizeSeparate(problem(LodScope::kMeshOnly), separate);
     if (!baseline) return baseline.error();
-    if (options_.progress) {
-      char line[160];
-      std::snprintf(line, sizeof line,
-                    "mesh-only baseline (while the searches run): %d pair renders, %d "
-                    "transitions, %.1f s",
-                    pair_evaluations_ - renders_before,
-                    transition_evaluations_ - transitions_before, secondsSince(baseline_start));
-      options_.progress({"shader candidates", 0.0, line});
-    }
+    if (options_.progress)
+      options_.progress(
+          {"shader candidates", 0.0,
+           describe("mesh-only baseline (while the searches run)", before, baseline_start)});
     baselines.emplace(LodScope::kMeshOnly, std::move(*baseline));
   }
   if (!interleaved)
@@ -933,6 +999,21 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   };
   if (!interleaved && options_.sort_prefetch && options_.scope != LodScope::kMeshOnly)
     startSortPrefetch();
+  separate.on_level_pairs = keepRendersOf(options_.scope);
+  if (options_.scope == LodScope::kJoint && !interleaved) {
+    // The shader-only baseline, which runs after this optimization, compares the renders of M_0
+    // with its shaders. Its searches use only the SortByError records this one makes at each
+    // level (and the same shader candidates), so its pair sets are known as each level ends: the
+    // renders they want are kept instead of dropped and rendered again (35 renders, 2 s, on spot).
+    separate.on_level_pairs = [this, &separate](int level,
+                                                const std::vector<EvaluatedPair>& pairs) {
+      wantRendersOf(options_.scope, level, pairs);
+      SeparateSolution ahead;  // (on failure the renders are made again when wanted)
+      if (searchLevel(problem(LodScope::kShaderOnly), separate, level, ahead))
+        wantRendersOf(LodScope::kShaderOnly, level, ahead.level_pairs.back());
+      dropUnwanted(level);
+    };
+  }
   auto joint = interleaved ? runInterleaved(separate)
                            : optimizeSeparate(problem(options_.scope), separate);
   if (sort_prefetch_) {
@@ -950,30 +1031,36 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
     sort_prefetch_.reset();
   }
   if (!joint) return joint.error();
-  auto logStep = [&](const char* what, Clock::time_point since, int renders_before,
-                     int transitions_before) {
-    if (!options_.progress) return;
-    char line[200];
-    std::snprintf(line, sizeof line, "%s: %d pair renders, %d transitions, %.1f s", what,
-                  pair_evaluations_ - renders_before, transition_evaluations_ - transitions_before,
-                  secondsSince(since));
-    options_.progress({"smoothing and merging", 1.0, line});
+  auto logStep = [&](const char* what, Clock::time_point since, const Tally& before) {
+    if (options_.progress)
+      options_.progress({"smoothing and merging", 1.0, describe(what, before, since)});
   };
-  logStep(interleaved ? "interleaved optimization" : "separate optimization (with smoothing, merging)",
-          optimization_start, 0, 0);
+  logStep(
+      interleaved ? "interleaved optimization" : "separate optimization (with smoothing, merging)",
+      optimization_start, Tally{});
   result.shader_candidates = static_cast<int>(shaders_.size());
   if (options_.scope == LodScope::kJoint) {
     separate.on_level = nullptr;
     for (LodScope scope : {LodScope::kMeshOnly, LodScope::kShaderOnly}) {
       if (baselines.count(scope)) continue;
       const auto baseline_start = Clock::now();
-      const int renders_before = pair_evaluations_, transitions_before = transition_evaluations_;
+      const Tally before = tally();
+      separate.on_level_pairs = keepRendersOf(scope);
       auto baseline = optimizeSeparate(problem(scope), separate);
       if (!baseline) return baseline.error();
       logStep(scope == LodScope::kMeshOnly ? "mesh-only baseline" : "shader-only baseline",
-              baseline_start, renders_before, transitions_before);
+              baseline_start, before);
       baselines.emplace(scope, std::move(*baseline));
     }
+  }
+  if (options_.progress) {
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "pair renders kept for the transitions: at most %.1f MB at once of %.1f MB "
+                  "made (%d renders for the transitions alone)",
+                  double(kept_bytes_peak_) / (1 << 20), double(rendered_bytes_) / (1 << 20),
+                  transition_renders_);
+    options_.progress({"smoothing and merging", 1.0, line});
   }
   result.timings.optimization_seconds = secondsSince(optimization_start);
 
@@ -1054,6 +1141,8 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
     if (auto measured = measureChosen(result); !measured) return measured.error();
   result.pair_evaluations = pair_evaluations_;
   result.transition_evaluations = transition_evaluations_;
+  result.transition_renders = transition_renders_;
+  result.kept_render_bytes_peak = kept_bytes_peak_;
   fillReport(result, *joint, baselines);
   result.timings.total_seconds = secondsSince(start);
   return result;
@@ -1422,6 +1511,7 @@ core::Result<SeparateSolution> Generator::runInterleaved(const SeparateOptions& 
     solution.shader_orders.emplace_back();
     solution.level_pairs.push_back(std::move(optimal));
     solution.fallback_to_original.push_back(fallback);
+    if (options.on_level_pairs) options.on_level_pairs(level, solution.level_pairs.back());
   }
   SeparateProblem whole = problem(LodScope::kJoint);
   if (auto finished = smoothAndMerge(whole, options, solution); !finished) return finished.error();

@@ -40,6 +40,10 @@ struct SeparateOptions {
   bool smooth = true;             // Algorithm 3; off: each level takes its cheapest pair
   // Called as each level's search finishes (level, evaluations so far).
   std::function<void(int, int)> on_level;
+  // Called with each level's pair set as it is chosen, before on_level. The smoothest path
+  // (Algorithm 3) compares the renders of these pairs only: a caller that keeps renders for it can
+  // drop the level's others.
+  std::function<void(int level, const std::vector<EvaluatedPair>& pairs)> on_level_pairs;
 };
 
 struct SeparateSolution {
@@ -57,6 +61,13 @@ struct SeparateSolution {
 
 core::Result<SeparateSolution> optimizeSeparate(const SeparateProblem& problem,
                                                 const SeparateOptions& options);
+
+// One level of the first half (Algorithm 1, lines 5-10: SortByError, then SearchPairs), appended
+// to `solution` (shader_orders, searches, level_pairs, fallback_to_original, evaluations), without
+// the hooks. optimizeSeparate runs it for each level in turn; a caller may run it alone to learn
+// which pairs a level of another problem would choose.
+core::Status searchLevel(const SeparateProblem& problem, const SeparateOptions& options, int level,
+                         SeparateSolution& solution);
 
 // The second half, for optimizers that make the levels' pair sets another way (the interleaved
 // one, §4.3): given solution.level_pairs and fallback_to_original, picks the smoothest path
