@@ -839,6 +839,50 @@ TEST(GltfMalformed, AccessorCountLargerThanItsBufferView) {
   expectLoadError(g.write(test::scratchDir("m"), "count"), "do not fit");
 }
 
+// A broken accessor is named with the mesh (index and name), primitive and attribute that use it,
+// and the bytes that do not fit. tinygltf's own messages named none of them ("primitive indices
+// accessor out of bounds", "accessor[3] invalid bufferView"), nor did ours the mesh's name or the
+// numbers ("NORMAL (accessor 3): 4 elements do not fit in the bufferView").
+TEST(GltfMalformed, ErrorsNameTheMeshPrimitiveAndAttribute) {
+  const fs::path dir = test::scratchDir("m_context");
+  // Mesh 0 a plain triangle, mesh 1 'Body' the same triangle with normals, on two nodes.
+  auto two_meshes = [] {
+    HandGltf g = oneTriangle();
+    const int normals = g.addFloats({0, 0, 1, 0, 0, 1, 0, 0, 1}, "VEC3");
+    g.doc["meshes"].push_back(
+        {{"name", "Body"}, {"primitives", {primitive(0, 1, -1, {{"NORMAL", normals}})}}});
+    g.addNode({{"mesh", 1}});
+    g.setScene({0, 1});
+    return g;
+  };
+  ASSERT_TRUE(io::loadAsset(two_meshes().write(dir, "good")).ok());
+  auto expectMessage = [&](const HandGltf& g, const std::string& name, const std::string& text) {
+    const std::string path = g.write(dir, name);
+    auto loaded = io::loadAsset(path);
+    ASSERT_FALSE(loaded.ok()) << name;
+    EXPECT_EQ(loaded.error().message, path + ": " + text);
+  };
+  HandGltf normals = two_meshes();
+  normals.doc["accessors"][2]["count"] = 4;  // 4 x 12 bytes from a 36-byte view
+  expectMessage(normals, "normals",
+                "mesh 1 'Body', primitive 0, attribute NORMAL: accessor 2 reads bytes 0-48 of "
+                "bufferView 2 that holds 36: its 4 elements do not fit");
+  HandGltf missing = two_meshes();
+  missing.doc["meshes"][1]["primitives"][0]["indices"] = 7;
+  expectMessage(missing, "missing_indices",
+                "mesh 1 'Body', primitive 0, indices: accessor 7 does not exist (3 accessors)");
+  HandGltf viewless = two_meshes();
+  viewless.doc["accessors"][1].erase("bufferView");
+  expectMessage(viewless, "viewless_indices",
+                "mesh 0, primitive 0, indices: accessor 1 has no bufferView (data from sparse "
+                "accessors or compression extensions is not supported)");
+  HandGltf past = two_meshes();
+  past.doc["bufferViews"][0]["byteLength"] = 400;
+  expectMessage(past, "view_past_buffer",
+                "mesh 0, primitive 0, attribute POSITION: accessor 0: bufferView 0 runs past the "
+                "end of buffer 0 (offset 0 + length 400 > 84 bytes)");
+}
+
 TEST(GltfMalformed, BufferViewPastTheEndOfTheBuffer) {
   HandGltf g = oneTriangle();
   g.doc["bufferViews"][1]["byteLength"] = 400;

@@ -385,6 +385,16 @@ std::vector<std::pair<std::string, std::string>> seedFiles() {
       {"seed.off",
        "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n1 1 0 0 0 255 255\n"
        "0 1 0 9 9 9 255\n3 0 1 2\n3 0 2 3\n"},
+      // Read free-format (a vertex split over lines, two on a line, faces two on a line and
+      // over lines, a face colour), and a PLY with its faces first (kept until the vertices).
+      {"seed_free.off",
+       "COFF 4 4 0\n0 0 0\n255 0 0\n1 0 0 0 255 0 255 1 1 0 0 0 255 255\n"
+       "0 1 0 9 9 9 # comment\n3 0 1 2 255 0 0\n3 0 2 3 3 1 2 3\n3 0\n1 3\n"},
+      {"seed_faces_first.ply",
+       "ply\nformat ascii 1.0\nelement face 2\nproperty list uchar int vertex_indices\n"
+       "element vertex 5\n" +
+           std::string(kPlyXyzHeader) +
+           "end_header\n4 0 1 2 3\n3 1 4 2\n0 0 0\n2 1 0\n0 2 0\n0.5 1 0\n3 1 0\n"},
       {"seed.obj",
        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
        "usemtl a\nf 1/1/1 2/2/1 3/3/1\nf -4/-3/-1 -2/-1/-1 -1/-1/-1\n"},

@@ -117,6 +117,95 @@ TEST(OffReader, CnoffAndStoff) {
   EXPECT_EQ(both.mesh.uv0[2].y, 0.25f);
 }
 
+// OFF is whitespace-separated numbers: the cube of CubeOfQuads with its counts on the keyword
+// line, a vertex split over two lines, several vertices and several faces on a line, a face split
+// over lines, all on one line, one number a line after the counts must read the same. Such files
+// were refused
+// ("vertex 1 has 2 values (3 needed)").
+const char* kCubeByLines =
+    "OFF\n8 6 12\n"
+    "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+    "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 3 7 6 2\n4 0 4 7 3\n4 1 2 6 5\n";
+
+TEST(OffReader, FreeFormatLayoutsReadAsByLines) {
+  const core::Asset by_lines = readOffOk(writeScratchFile("cube_lines.off", kCubeByLines));
+  const struct {
+    const char* name;
+    const char* text;
+  } layouts[] = {
+      {"cube_free.off",
+       "OFF 8 6 12\n"
+       "0 0 0   1 0 0\n1 1 0 0\n1 0  # a vertex split over two lines\n0 0 1 1 0 1\n"
+       "1 1 1 0 1 1\n"
+       "4 0 3 2 1 4 4 5 6 7\n4 0 1 5 4  4 3 7 6 2\n4 0 4\n7 3\n4 1 2 6 5\n"},
+      {"cube_one_line.off",
+       "OFF 8 6 12 0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1 4 0 3 2 1 4 4 5 6 7 "
+       "4 0 1 5 4 4 3 7 6 2 4 0 4 7 3 4 1 2 6 5"},
+      {"cube_columns.off",
+       "OFF\n8 6 12\n0\n0\n0\n1\n0\n0\n1\n1\n0\n0\n1\n0\n0\n0\n1\n1\n0\n1\n1\n1\n1\n"
+       "0\n1\n1\n4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 3 7 6 2\n4 0 4 7 3\n4 1 2 6 5\n"},
+  };
+  for (const auto& layout : layouts) {
+    SCOPED_TRACE(layout.name);
+    const core::Asset asset = readOffOk(writeScratchFile(layout.name, layout.text));
+    EXPECT_EQ(asset.mesh.positions, by_lines.mesh.positions);
+    EXPECT_EQ(asset.mesh.indices, by_lines.mesh.indices);
+    EXPECT_TRUE(test::hasWarningContaining(asset, "read as free-format OFF"));
+  }
+  // A file laid out by lines gets no such warning.
+  EXPECT_TRUE(by_lines.warnings.empty());
+}
+
+// Free-format with the optional parts: a COFF vertex split over lines keeps its 3-number colour
+// (the lines tell); vertices that do not start a line have RGBA colours (Geomview's 4 numbers);
+// a face's colour is what follows its indices on its line, unless that is another face.
+TEST(OffReader, FreeFormatKeepsVertexAndFaceColours) {
+  const core::Asset coff = readOffOk(writeScratchFile(
+      "free_colors.off",
+      "COFF\n4 3 0\n"
+      "0 0 0\n255 0 0\n"                        // split over two lines: RGB
+      "1 0 0 0 255 0 255  1 1 0 0 0 255 128\n"  // two vertices on a line: RGBA each
+      "0 1 0 0.5 0.5 0.5\n"                     // one line, RGB
+      "3 0 1 2 255 255 255\n"                   // a face and its colour
+      "3 0 2 3 3 0 1 3\n"                       // two faces on a line (no colour)
+      ));
+  ASSERT_EQ(coff.mesh.colors.size(), 4u);
+  EXPECT_EQ(coff.mesh.colors[0].x, 1.0f);
+  EXPECT_EQ(coff.mesh.colors[0].w, 1.0f);
+  EXPECT_EQ(coff.mesh.colors[1].y, 1.0f);
+  EXPECT_EQ(coff.mesh.colors[2].z, 1.0f);
+  EXPECT_FLOAT_EQ(coff.mesh.colors[2].w, 128 / 255.0f);
+  EXPECT_EQ(coff.mesh.colors[3].x, 0.5f);
+  EXPECT_EQ(coff.mesh.positions[3], (core::Vec3{0, 1, 0}));
+  EXPECT_EQ(coff.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 1, 3}));
+
+  // Normals and texture coordinates wrapped at four numbers a line.
+  const core::Asset stnoff = readOffOk(writeScratchFile("free_stn.off",
+                                                        "STNOFF 3 1 0\n"
+                                                        "0 0 0 0\n0 1 0 0\n"
+                                                        "1 0 0 0\n0 1 1 0\n"
+                                                        "0 1 0 0\n0 1 0.25 0.75\n"
+                                                        "3 0 1 2\n"));
+  ASSERT_EQ(stnoff.mesh.normals.size(), 3u);
+  EXPECT_EQ(stnoff.mesh.positions[2], (core::Vec3{0, 1, 0}));
+  EXPECT_EQ(stnoff.mesh.normals[1], (core::Vec3{0, 0, 1}));
+  EXPECT_EQ(stnoff.mesh.uv0[2].x, 0.25f);
+  EXPECT_EQ(stnoff.mesh.uv0[2].y, 0.25f);  // t up becomes v down
+}
+
+// A free-format file with a real fault: the message gives the line reading's reason and where the
+// free-format reading failed.
+TEST(OffReader, FreeFormatErrorsSayWhere) {
+  const std::string path =
+      writeScratchFile("free_bad.off", "OFF 3 1 0\n0 0 0 1 0 0\n0 1 0 3 0 1 7\n");
+  auto asset = io::readOff(path, io::LoadOptions{});
+  ASSERT_FALSE(asset.ok());
+  EXPECT_EQ(asset.error().message,
+            path +
+                ":3: file ends after 2 of 3 vertices; read as free-format OFF instead: line 3: "
+                "face 0: vertex index 7 out of range (3 vertices)");
+}
+
 TEST(OffReader, NoFacesIsNotAnErrorHere) {
   core::Asset asset = readOffOk(writeScratchFile("cloud.off", "OFF\n2 0 0\n0 0 0\n1 1 1\n"));
   EXPECT_EQ(asset.mesh.vertexCount(), 2u);

@@ -173,6 +173,36 @@ TEST(PlyReader, ConcavePolygonIsCutIntoEars) {  // the dart of io_obj_test.cpp
   EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{3, 0, 1, 1, 2, 3}));
 }
 
+// The header may put the face element first: its polygons must still be cut into ears (they were
+// fanned, as their corners had no positions yet: the dart's fan 0 1 2, 0 2 3 covers its notch),
+// in file order, with nothing to warn about.
+TEST(PlyReader, FacesBeforeVerticesAreCutIntoEars) {
+  const std::string faces_first =
+      "ply\nformat ascii 1.0\nelement face 2\nproperty list uchar int vertex_indices\n"
+      "element vertex 5\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+      "4 0 1 2 3\n3 1 4 2\n"
+      "0 0 0\n2 1 0\n0 2 0\n0.5 1 0\n3 1 0\n";
+  core::Asset asset = readPlyOk(writeScratchFile("faces_first.ply", faces_first));
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{3, 0, 1, 1, 2, 3, 1, 4, 2}));
+  EXPECT_TRUE(asset.warnings.empty()) << asset.warnings.front();
+  ASSERT_EQ(asset.mesh.submeshes.size(), 1u);
+  EXPECT_EQ(asset.mesh.submeshes[0].index_count, 9u);
+
+  // Binary, the same way.
+  BinaryWriter out(false);
+  for (int32_t value : {4, 0, 1, 2, 3, 3, 1, 4, 2}) out.put(static_cast<uint8_t>(value));
+  for (float value : {0.f, 0.f, 0.f, 2.f, 1.f, 0.f, 0.f, 2.f, 0.f, 0.5f, 1.f, 0.f, 3.f, 1.f, 0.f})
+    out.put(value);
+  core::Asset binary = readPlyOk(writeScratchFile(
+      "faces_first_binary.ply",
+      "ply\nformat binary_little_endian 1.0\nelement face 2\n"
+      "property list uchar uchar vertex_indices\nelement vertex 5\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n" +
+          out.bytes()));
+  EXPECT_EQ(binary.mesh.indices, asset.mesh.indices);
+  EXPECT_EQ(binary.mesh.positions, asset.mesh.positions);
+}
+
 TEST(PlyReader, BinaryLittleAndBigEndianMatchAscii) {
   core::Asset ascii = readPlyOk(writeScratchFile("mesh_ascii.ply", asciiPly()));
   core::Asset little = readPlyOk(writeScratchFile("mesh_le.ply", binaryPly(false)));

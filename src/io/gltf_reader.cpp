@@ -1,7 +1,8 @@
 // glTF 2.0 reader (Khronos glTF 2.0 specification) through tinygltf (Debian libtinygltf-dev):
 // all triangle primitives of the default scene, node transforms flattened, metallic-roughness
 // materials and their textures. Every accessor read is bounds-checked here, because tinygltf
-// leaves out-of-range views to the caller.
+// leaves out-of-range views to the caller; a broken one is named with the mesh, primitive and
+// attribute that use it.
 #define TINYGLTF_IMPLEMENTATION
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE
@@ -131,6 +132,16 @@ std::vector<uint32_t> triangleListOf(const std::vector<uint32_t>& vertices, int 
   return triangles;
 }
 
+// How messages name a primitive: "mesh 2 'Body', primitive 0" (without a name when it has none),
+// so that a broken accessor can be traced to what uses it.
+std::string primitiveName(size_t mesh, const std::string& name, size_t primitive) {
+  return "mesh " + std::to_string(mesh) + (name.empty() ? "" : " '" + name + "'") + ", primitive " +
+         std::to_string(primitive);
+}
+
+constexpr const char* kNoBufferView =
+    "has no bufferView (data from sparse accessors or compression extensions is not supported)";
+
 // A validated view of an accessor's bytes: every element lies inside its buffer.
 struct AccessorBytes {
   const unsigned char* first = nullptr;
@@ -141,52 +152,72 @@ struct AccessorBytes {
   bool normalized = false;
 };
 
+// `what` names the user ("path: mesh 2 'Body', primitive 0, attribute NORMAL"); the messages go
+// on with the accessor and the numbers that do not fit ("accessor 5 reads bytes 0-4800 of
+// bufferView 3 that holds 4000").
 core::Result<AccessorBytes> viewAccessor(const tinygltf::Model& model, int index, int components,
                                          const std::string& what) {
+  const std::string where = what + ": accessor " + std::to_string(index);
   if (index < 0 || index >= static_cast<int>(model.accessors.size()))
-    return Error{what + ": accessor " + std::to_string(index) + " does not exist"};
+    return Error{where + " does not exist (" + std::to_string(model.accessors.size()) +
+                 " accessors)"};
   const tinygltf::Accessor& accessor = model.accessors[index];
-  std::string where = what + " (accessor " + std::to_string(index) + ")";
-  if (accessor.sparse.isSparse) return Error{where + ": sparse accessors are not supported"};
+  if (accessor.sparse.isSparse) return Error{where + " is sparse, which is not supported"};
   int count_per_element = tinygltf::GetNumComponentsInType(accessor.type);
   if (count_per_element != components)
-    return Error{where + ": expected " + std::to_string(components) + " components, found " +
-                 std::to_string(count_per_element)};
+    return Error{where + " has " + std::to_string(count_per_element) + " components, " +
+                 std::to_string(components) + " expected"};
   AccessorBytes bytes;
   bytes.component_type = accessor.componentType;
   bytes.component_size = tinygltf::GetComponentSizeInBytes(accessor.componentType);
   bytes.count = accessor.count;
   bytes.normalized = accessor.normalized;
-  if (bytes.component_size <= 0) return Error{where + ": invalid componentType"};
+  if (bytes.component_size <= 0) return Error{where + " has an invalid componentType"};
   // Without a bufferView an accessor is all zeros unless sparse data or a compression extension
   // fills it, and neither is supported: zero positions or indices are only degenerate triangles,
   // and the count, bounded by no data in the file, could make a tiny file allocate any amount.
-  if (accessor.bufferView < 0)
-    return Error{where +
-                 ": has no bufferView (data from sparse accessors or compression "
-                 "extensions is not supported)"};
+  if (accessor.bufferView < 0) return Error{where + " " + kNoBufferView};
+  const std::string view_name = "bufferView " + std::to_string(accessor.bufferView);
   if (accessor.bufferView >= static_cast<int>(model.bufferViews.size()))
-    return Error{where + ": bufferView " + std::to_string(accessor.bufferView) + " does not exist"};
+    return Error{where + "'s " + view_name + " does not exist (" +
+                 std::to_string(model.bufferViews.size()) + " bufferViews)"};
   const tinygltf::BufferView& view = model.bufferViews[accessor.bufferView];
   if (view.buffer < 0 || view.buffer >= static_cast<int>(model.buffers.size()))
-    return Error{where + ": buffer " + std::to_string(view.buffer) + " does not exist"};
+    return Error{where + ": " + view_name + "'s buffer " + std::to_string(view.buffer) +
+                 " does not exist (" + std::to_string(model.buffers.size()) + " buffers)"};
   const std::vector<unsigned char>& data = model.buffers[view.buffer].data;
   size_t element_size = static_cast<size_t>(bytes.component_size) * components;
   bytes.stride = view.byteStride ? view.byteStride : element_size;
-  if (bytes.stride < element_size) return Error{where + ": byteStride smaller than the element"};
+  if (bytes.stride < element_size)
+    return Error{where + ": " + view_name + "'s byteStride " + std::to_string(bytes.stride) +
+                 " is smaller than an element (" + std::to_string(element_size) + " bytes)"};
   // Offsets and lengths come from the file and may be near 2^64: compare by subtraction so that
   // no sum can wrap around.
   if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
-    return Error{where + ": bufferView runs past the end of its buffer (offset " +
-                 std::to_string(view.byteOffset) + " + length " + std::to_string(view.byteLength) +
-                 " > " + std::to_string(data.size()) + " bytes)"};
+    return Error{where + ": " + view_name + " runs past the end of buffer " +
+                 std::to_string(view.buffer) + " (offset " + std::to_string(view.byteOffset) +
+                 " + length " + std::to_string(view.byteLength) + " > " +
+                 std::to_string(data.size()) + " bytes)"};
   const size_t available =
       accessor.byteOffset <= view.byteLength ? view.byteLength - accessor.byteOffset : 0;
   if (accessor.byteOffset > view.byteLength ||
       (accessor.count > 0 && ((accessor.count - 1) > available / bytes.stride ||
-                              (accessor.count - 1) * bytes.stride + element_size > available)))
-    return Error{where + ": " + std::to_string(accessor.count) +
-                 " elements do not fit in the bufferView"};
+                              (accessor.count - 1) * bytes.stride + element_size > available))) {
+    // The bytes it reads, from its byteOffset in the view to the end of its last element (past
+    // 2^64 for a count or offset no file could back).
+    const size_t kMax = std::numeric_limits<size_t>::max();
+    const size_t last = accessor.count > 1 ? accessor.count - 1 : 0;
+    const size_t span = accessor.count == 0 ? 0 : element_size;
+    const bool wraps = last > (kMax - span) / bytes.stride ||
+                       last * bytes.stride + span > kMax - accessor.byteOffset;
+    const std::string first = std::to_string(accessor.byteOffset);
+    const std::string range =
+        wraps ? "from " + first + " to past 2^64"
+              : first + "-" + std::to_string(accessor.byteOffset + last * bytes.stride + span);
+    return Error{where + " reads bytes " + range + " of " + view_name + " that holds " +
+                 std::to_string(view.byteLength) + ": its " + std::to_string(accessor.count) +
+                 " elements do not fit"};
+  }
   bytes.first = data.data() + view.byteOffset + accessor.byteOffset;
   return bytes;
 }
@@ -241,7 +272,7 @@ core::Result<std::vector<float>> readFloats(const tinygltf::Model& model, int in
 
 core::Result<std::vector<uint32_t>> readIndices(const tinygltf::Model& model, int index,
                                                 const std::string& what) {
-  auto view = viewAccessor(model, index, 1, what + " indices");
+  auto view = viewAccessor(model, index, 1, what + ", indices");
   if (!view) return view.error();
   const AccessorBytes& a = *view;
   std::vector<uint32_t> out(a.count, 0);
@@ -355,8 +386,7 @@ class GltfFlattener {
     ++instance_;  // the vertices appended for this placement of the mesh are shared below
     for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
       const tinygltf::Primitive& prim = gmesh.primitives[p];
-      std::string what = path_ + ": mesh " + std::to_string(mesh_index) + " primitive " +
-                         std::to_string(p);
+      const std::string what = path_ + ": " + primitiveName(mesh_index, gmesh.name, p);
       // Triangles, strips and fans are read (strips and fans as triangles); points and lines
       // have no surface to simplify or shade.
       if (prim.mode < -1 || prim.mode > TINYGLTF_MODE_TRIANGLE_FAN)
@@ -388,15 +418,17 @@ class GltfFlattener {
     }
     if (auto shared = appended_.find(key); shared != appended_.end())
       return addTriangles(prim, world, what, shared->second.base, shared->second.count);
-    auto positions = readFloats(model_, position_it->second, 3, what + " POSITION");
+    auto positions = readFloats(model_, position_it->second, 3, what + ", attribute POSITION");
     if (!positions) return positions.error();
     size_t count = positions->size() / 3;
     auto optional = [&](const char* name, int components) -> core::Result<std::vector<float>> {
       auto it = prim.attributes.find(name);
       if (it == prim.attributes.end()) return std::vector<float>{};
-      auto values = readFloats(model_, it->second, components, what + " " + name);
+      auto values = readFloats(model_, it->second, components, what + ", attribute " + name);
       if (values && values->size() != count * components)
-        return Error{what + ": " + name + " has a different count than POSITION"};
+        return Error{what + ", attribute " + name + ": accessor " + std::to_string(it->second) +
+                     " has " + std::to_string(values->size() / components) +
+                     " elements, POSITION's " + std::to_string(count)};
       return values;
     };
     auto normals = optional("NORMAL", 3);
@@ -813,6 +845,52 @@ std::string withoutLongDataUris(const uint8_t* text, size_t size) {
   return out;
 }
 
+// tinygltf refuses a primitive whose indices accessor does not exist or has no bufferView, but
+// with a message that names neither the mesh nor the primitive ("primitive indices accessor out
+// of bounds", "accessor[5] invalid bufferView"): checked here first, saying which. (Its
+// attributes' accessors are checked where they are read, viewAccessor, with the same words.)
+core::Status checkIndexAccessors(const nlohmann::json& doc, const std::string& path) {
+  auto arrayOf = [&](const char* key) -> const nlohmann::json* {
+    const auto found = doc.find(key);
+    return found != doc.end() && found->is_array() ? &*found : nullptr;
+  };
+  const nlohmann::json* meshes = arrayOf("meshes");
+  const nlohmann::json* accessors = arrayOf("accessors");
+  const nlohmann::json* views = arrayOf("bufferViews");
+  const size_t accessor_count = accessors ? accessors->size() : 0;
+  const size_t view_count = views ? views->size() : 0;
+  if (!meshes) return core::okStatus();
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    const nlohmann::json& mesh = (*meshes)[m];
+    const auto primitives = mesh.is_object() ? mesh.find("primitives") : mesh.end();
+    if (!mesh.is_object() || primitives == mesh.end() || !primitives->is_array()) continue;
+    const auto name = mesh.find("name");
+    const std::string mesh_name =
+        name != mesh.end() && name->is_string() ? name->get<std::string>() : "";
+    for (size_t p = 0; p < primitives->size(); ++p) {
+      const nlohmann::json& primitive = (*primitives)[p];
+      const auto indices = primitive.is_object() ? primitive.find("indices") : primitive.end();
+      // (A negative or non-integer one is tinygltf's to judge: it reads no indices then.)
+      if (!primitive.is_object() || indices == primitive.end() || !indices->is_number_unsigned())
+        continue;
+      const uint64_t index = indices->get<uint64_t>();
+      const std::string where = path + ": " + primitiveName(m, mesh_name, p) +
+                                ", indices: accessor " + std::to_string(index);
+      if (index >= accessor_count)
+        return Error{where + " does not exist (" + std::to_string(accessor_count) + " accessors)"};
+      const nlohmann::json& accessor = (*accessors)[index];
+      if (!accessor.is_object()) continue;
+      const auto view = accessor.find("bufferView");
+      if (view == accessor.end()) return Error{where + " " + kNoBufferView};
+      if (view->is_number_integer() &&
+          (!view->is_number_unsigned() || view->get<uint64_t>() >= view_count))
+        return Error{where + "'s bufferView " + view->dump() + " does not exist (" +
+                     std::to_string(view_count) + " bufferViews)"};
+    }
+  }
+  return core::okStatus();
+}
+
 // normalizedDocument's checks and rewrites of a parsed document (an object); how many values
 // were rewritten.
 core::Result<size_t> normalize(nlohmann::json& doc, const std::string& path) {
@@ -866,6 +944,7 @@ core::Result<size_t> normalize(nlohmann::json& doc, const std::string& path) {
     });
     if (!status) return status.error();
   }
+  if (auto checked = checkIndexAccessors(doc, path); !checked) return checked.error();
   return rewritten;
 }
 
@@ -877,7 +956,9 @@ core::Result<size_t> normalize(nlohmann::json& doc, const std::string& path) {
 //   - offsets, lengths, strides and counts are non-negative integers (glTF 2.0's schema): a
 //     negative or fractional byteOffset was read as 0; refused, naming the object and field;
 //   - a '%' in a uri escapes two hex digits: a bad escape cut the file name short ("File not
-//     found : m"); refused, naming the uri.
+//     found : m"); refused, naming the uri;
+//   - a primitive's indices accessor exists and has a bufferView: tinygltf refuses it otherwise
+//     without saying which mesh (checkIndexAccessors); refused naming the mesh and primitive.
 // Returns the rewritten JSON text, or an empty string when nothing needed rewriting. A document
 // that does not parse is left to tinygltf, whose message says where. Long data: URIs are parsed
 // only when the document is rewritten (withoutLongDataUris).

@@ -1,8 +1,9 @@
 // PLY reader (ascii, binary_little_endian, binary_big_endian), after Greg Turk, "The PLY Polygon
 // File Format" (1994) as documented by Paul Bourke: element vertex (x y z, nx ny nz, s t / u v /
 // texture_u texture_v, red green blue alpha) and element face (list vertex_indices); every other
-// element and property is skipped by its declared type. Header counts are never trusted for
-// allocation: each is checked against the bytes left in the file first.
+// element and property is skipped by its declared type. Elements may come in any order: faces
+// read before the vertices are triangulated once the vertices are. Header counts are never
+// trusted for allocation: each is checked against the bytes left in the file first.
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -426,6 +427,7 @@ class PlyParser {
     for (Element& element : header->elements) {
       if (auto status = readElement(element, body); !status) return status;
     }
+    if (auto status = triangulateDeferredFaces(); !status) return status;
     if (body.bytesLeft() > 0 && !body.ascii()) {
       asset_.warnings.push_back(path_ + ": " + std::to_string(body.bytesLeft()) +
                                 " bytes after the last element ignored");
@@ -437,7 +439,11 @@ class PlyParser {
  private:
   core::Status readElement(Element& element, BodyReader& body) {
     body.at(&element, 0, nullptr);
-    if (element.name == "vertex") return readVertices(element, body);
+    if (element.name == "vertex") {
+      auto status = readVertices(element, body);
+      vertices_read_ = true;
+      return status;
+    }
     if (element.name == "face") return readFaces(element, body);
     if (element.count == 0 || element.properties.empty()) return core::okStatus();
     if (auto status = checkCount(element, body); !status) return status;
@@ -565,6 +571,7 @@ class PlyParser {
       return errorAt(path_, element.line, "vertex_indices has a non-integer item type");
     }
     if (auto status = checkCount(element, body); !status) return status;
+    face_line_ = element.line;
     std::vector<uint32_t> polygon;
     size_t unclipped = 0;  // polygons not cut into ears (triangulatePolygon): fanned
     for (uint64_t item = 0; item < element.count; ++item) {
@@ -588,14 +595,42 @@ class PlyParser {
           }
           polygon.push_back(static_cast<uint32_t>(index));
         }
+        if (!vertices_read_) {
+          // Faces before vertices (the header may order elements any way): a polygon's shape is
+          // not known yet, so it is kept and cut up once the vertices are read.
+          deferred_sizes_.push_back(static_cast<uint32_t>(polygon.size()));
+          deferred_corners_.insert(deferred_corners_.end(), polygon.begin(), polygon.end());
+          continue;
+        }
         if (!text::appendPolygon(polygon, asset_.mesh.positions, asset_.mesh.indices)) ++unclipped;
         if (asset_.mesh.indices.size() > UINT32_MAX) return body.error("too many triangles");
       }
     }
+    warnUnclipped(unclipped);
+    return core::okStatus();
+  }
+
+  // The faces readFaces kept because they came before the vertices, triangulated as they would
+  // have been after them (in file order, ears for concave polygons).
+  core::Status triangulateDeferredFaces() {
+    size_t unclipped = 0, first = 0;
+    for (uint32_t size : deferred_sizes_) {
+      const std::span<const uint32_t> polygon(deferred_corners_.data() + first, size);
+      first += size;
+      if (!text::appendPolygon(polygon, asset_.mesh.positions, asset_.mesh.indices)) ++unclipped;
+      if (asset_.mesh.indices.size() > UINT32_MAX)
+        return errorAt(path_, face_line_, "element 'face': too many triangles");
+    }
+    warnUnclipped(unclipped);
+    deferred_sizes_.clear();
+    deferred_corners_.clear();
+    return core::okStatus();
+  }
+
+  void warnUnclipped(size_t unclipped) {
     if (unclipped > 0)
       asset_.warnings.push_back(path_ + ": " + std::to_string(unclipped) + " polygon(s): each " +
                                 text::kUnclippedPolygon);
-    return core::okStatus();
   }
 
   void finish() {
@@ -610,6 +645,11 @@ class PlyParser {
   const std::string& path_;
   core::Asset& asset_;
   uint64_t vertex_count_ = 0;
+  bool vertices_read_ = false;
+  // Faces read before the vertices (triangulateDeferredFaces): each polygon's corner count, and
+  // all their corners one after another. face_line_: the header line of the face element.
+  std::vector<uint32_t> deferred_sizes_, deferred_corners_;
+  size_t face_line_ = 0;
   std::vector<std::string> skipped_elements_;
 };
 

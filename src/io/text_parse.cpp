@@ -1,6 +1,7 @@
 // Private text-parsing helpers for the OBJ/MTL/PLY/OFF readers (see text_parse.hpp).
 #include "io/text_parse.hpp"
 
+#include <cassert>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -318,17 +319,12 @@ bool appendPolygon(std::span<const uint32_t> polygon, std::span<const core::Vec3
     return true;
   }
   std::vector<core::Vec3> corners(polygon.size());
-  std::vector<uint32_t> triangles;
-  bool placed = true;
-  for (size_t k = 0; k < polygon.size() && placed; ++k) {
-    placed = polygon[k] < positions.size();  // faces before vertices: no geometry yet
-    if (placed) corners[k] = positions[polygon[k]];
+  for (size_t k = 0; k < polygon.size(); ++k) {
+    assert(polygon[k] < positions.size());
+    corners[k] = positions[polygon[k]];
   }
-  bool simple = true;
-  if (placed)
-    simple = triangulatePolygon(corners, triangles);
-  else
-    appendFanCorners(polygon.size(), triangles);
+  std::vector<uint32_t> triangles;
+  const bool simple = triangulatePolygon(corners, triangles);
   for (uint32_t corner : triangles) indices.push_back(polygon[corner]);
   return simple;
 }

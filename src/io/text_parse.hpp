@@ -117,8 +117,8 @@ inline const std::string kUnclippedPolygon =
     std::to_string(kMaxClippedCorners) + " corners) and was fan-triangulated";
 bool triangulatePolygon(std::span<const core::Vec3> corners, std::vector<uint32_t>& triangles);
 // triangulatePolygon for a polygon of vertex ids into `indices`, its corners' positions read from
-// `positions` (fanned when a corner has no position yet: a PLY file with its faces first).
-// Returns triangulatePolygon's answer.
+// `positions`, which must hold every corner (a reader that meets faces before their vertices
+// keeps them until the vertices are read). Returns triangulatePolygon's answer.
 bool appendPolygon(std::span<const uint32_t> polygon, std::span<const core::Vec3> positions,
                    std::vector<uint32_t>& indices);
 // One default material and, when there are triangles, one submesh covering them all.
