@@ -124,6 +124,70 @@ TEST_F(ImageSimplifyTest, AStartOverTheErrorTargetIsReturnedWithoutPricing) {
   EXPECT_EQ(stats.rendered_evaluations, 0u);
 }
 
+// A start mesh is drawn as generate draws its candidates: over the original's upload, with the
+// original's materials and bounding sphere (Renderer::uploadMesh). Object-space procedural shading
+// scales with that sphere (noise_phong), so a start mesh drawn with its own sphere was
+// priced against a different pattern. With `uploaded`, the caller's upload is used and kept.
+TEST_F(ImageSimplifyTest, AStartMeshIsDrawnWithTheOriginalsSphereAndUpload) {
+  auto noise = render::loadShaderPair(test::sourcePath("shaders/noise_phong"));
+  ASSERT_TRUE(noise) << noise.error().message;
+  // The start: the sphere without its x > 0 half (its own bounding sphere clearly differs),
+  // its used vertices renumbered in order.
+  core::Mesh start;
+  std::vector<uint32_t> id(asset_.mesh.positions.size(), UINT32_MAX);
+  for (size_t t = 0; t < asset_.mesh.triangleCount(); ++t) {
+    const uint32_t* corner = &asset_.mesh.indices[t * 3];
+    bool capped = false;
+    for (int k = 0; k < 3; ++k) capped |= asset_.mesh.positions[corner[k]].x > 0.0f;
+    if (capped) continue;
+    for (int k = 0; k < 3; ++k) {
+      if (id[corner[k]] == UINT32_MAX) {
+        id[corner[k]] = uint32_t(start.positions.size());
+        start.positions.push_back(asset_.mesh.positions[corner[k]]);
+        if (!asset_.mesh.normals.empty()) start.normals.push_back(asset_.mesh.normals[corner[k]]);
+      }
+      start.indices.push_back(id[corner[k]]);
+    }
+  }
+  start.submeshes = {{0, uint32_t(start.indices.size()), 0}};
+  const core::Sphere sphere = core::computeBoundingSphere(asset_.mesh);
+  const core::Sphere own = core::computeBoundingSphere(start);
+  ASSERT_GT(core::length(own.center - sphere.center) + std::abs(own.radius - sphere.radius),
+            0.05f * sphere.radius);
+
+  mesh::ImageSimplifyOptions options;
+  options.distance = distanceForPixels(1.0f, 40);
+  options.target_error = 1e-9;  // the start comes back unpriced: only its own error is measured
+  options.start = &start;
+  auto program = renderer_->compileProgram(*noise);
+  ASSERT_TRUE(program) << program.error().message;
+  const auto samples = render::domainSamples(sphere, options.distance, options.domain);
+  const int resolution = render::footprintPixels(sphere, options.distance, options.display);
+  auto reference =
+      renderer_->renderReference(*renderer_->uploadAsset(asset_), *program, samples,
+                                 {.resolution = resolution, .supersample = options.supersample});
+  ASSERT_TRUE(reference) << reference.error().message;
+  options.reference = &*reference;
+  auto original = renderer_->uploadAsset(asset_);
+  ASSERT_TRUE(original) << original.error().message;
+  auto drawn = renderer_->uploadMesh(*original, start);
+  ASSERT_TRUE(drawn);
+  auto images = renderer_->render(*drawn, *program, samples, {.resolution = resolution});
+  ASSERT_TRUE(images) << images.error().message;
+  const double expected = metric::imageError(*images, *reference).epsilon;
+
+  for (bool given_upload : {false, true}) {
+    options.uploaded = given_upload ? *original : -1;
+    mesh::ImageSimplifyStats stats;
+    auto result = mesh::simplifyImage(*renderer_, asset_, *noise, options, &stats);
+    ASSERT_TRUE(result) << result.error().message;
+    EXPECT_EQ(result->mesh.triangleCount(), start.triangleCount());
+    EXPECT_DOUBLE_EQ(stats.initial_error, expected) << "given upload: " << given_upload;
+  }
+  // The caller's upload is still there.
+  EXPECT_TRUE(renderer_->render(*original, *program, samples, {.resolution = resolution}));
+}
+
 TEST_F(ImageSimplifyTest, RefusesWithoutADistance) {
   mesh::ImageSimplifyOptions options;
   options.target_triangles = 10;  // and no distance

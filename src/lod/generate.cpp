@@ -557,6 +557,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
             ? &candidateMesh(previous_set, int(mesh_sets_[previous_set].meshes.size()) - 1)
             : nullptr;
     image.reference = &levels_[level].reference;
+    image.uploaded = original_asset_;  // its textures are not uploaded again
     mesh::ImageSimplifyStats stats;
     auto simplified = mesh::simplifyImage(*renderer_, asset_, source, image, &stats);
     if (!simplified)

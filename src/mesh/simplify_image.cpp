@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <vector>
 
 #include "duolod/mesh.hpp"
 #include "duolod/metric.hpp"
@@ -11,6 +12,36 @@
 #include "mesh/image_cost.hpp"
 
 namespace duolod::mesh {
+namespace {
+
+// What one run made in the renderer, released however the run ends (an error return included).
+class RendererScratch {
+ public:
+  explicit RendererScratch(render::Renderer& renderer) : renderer_(renderer) {}
+  ~RendererScratch() {
+    for (render::Renderer::AssetId asset : assets_) renderer_.releaseAsset(asset);
+    for (render::Renderer::ProgramId program : programs_) renderer_.releaseProgram(program);
+  }
+  RendererScratch(const RendererScratch&) = delete;
+  RendererScratch& operator=(const RendererScratch&) = delete;
+  template <class Id>
+  core::Result<Id> asset(core::Result<Id> made) {
+    if (made) assets_.push_back(*made);
+    return made;
+  }
+  template <class Id>
+  core::Result<Id> program(core::Result<Id> made) {
+    if (made) programs_.push_back(*made);
+    return made;
+  }
+
+ private:
+  render::Renderer& renderer_;
+  std::vector<render::Renderer::AssetId> assets_;
+  std::vector<render::Renderer::ProgramId> programs_;
+};
+
+}  // namespace
 
 core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const core::Asset& asset,
                                            const render::GlslSource& shader,
@@ -42,13 +73,18 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   prepared_asset.mesh = prepareMesh(options.start ? *options.start : asset.mesh);
   if (prepared_asset.mesh.triangleCount() == 0) return Error{"the mesh has no valid triangles"};
 
-  auto program = renderer.compileProgram(shader);
+  RendererScratch scratch(renderer);
+  auto program = scratch.program(renderer.compileProgram(shader));
   if (!program) return program.error();
-  auto region_program = renderer.compileRegionProgram(shader);
+  auto region_program = scratch.program(renderer.compileRegionProgram(shader));
   if (!region_program) return region_program.error();
-  auto original_id = renderer.uploadAsset(asset);
+  // The meshes drawn here share the original's materials and textures, and its bounding sphere
+  // (uploadMesh), as generate's candidates do when their pairs are rendered: object-space
+  // procedural shading (noise_phong scales its noise by the radius) is then the same as there.
+  core::Result<render::Renderer::AssetId> original_id = options.uploaded;
+  if (options.uploaded < 0) original_id = scratch.asset(renderer.uploadAsset(asset));
   if (!original_id) return original_id.error();
-  auto prepared_id = renderer.uploadAsset(prepared_asset);
+  auto prepared_id = scratch.asset(renderer.uploadMesh(*original_id, prepared_asset.mesh));
   if (!prepared_id) return prepared_id.error();
 
   // Frame everything by the original's bounding sphere, as the LOD levels will be.
@@ -117,12 +153,9 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
   // The result's error, rendered whole: the model's running sum is only refreshed lazily.
   double final_error = initial_error;
   if (model.failure().empty()) {
-    core::Asset simplified = asset;
-    simplified.mesh = result.mesh;
-    auto simplified_id = renderer.uploadAsset(simplified);
+    auto simplified_id = scratch.asset(renderer.uploadMesh(*original_id, result.mesh));
     if (!simplified_id) return simplified_id.error();
     auto image = renderer.render(*simplified_id, *program, samples, {.resolution = resolution});
-    renderer.releaseAsset(*simplified_id);
     if (!image) return image.error();
     final_error = metric::imageError(*image, reference_images).epsilon;
     if (std::getenv("DUOLOD_DEBUG")) {
@@ -135,10 +168,6 @@ core::Result<SimplifyResult> simplifyImage(render::Renderer& renderer, const cor
                    tracked, from_images, final_error, images_vs_truth);
     }
   }
-  renderer.releaseAsset(*original_id);
-  renderer.releaseAsset(*prepared_id);
-  renderer.releaseProgram(*program);
-  renderer.releaseProgram(*region_program);
   if (!model.failure().empty()) return Error{"image-driven simplification: " + model.failure()};
   if (stats) {
     const ImageCostStats& s = model.stats();
