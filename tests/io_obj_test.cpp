@@ -154,10 +154,29 @@ TEST(ObjReader, PolygonCornersPastTheVerticesAreAnErrorNotACrash) {
   EXPECT_NE(asset.error().message.find("far_corner.obj:4: face index 2000000000 out of range"),
             std::string::npos)
       << asset.error().message;
-  // A face before its vertices is valid OBJ: fanned, as its corners have no place yet.
+  // A face before its vertices is valid OBJ.
   core::Asset late =
       readObjOk(writeScratchFile("late.obj", "f 1 2 3 4\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"));
   EXPECT_EQ(late.mesh.triangleCount(), 2u);
+}
+
+// A polygon before its vertices is cut up once they are read, as it would be after them: the dart
+// gets its ears, not the fan that folds over its notch; and the triangles keep their place among
+// the file's others (a triangle before and after it, a second dart in another material).
+TEST(ObjReader, PolygonsBeforeTheirVerticesAreCutIntoEarsInPlace) {
+  const std::string vertices = "v 0 0 0\nv 2 1 0\nv 0 2 0\nv 0.5 1 0\nv 3 0 0\n";
+  const std::string faces = "f 1 2 3 4\nf 2 5 3\nusemtl other\nf 1 2 3 4\n";
+  core::Asset after = readObjOk(writeScratchFile("dart_after.obj", vertices + faces));
+  core::Asset before = readObjOk(writeScratchFile("dart_before.obj", faces + vertices));
+  EXPECT_EQ(before.mesh.indices, after.mesh.indices);
+  EXPECT_EQ(before.mesh.positions, after.mesh.positions);
+  ASSERT_EQ(before.mesh.submeshes.size(), 2u);
+  EXPECT_EQ(before.mesh.submeshes[1].index_count, 6u);
+  EXPECT_EQ(before.warnings.size(), after.warnings.size());  // ("other" has no library)
+  EXPECT_FALSE(hasWarningContaining(before, "could not be cut into ears"));
+  // (The fan would be 0 1 2, 0 2 3 with the notch first.)
+  EXPECT_EQ(std::vector<uint32_t>(before.mesh.indices.begin(), before.mesh.indices.begin() + 6),
+            (std::vector<uint32_t>{0, 1, 2, 2, 3, 0}));
 }
 
 TEST(ObjReader, SelfCrossingPolygonIsFannedWithAWarning) {

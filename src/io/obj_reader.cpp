@@ -270,26 +270,60 @@ class ObjParser {
       group.triangles.push_back({{polygon_[0], polygon_[1], polygon_[2]}, line_});
       return core::okStatus();
     }
-    polygon_points_.resize(polygon_.size());
-    polygon_triangles_.clear();
-    bool placed = true;  // positive indices are range-checked after the file (a face may come
-                         // before its vertices): such a polygon is fanned, as before
-    for (size_t k = 0; k < polygon_.size() && placed; ++k) {
+    // Positive indices are range-checked after the file (a face may come before its vertices):
+    // such a polygon is fanned for now and cut up in finish(), when its corners are known.
+    bool placed = true;
+    for (size_t k = 0; k < polygon_.size() && placed; ++k)
       placed = static_cast<size_t>(polygon_[k].position) < positions_.size();
-      if (placed) polygon_points_[k] = positions_[polygon_[k].position];
-    }
     if (!placed) {
+      deferred_.push_back({current_group_, group.triangles.size(), line_, polygon_});
+      polygon_triangles_.clear();
       text::appendFanCorners(polygon_.size(), polygon_triangles_);
-    } else if (!text::triangulatePolygon(polygon_points_, polygon_triangles_) &&
-               !first_unclipped_line_) {
-      first_unclipped_line_ = line_;
+      appendTriangles(polygon_, polygon_triangles_, line_, group.triangles);
+      return core::okStatus();
     }
-    for (size_t i = 0; i < polygon_triangles_.size(); i += 3)
-      group.triangles.push_back(
-          {{polygon_[polygon_triangles_[i]], polygon_[polygon_triangles_[i + 1]],
-            polygon_[polygon_triangles_[i + 2]]},
-           line_});
+    if (!triangulate(polygon_) && !first_unclipped_line_) first_unclipped_line_ = line_;
+    appendTriangles(polygon_, polygon_triangles_, line_, group.triangles);
     return core::okStatus();
+  }
+
+  // Cuts `polygon` (every corner placed) into polygon_triangles_; triangulatePolygon's answer.
+  bool triangulate(const std::vector<Corner>& polygon) {
+    polygon_points_.resize(polygon.size());
+    for (size_t k = 0; k < polygon.size(); ++k)
+      polygon_points_[k] = positions_[polygon[k].position];
+    polygon_triangles_.clear();
+    return text::triangulatePolygon(polygon_points_, polygon_triangles_);
+  }
+
+  static void appendTriangles(const std::vector<Corner>& polygon,
+                              const std::vector<uint32_t>& triangles, size_t line,
+                              std::vector<Triangle>& out) {
+    for (size_t i = 0; i < triangles.size(); i += 3)
+      out.push_back(
+          {{polygon[triangles[i]], polygon[triangles[i + 1]], polygon[triangles[i + 2]]}, line});
+  }
+
+  // The polygons that came before their vertices, now that every vertex is read: their fans are
+  // replaced by what triangulatePolygon makes of them, in place (last first, so that the earlier
+  // ones' places in their group do not move). One whose corners are still out of range stays
+  // fanned: the range check then refuses it.
+  void triangulateDeferred() {
+    for (auto it = deferred_.rbegin(); it != deferred_.rend(); ++it) {
+      bool placed = true;
+      for (const Corner& corner : it->polygon)
+        placed &= static_cast<size_t>(corner.position) < positions_.size();
+      if (!placed) continue;
+      if (!triangulate(it->polygon) && (!first_unclipped_line_ || it->line < first_unclipped_line_))
+        first_unclipped_line_ = it->line;
+      std::vector<Triangle> cut;
+      appendTriangles(it->polygon, polygon_triangles_, it->line, cut);
+      std::vector<Triangle>& triangles = groups_[it->group].triangles;
+      const auto first = triangles.begin() + static_cast<std::ptrdiff_t>(it->first_triangle);
+      const auto fanned = static_cast<std::ptrdiff_t>(it->polygon.size() - 2);
+      triangles.insert(triangles.erase(first, first + fanned), cut.begin(), cut.end());
+    }
+    deferred_.clear();
   }
 
   MaterialGroup& currentGroup() {
@@ -372,6 +406,7 @@ class ObjParser {
   }
 
   core::Status finish() {
+    triangulateDeferred();
     // Range checks, and which attribute streams the mesh gets.
     size_t corners = 0, corners_with_uv = 0, corners_with_normal = 0;
     for (const MaterialGroup& group : groups_) {
@@ -485,6 +520,13 @@ class ObjParser {
   std::vector<core::Vec3> normals_;
   std::vector<Corner> polygon_;  // scratch for the face being read
   std::vector<core::Vec3> polygon_points_;   // its corners' positions
+  // Polygons of more than three corners read before some of their vertices (triangulateDeferred):
+  // their group, where their fan starts in it, their line and their corners.
+  struct DeferredPolygon {
+    size_t group = 0, first_triangle = 0, line = 0;
+    std::vector<Corner> polygon;
+  };
+  std::vector<DeferredPolygon> deferred_;
   std::vector<uint32_t> polygon_triangles_;  // its triangles, as corner numbers
   size_t first_unclipped_line_ = 0;  // the first polygon not cut into ears (triangulatePolygon)
 
