@@ -75,7 +75,8 @@ shader::EvaluationConfig evaluationConfig(const GenerateOptions& options, float 
 struct LevelState {
   DistanceLevel level;
   std::vector<render::Sample> samples;
-  render::ImageBatchF reference;  // f̄(M_0, S_0, d_i)
+  render::ImageBatchF reference;  // f̄(M_0, S_0, d_i); its first tile only once trimmed
+  bool trimmed = false;           // (referenceOf renders it whole again if ever needed)
   double coverage_px = 0;         // s_d, measured on the reference
   double bound = 0;               // e_a(d_i)·s_d
   double search_bound = 0;        // what the searches aim at: bound × (1 − bound_margin)
@@ -395,6 +396,8 @@ class Generator {
   // default run peaked at 1.24 GB, 0.2 GB more.
   std::map<std::tuple<int, int, int, int>, render::ImageBatch8> images_;
   std::set<std::tuple<int, int, int, int>> wanted_images_;
+  core::Result<render::ImageBatchF> renderReference(const LevelState& level);
+  core::Result<const render::ImageBatchF*> referenceOf(int level);
   size_t kept_bytes_ = 0, kept_bytes_peak_ = 0, rendered_bytes_ = 0;  // of images_' pixels
   const render::ImageBatch8& keepRender(const std::tuple<int, int, int, int>& key,
                                         render::ImageBatch8 images);
@@ -462,18 +465,13 @@ core::Status Generator::makeLevels() {
   auto levels = distanceLevels(bounds_, level_options);
   if (!levels) return levels.error();
 
-  auto program = cache_->program(shaders_[0].variant);
-  if (!program) return program.error();
   for (size_t i = 0; i < levels->size(); ++i) {
     progress("references", double(i) / levels->size());
     LevelState state;
     state.level = (*levels)[i];
     state.samples =
         render::domainSamples(bounds_, float(state.level.distance), {.views = options_.views});
-    render::RenderOptions render_options{.resolution = state.level.footprint_px,
-                                         .supersample = options_.supersample};
-    auto reference = renderer_->renderReference(original_asset_, *program, state.samples,
-                                                render_options);
+    auto reference = renderReference(state);
     if (!reference) return reference.error();
     if (auto covered = metric::checkReferenceCoverage(*reference); !covered) return covered.error();
     state.reference = std::move(*reference);
@@ -699,8 +697,7 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
     images = std::move(*rendered);
   }
   ++pair_evaluations_;
-  // Kept: the transition error (eq. 5) compares pairs at these very distances (a few MB each;
-  // the renders are what costs).
+  // Kept while a transition error (eq. 5) may compare it (wantRendersOf, dropUnwanted).
   const render::ImageBatch8& kept = keepRender(key, std::move(*images));
   ShaderCandidate& candidate = shaders_[shader];
   if (auto profiled = profile(candidate); !profiled) return profiled.error();
@@ -711,10 +708,41 @@ core::Result<PairRecord> Generator::evaluatePair(int distance_level, int set, in
       .fragment_ops = candidate.fragment_ops,
       .vertex_invocations = static_cast<double>(work.vertex_invocations) / draws,
       .fragment_invocations = static_cast<double>(work.fragment_invocations) / draws};
-  PairRecord record{.error = metric::imageError(kept, level.reference),
+  auto reference = referenceOf(distance_level);
+  if (!reference) return reference.error();
+  PairRecord record{.error = metric::imageError(kept, **reference),
                     .cost = shader::predictCost(features, shader::calibratedCostWeights())};
   pairs_.emplace(key, record);
+  // At a bound of 0 (d_near, eq. 4) every optimizer evaluates the original pair only (nothing
+  // can be within the bound), and the report shows the reference's first tile: the rest of the
+  // largest reference of the run (spot: 105 MB of 256 px floats) goes.
+  if (level.bound <= 0) {
+    LevelState& trimmed = levels_[distance_level];
+    trimmed.reference.count = 1;
+    trimmed.reference.pixels.resize(size_t(trimmed.reference.width) * trimmed.reference.height * 4);
+    trimmed.reference.pixels.shrink_to_fit();
+    trimmed.trimmed = true;
+  }
   return record;
+}
+
+core::Result<render::ImageBatchF> Generator::renderReference(const LevelState& level) {
+  auto program = cache_->program(shaders_[0].variant);
+  if (!program) return program.error();
+  return renderer_->renderReference(
+      original_asset_, *program, level.samples,
+      {.resolution = level.level.footprint_px, .supersample = options_.supersample});
+}
+
+core::Result<const render::ImageBatchF*> Generator::referenceOf(int level_index) {
+  LevelState& level = levels_[level_index];
+  if (level.trimmed) {  // (no optimizer asks for it at present)
+    auto whole = renderReference(level);
+    if (!whole) return whole.error();
+    level.reference = std::move(*whole);
+    level.trimmed = false;
+  }
+  return &level.reference;
 }
 
 // ε_t of eq. (5): both pairs rendered at d_{level+1} and compared with each other.
