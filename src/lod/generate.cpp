@@ -1028,20 +1028,20 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   };
   if (!interleaved && options_.sort_prefetch && options_.scope != LodScope::kMeshOnly)
     startSortPrefetch();
-  separate.on_level_pairs = keepRendersOf(options_.scope);
   if (options_.scope == LodScope::kJoint && !interleaved) {
     // The shader-only baseline, which runs after this optimization, compares the renders of M_0
     // with its shaders. Its searches use only the SortByError records this one makes at each
     // level (and the same shader candidates), so its pair sets are known as each level ends: the
     // renders they want are kept instead of dropped and rendered again (35 renders, 2 s, on spot).
-    separate.on_level_pairs = [this, &separate](int level,
-                                                const std::vector<EvaluatedPair>& pairs) {
-      wantRendersOf(options_.scope, level, pairs);
+    separate.on_level_pairs = [this, &separate, keep = keepRendersOf(options_.scope)](
+                                  int level, const std::vector<EvaluatedPair>& pairs) {
       SeparateSolution ahead;  // (on failure the renders are made again when wanted)
       if (searchLevel(problem(LodScope::kShaderOnly), separate, level, ahead))
         wantRendersOf(LodScope::kShaderOnly, level, ahead.level_pairs.back());
-      dropUnwanted(level);
+      keep(level, pairs);
     };
+  } else {
+    separate.on_level_pairs = keepRendersOf(options_.scope);
   }
   auto joint = interleaved ? runInterleaved(separate)
                            : optimizeSeparate(problem(options_.scope), separate);

@@ -24,13 +24,12 @@ class RendererScratch {
   }
   RendererScratch(const RendererScratch&) = delete;
   RendererScratch& operator=(const RendererScratch&) = delete;
-  template <class Id>
-  core::Result<Id> asset(core::Result<Id> made) {
+  core::Result<render::Renderer::AssetId> asset(core::Result<render::Renderer::AssetId> made) {
     if (made) assets_.push_back(*made);
     return made;
   }
-  template <class Id>
-  core::Result<Id> program(core::Result<Id> made) {
+  core::Result<render::Renderer::ProgramId> program(
+      core::Result<render::Renderer::ProgramId> made) {
     if (made) programs_.push_back(*made);
     return made;
   }
