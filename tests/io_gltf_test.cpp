@@ -980,6 +980,38 @@ TEST(GltfMalformed, ByteStrideSmallerThanTheElement) {
   expectLoadError(g.write(test::scratchDir("m"), "stride"), "byteStride");
 }
 
+// tinygltf's own messages for these named neither the object nor its user ("Invalid
+// `componentType` in accessor. Got 9999"); the file's reader checks them first.
+TEST(GltfMalformed, BadEnumsAndStridesNameTheAccessorAndItsUser) {
+  const fs::path dir = test::scratchDir("m_enums");
+  HandGltf component = oneTriangle();
+  component.doc["accessors"][0]["componentType"] = 9999;
+  expectLoadError(component.write(dir, "component"),
+                  "mesh 0, primitive 0, attribute POSITION: accessor 0: componentType 9999 is not "
+                  "a glTF component type");
+  HandGltf type = oneTriangle();
+  type.doc["accessors"][0]["type"] = "VEC7";
+  expectLoadError(type.write(dir, "type"),
+                  "attribute POSITION: accessor 0: type \"VEC7\" is not a glTF accessor type");
+  HandGltf unused = oneTriangle();
+  unused.doc["accessors"].push_back(unused.doc["accessors"][0]);
+  unused.doc["accessors"][2]["type"] = 3;
+  expectLoadError(unused.write(dir, "unused"), ": accessor 2: type 3 is not a glTF accessor type");
+  for (int bytes : {2, 13, 300}) {
+    HandGltf stride = oneTriangle();
+    stride.doc["bufferViews"][0]["byteStride"] = bytes;
+    expectLoadError(stride.write(dir, "stride" + std::to_string(bytes)),
+                    "bufferView 0 (read by mesh 0, primitive 0, attribute POSITION: accessor 0): "
+                    "byteStride " +
+                        std::to_string(bytes) + " is not a multiple of 4 from 4 to 252");
+  }
+  HandGltf float_indices = oneTriangle();
+  float_indices.doc["accessors"][1]["componentType"] = 5126;
+  expectLoadError(float_indices.write(dir, "float_indices"),
+                  "mesh 0, primitive 0, indices: accessor 1's componentType 5126 is not one of "
+                  "indices' 5121, 5123 or 5125");
+}
+
 TEST(GltfMalformed, MissingBinFile) {
   fs::path dir = test::scratchDir("m");
   std::string path = oneTriangle().write(dir, "nobin");

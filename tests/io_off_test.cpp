@@ -49,6 +49,23 @@ TEST(OffReader, ConcavePolygonIsCutIntoEars) {  // the dart of io_obj_test.cpp
   EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{3, 0, 1, 1, 2, 3}));
 }
 
+TEST(OffReader, CountsSplitOverLinesAreReadWithAWarning) {
+  // Geomview reads the counts as free-format numbers: "4" then "1 0" on the next line.
+  core::Asset asset = readOffOk(writeScratchFile(
+      "split_counts.off", "OFF\n4\n# faces next\n1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n"));
+  EXPECT_EQ(asset.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  ASSERT_EQ(asset.warnings.size(), 1u);
+  EXPECT_NE(asset.warnings[0].find("split_counts.off:2: the counts are split over lines 2 and 4"),
+            std::string::npos)
+      << asset.warnings[0];
+  // A vertex count alone at the end of the file is still an error that says so.
+  auto truncated =
+      io::readOff(writeScratchFile("only_vertex_count.off", "OFF\n4\n"), io::LoadOptions{});
+  ASSERT_FALSE(truncated);
+  EXPECT_NE(truncated.error().message.find("file ends after the vertex count"), std::string::npos)
+      << truncated.error().message;
+}
+
 TEST(OffReader, MissingKeywordIsAccepted) {
   core::Asset asset =
       readOffOk(writeScratchFile("bare.off", "3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));

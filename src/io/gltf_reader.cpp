@@ -886,7 +886,104 @@ core::Status checkIndexAccessors(const nlohmann::json& doc, const std::string& p
           (!view->is_number_unsigned() || view->get<uint64_t>() >= view_count))
         return Error{where + "'s bufferView " + view->dump() + " does not exist (" +
                      std::to_string(view_count) + " bufferViews)"};
+      // glTF 2.0 indices are unsigned bytes, shorts or ints (another type read as one would
+      // only fail later, with a size that does not fit).
+      const auto type = accessor.find("componentType");
+      if (type != accessor.end() && type->is_number_integer()) {
+        const int64_t component = type->get<int64_t>();
+        if (component != 5121 && component != 5123 && component != 5125)
+          return Error{where + "'s componentType " + std::to_string(component) +
+                       " is not one of indices' 5121, 5123 or 5125 (unsigned byte, short, int)"};
+      }
     }
+  }
+  return core::okStatus();
+}
+
+// The first user of each accessor, as messages name it ("mesh 2 'Body', primitive 0, attribute
+// NORMAL"), or empty when no primitive reads it.
+std::vector<std::string> accessorUsers(const nlohmann::json& doc, size_t accessor_count) {
+  std::vector<std::string> users(accessor_count);
+  const auto meshes = doc.find("meshes");
+  if (meshes == doc.end() || !meshes->is_array()) return users;
+  auto use = [&](const nlohmann::json& index, const std::string& who) {
+    if (!index.is_number_unsigned()) return;
+    const uint64_t i = index.get<uint64_t>();
+    if (i < accessor_count && users[i].empty()) users[i] = who;
+  };
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    const nlohmann::json& mesh = (*meshes)[m];
+    if (!mesh.is_object()) continue;
+    const auto primitives = mesh.find("primitives");
+    if (primitives == mesh.end() || !primitives->is_array()) continue;
+    const auto name = mesh.find("name");
+    const std::string mesh_name =
+        name != mesh.end() && name->is_string() ? name->get<std::string>() : "";
+    for (size_t p = 0; p < primitives->size(); ++p) {
+      const nlohmann::json& primitive = (*primitives)[p];
+      if (!primitive.is_object()) continue;
+      const std::string who = primitiveName(m, mesh_name, p);
+      if (const auto indices = primitive.find("indices"); indices != primitive.end())
+        use(*indices, who + ", indices");
+      if (const auto attributes = primitive.find("attributes");
+          attributes != primitive.end() && attributes->is_object())
+        for (const auto& [attribute, index] : attributes->items())
+          use(index, who + ", attribute " + attribute);
+    }
+  }
+  return users;
+}
+
+// tinygltf refuses an accessor's unknown componentType or type, and a bufferView's byteStride
+// outside glTF's 4-252 bytes in steps of 4, but its messages name neither the object nor what
+// uses it ("Invalid `componentType` in accessor. Got 9999"): checked here first, saying which.
+core::Status checkAccessorsAndStrides(const nlohmann::json& doc, const std::string& path) {
+  const auto accessors = doc.find("accessors");
+  const auto views = doc.find("bufferViews");
+  const bool have_accessors = accessors != doc.end() && accessors->is_array();
+  const bool have_views = views != doc.end() && views->is_array();
+  if (!have_accessors && !have_views) return core::okStatus();
+  const size_t accessor_count = have_accessors ? accessors->size() : 0;
+  const std::vector<std::string> users = accessorUsers(doc, accessor_count);
+  auto accessorName = [&](size_t i) {
+    return users[i].empty() ? "accessor " + std::to_string(i)
+                            : users[i] + ": accessor " + std::to_string(i);
+  };
+  for (size_t i = 0; i < accessor_count; ++i) {
+    const nlohmann::json& accessor = (*accessors)[i];
+    if (!accessor.is_object()) continue;
+    if (const auto type = accessor.find("componentType"); type != accessor.end()) {
+      static const std::set<int64_t> kComponentTypes = {5120, 5121, 5122, 5123, 5125, 5126};
+      if (!type->is_number_integer() || !kComponentTypes.count(type->get<int64_t>()))
+        return Error{path + ": " + accessorName(i) + ": componentType " + type->dump() +
+                     " is not a glTF component type (5120-5123, 5125 or 5126)"};
+    }
+    if (const auto type = accessor.find("type"); type != accessor.end()) {
+      static const std::set<std::string> kTypes = {"SCALAR", "VEC2", "VEC3", "VEC4",
+                                                   "MAT2",   "MAT3", "MAT4"};
+      if (!type->is_string() || !kTypes.count(type->get<std::string>()))
+        return Error{path + ": " + accessorName(i) + ": type " + type->dump() +
+                     " is not a glTF accessor type (SCALAR, VEC2-4 or MAT2-4)"};
+    }
+  }
+  if (!have_views) return core::okStatus();
+  for (size_t v = 0; v < views->size(); ++v) {
+    const nlohmann::json& view = (*views)[v];
+    if (!view.is_object()) continue;
+    const auto stride = view.find("byteStride");
+    if (stride == view.end() || !stride->is_number_unsigned()) continue;  // (normalize's check)
+    const uint64_t bytes = stride->get<uint64_t>();
+    if (bytes >= 4 && bytes <= 252 && bytes % 4 == 0) continue;
+    std::string reader;  // the first accessor on this view, and what uses it
+    for (size_t i = 0; i < accessor_count && reader.empty(); ++i) {
+      const nlohmann::json& accessor = (*accessors)[i];
+      if (!accessor.is_object()) continue;
+      const auto on = accessor.find("bufferView");
+      if (on != accessor.end() && on->is_number_unsigned() && on->get<uint64_t>() == v)
+        reader = " (read by " + accessorName(i) + ")";
+    }
+    return Error{path + ": bufferView " + std::to_string(v) + reader + ": byteStride " +
+                 std::to_string(bytes) + " is not a multiple of 4 from 4 to 252 (glTF 2.0)"};
   }
   return core::okStatus();
 }
@@ -945,6 +1042,7 @@ core::Result<size_t> normalize(nlohmann::json& doc, const std::string& path) {
     if (!status) return status.error();
   }
   if (auto checked = checkIndexAccessors(doc, path); !checked) return checked.error();
+  if (auto checked = checkAccessorsAndStrides(doc, path); !checked) return checked.error();
   return rewritten;
 }
 

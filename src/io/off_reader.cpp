@@ -149,8 +149,20 @@ class OffParser {
 
     uint64_t vertex_count = 0, face_count = 0;
     std::string_view token;
-    if (!tokens.next(token) || !text::parseUint(token, vertex_count) || !tokens.next(token) ||
-        !text::parseUint(token, face_count)) {
+    bool counts_read = tokens.next(token) && text::parseUint(token, vertex_count);
+    if (counts_read && tokens.atEnd()) {
+      // Geomview reads the counts as free-format numbers: the face count may start the next
+      // line ("OFF\n8\n6 12\n"). Read so, with a warning (most readers want them on one line).
+      const size_t vertex_count_line = line_;
+      if (!nextDataLine(lines, line)) return errorIn(path_, "file ends after the vertex count");
+      tokens = text::Tokens(line);
+      asset_.warnings.push_back(located(vertex_count_line, "the counts are split over lines " +
+                                                               std::to_string(vertex_count_line) +
+                                                               " and " + std::to_string(line_) +
+                                                               "; read as one line")
+                                    .message);
+    }
+    if (!counts_read || !tokens.next(token) || !text::parseUint(token, face_count)) {
       return errorAt(path_, line_,
                      "expected 'vertex_count face_count [edge_count]', got " + quote(line));
     }
