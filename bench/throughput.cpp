@@ -35,11 +35,28 @@ int main(int argc, char** argv) {
   app.add("--footprints", footprints, "s_d values in pixels");
   app.add("--repeats", repeats, "timed repeats per cell (median)");
   app.add("--supersample", supersample, "reference k");
+  bool shared_textures = false;
+  app.flag("--shared-textures", shared_textures,
+           "draw the asset's textures from a render::SharedTextures context");
   if (auto exit_code = app.parse(argc, argv)) return *exit_code;
 
   auto asset = io::loadAsset(asset_path);
   if (!asset) return std::fprintf(stderr, "%s\n", asset.error().message.c_str()), 1;
-  auto renderer = render::Renderer::create();
+  // --shared-textures: the timed renderer draws the textures of another renderer's context
+  // (render::SharedTextures, as generate's compile-ahead workers do).
+  std::unique_ptr<render::Renderer> owner;
+  render::ContextOptions context;
+  if (shared_textures) {
+    auto made = render::Renderer::create();
+    if (!made) return std::fprintf(stderr, "%s\n", made.error().message.c_str()), 1;
+    owner = std::move(*made);
+    auto uploaded = owner->uploadAsset(*asset);
+    if (!uploaded) return std::fprintf(stderr, "%s\n", uploaded.error().message.c_str()), 1;
+    auto shared = owner->shareTextures(*uploaded);
+    if (!shared) return std::fprintf(stderr, "%s\n", shared.error().message.c_str()), 1;
+    context.textures = std::move(*shared);
+  }
+  auto renderer = render::Renderer::create(context);
   if (!renderer) return std::fprintf(stderr, "%s\n", renderer.error().message.c_str()), 1;
   auto source = render::loadShaderPair(shader_name);
   if (!source) return std::fprintf(stderr, "%s\n", source.error().message.c_str()), 1;

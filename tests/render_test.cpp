@@ -10,8 +10,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <map>
 #include <mutex>
+#include <thread>
 
 #include "duolod/io.hpp"
 #include "duolod/metric.hpp"
@@ -221,6 +223,98 @@ TEST(RendererContexts, EachRendererDrawsWithItsOwnContext) {
     EXPECT_EQ(drawn(**second, *green, *green_program), other);
   }
   EXPECT_EQ(drawn(**first, *red, *red_program), before) << "after the second one is gone";
+}
+
+// A square textured with a 64×64 checker of two colours (pbr draws its base colour texture).
+core::Asset checkerSquare(uint8_t tint) {
+  core::Asset asset = squareAsset({1, 1, 1, 1});
+  asset.mesh.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  core::Texture checker;
+  checker.name = "checker";
+  checker.srgb = true;
+  checker.image.width = checker.image.height = 64;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const bool dark = ((x / 8) + (y / 8)) % 2 != 0;
+      checker.image.pixels.insert(checker.image.pixels.end(),
+                                  {uint8_t(dark ? 30 : 220), tint, uint8_t(dark ? 200 : 40), 255});
+    }
+  asset.textures = {checker};
+  asset.materials[0].base_color_texture = 0;
+  return asset;
+}
+
+// Compile-ahead workers draw their search thread's textures (SharedTextures) instead of uploading
+// copies: the images must be the ones their own upload gives, on another thread, while the
+// textures' renderer draws too, and after it is gone; another asset's textures are not used.
+TEST(RendererSharedTextures, ASharingRendererDrawsWhatItsOwnUploadDraws) {
+  auto owner = render::Renderer::create();
+  if (!owner) GTEST_SKIP() << "SKIPPED: no OpenGL 4.5 context: " << owner.error().message;
+  auto source = render::loadShaderPair(test::sourcePath("shaders/pbr"));
+  ASSERT_TRUE(source) << source.error().message;
+  const core::Asset asset = checkerSquare(90);
+  std::vector<render::Sample> samples;
+  for (float distance : {3.0f, 4.0f, 6.0f}) samples.push_back(frontSample(distance));
+  auto drawn = [&](render::Renderer& renderer, render::Renderer::AssetId id) {
+    auto program = renderer.compileProgram(*source);
+    EXPECT_TRUE(program) << program.error().message;
+    if (!program) return std::vector<uint8_t>{};
+    auto batch = renderer.render(id, *program, samples, {.resolution = 48});
+    EXPECT_TRUE(batch) << batch.error().message;
+    renderer.releaseProgram(*program);
+    return batch ? batch->pixels : std::vector<uint8_t>{};
+  };
+  auto owned = (*owner)->uploadAsset(asset);
+  ASSERT_TRUE(owned) << owned.error().message;
+  const std::vector<uint8_t> expected = drawn(**owner, *owned);
+  EXPECT_EQ((*owner)->uploadedTextureBytes(), size_t(64 * 64 * 4 * 4 / 3));
+  ASSERT_FALSE(expected.empty());
+  auto shared = (*owner)->shareTextures(*owned);
+  ASSERT_TRUE(shared) << shared.error().message;
+  EXPECT_TRUE((*shared)->matches(asset));
+  EXPECT_EQ((*shared)->textureBytes(), size_t(64 * 64 * 4 * 4 / 3));
+  EXPECT_FALSE((*shared)->matches(checkerSquare(91))) << "one channel of every texel differs";
+  EXPECT_FALSE((*owner)->shareTextures(7)) << "an unknown asset id";
+
+  std::vector<uint8_t> on_the_thread, other_on_the_thread, other_alone, after_owner;
+  std::promise<void> owner_gone;
+  std::promise<void> first_draws_done;
+  std::thread worker([&, owner_gone = owner_gone.get_future()]() mutable {
+    auto sharing = render::Renderer::create({.textures = *shared});
+    first_draws_done.set_value();  // (even when it failed: the main thread must not wait)
+    ASSERT_TRUE(sharing) << sharing.error().message;
+    auto copy = (*sharing)->uploadAsset(core::Asset(asset));  // a copy, as the workers get
+    ASSERT_TRUE(copy) << copy.error().message;
+    on_the_thread = drawn(**sharing, *copy);
+    EXPECT_EQ((*sharing)->uploadedTextureBytes(), 0u) << "drawn from the shared textures";
+    auto other = (*sharing)->uploadAsset(checkerSquare(160));  // uploads its own textures
+    ASSERT_TRUE(other) << other.error().message;
+    other_on_the_thread = drawn(**sharing, *other);
+    EXPECT_EQ((*sharing)->uploadedTextureBytes(), size_t(64 * 64 * 4 * 4 / 3));
+    (*sharing)->releaseAsset(*other);
+    // The textures' renderer goes first: this one still draws them (the share group keeps
+    // them; nobody deletes names in another context).
+    owner_gone.wait();
+    auto again = (*sharing)->uploadAsset(asset);
+    ASSERT_TRUE(again) << again.error().message;
+    after_owner = drawn(**sharing, *again);
+  });
+  first_draws_done.get_future().wait();
+  const std::vector<uint8_t> meanwhile = drawn(**owner, *owned);  // the owner draws meanwhile
+  shared->reset();
+  owner->reset();
+  owner_gone.set_value();
+  worker.join();
+  EXPECT_EQ(meanwhile, expected);
+  EXPECT_EQ(on_the_thread, expected) << "the shared textures on another thread";
+  EXPECT_EQ(after_owner, expected) << "after the textures' renderer is gone";
+  auto alone = render::Renderer::create();
+  ASSERT_TRUE(alone);
+  auto id = (*alone)->uploadAsset(checkerSquare(160));
+  ASSERT_TRUE(id);
+  other_alone = drawn(**alone, *id);
+  EXPECT_NE(other_alone, expected);
+  EXPECT_EQ(other_on_the_thread, other_alone) << "another asset's textures: its own upload";
 }
 
 // An asset whose parts disagree is refused before anything reaches the GPU (a texture with fewer

@@ -174,6 +174,8 @@ std::string shaderDirectory();
 
 // ---------------------------------------------------------------------------------------------
 
+class SharedTextures;
+
 struct ContextOptions {
   // -1: Mesa's surfaceless platform (llvmpipe on a machine without a GPU). N >= 0: the Nth EGL
   // device from EGL_EXT_device_enumeration (a real GPU where one exists).
@@ -186,6 +188,37 @@ struct ContextOptions {
   // The shader interface's locations and bindings (setBindings) from the start, so that every
   // context a task makes (its own, and those of its worker threads) feeds the shader alike.
   Bindings bindings = {};
+  // Another renderer's textures (SharedTextures): this context shares that renderer's objects
+  // (on its device, not `device`), and its uploadAsset() of an asset with the same textures draws
+  // those instead of uploading its own.
+  std::shared_ptr<const SharedTextures> textures = nullptr;
+};
+
+// An uploaded asset's textures, drawn by renderers on other threads (generate's and `duolod
+// shader`'s compile-ahead workers) without copies of their own: on llvmpipe a texture is system
+// memory (a 2048² one with its mipmaps is 21 MB) and each worker's context held a copy of every
+// texture. Made by Renderer::shareTextures; a renderer created with ContextOptions::textures shares
+// the objects of the renderer that made it. Drawing shared textures is slower on llvmpipe (Mesa
+// 22.3: 1.1-1.5x the time of a render, bench_throughput --shared-textures), so they are for
+// renderers that draw little. The textures stay while any renderer or handle holds them and the
+// making renderer's context or another that shares them exists.
+class SharedTextures {
+ public:
+  ~SharedTextures();
+  SharedTextures(const SharedTextures&) = delete;
+  SharedTextures& operator=(const SharedTextures&) = delete;
+
+  // Whether `asset`'s textures are these: the same count and, each, size, colour space and
+  // pixels (core::fingerprintImage).
+  bool matches(const core::Asset& asset) const;
+  size_t textureBytes() const;  // the texels' bytes with their mipmaps
+
+  struct Impl;
+
+ private:
+  SharedTextures();
+  std::unique_ptr<Impl> impl_;
+  friend class Renderer;
 };
 
 struct RenderOptions {
@@ -313,6 +346,11 @@ class Renderer {
   // copied): for the many meshes of one asset an optimizer renders. It keeps that asset's
   // bounding sphere (the shaders' uObjectInfo): a simplification is the same object.
   core::Result<AssetId> uploadMesh(AssetId materials_from, const core::Mesh& mesh);
+  // A handle to an uploaded asset's textures for renderers on other threads (SharedTextures).
+  core::Result<std::shared_ptr<const SharedTextures>> shareTextures(AssetId asset) const;
+  // The texture bytes (with mipmaps) uploadAsset() has copied into this context so far: shared
+  // textures (ContextOptions::textures) add nothing.
+  size_t uploadedTextureBytes() const;
   void releaseAsset(AssetId asset);
   core::Result<ProgramId> compileProgram(const GlslSource& source);
   core::Result<ProgramId> compileProgram(const SpirvBinary& binary);

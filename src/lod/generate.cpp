@@ -135,8 +135,13 @@ class ShaderSearchThread {
   };
 
   ShaderSearchThread(const core::Asset& asset, const shader::ShaderProgram& original,
-                     shader::RuleContext context, const GenerateOptions& options)
-      : asset_(asset), original_(original), context_(std::move(context)), options_(options) {
+                     shader::RuleContext context, const GenerateOptions& options,
+                     render::ContextOptions gl)
+      : asset_(asset),
+        original_(original),
+        context_(std::move(context)),
+        options_(options),
+        gl_(std::move(gl)) {
     thread_ = std::thread([this] { run(); });
   }
   ~ShaderSearchThread() {
@@ -213,7 +218,7 @@ class ShaderSearchThread {
       done_ = true;
       changed_.notify_all();
     };
-    auto renderer = Renderer::create({.device = options_.device, .bindings = options_.bindings});
+    auto renderer = Renderer::create(gl_);
     if (!renderer) return failed("shader search context: " + renderer.error().message);
     auto original_asset = (*renderer)->uploadAsset(asset_);
     if (!original_asset) return failed(original_asset.error().message);
@@ -267,8 +272,12 @@ class ShaderSearchThread {
     if (!scoring) return scoring.error();
     if (options_.compile_ahead) {
       // What the scorer draws: this mesh uploaded over the asset (uploadMesh above).
-      (*scoring)->enableCompileAhead(asset_, configuration.drawn,
-                                     {.device = options_.device, .bindings = options_.bindings});
+      // The workers draw this context's textures (they draw little: a few profile samples a
+      // variant) instead of each uploading a copy (WaterBottle: 85 MB a context).
+      render::ContextOptions workers = gl_;
+      if (auto shared = renderer.shareTextures(original_asset); shared)
+        workers.textures = std::move(*shared);
+      (*scoring)->enableCompileAhead(asset_, configuration.drawn, workers);
     }
     // Moving to parameter (He et al.): values averaged over the training domain by an
     // instrumented render on this configuration's mesh and distance.
@@ -293,6 +302,7 @@ class ShaderSearchThread {
   const shader::ShaderProgram& original_;
   const shader::RuleContext context_;
   const GenerateOptions& options_;
+  const render::ContextOptions gl_;  // its own context's and its workers'
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<Configuration> queue_;
@@ -373,6 +383,11 @@ class Generator {
   void fillReport(GenerateResult& result, const SeparateSolution& joint,
                   const std::map<LodScope, SeparateSolution>& baselines);
 
+  // Every context this run makes: the device and the shader interface.
+  render::ContextOptions contextOptions() const {
+    return {.device = options_.device, .bindings = options_.bindings};
+  }
+
   const core::Asset& asset_;
   GenerateOptions options_;
   std::unique_ptr<Renderer> renderer_;
@@ -423,7 +438,7 @@ core::Status Generator::setUp(const render::GlslSource& source) {
     return room.error();
   original_ = std::move(*original);
 
-  auto renderer = Renderer::create({.device = options_.device, .bindings = options_.bindings});
+  auto renderer = Renderer::create(contextOptions());
   if (!renderer) return renderer.error();
   renderer_ = std::move(*renderer);
   if (!renderer_->canCountWork())
@@ -852,7 +867,8 @@ void Generator::startShaderSearch() {
   }
   shader::RuleContext context;
   context.texture_averages = shader::textureAverages(asset_, options_.bindings);
-  shader_search_ = std::make_unique<ShaderSearchThread>(asset_, original_, std::move(context), options_);
+  shader_search_ = std::make_unique<ShaderSearchThread>(asset_, original_, std::move(context),
+                                                        options_, contextOptions());
 }
 
 void Generator::addReadyConfigurations(int completed_level) {
@@ -939,8 +955,7 @@ void Generator::startSortPrefetch() {
   std::vector<shader::Variant> variants;
   for (const ShaderCandidate& candidate : shaders_) variants.push_back(candidate.variant);
   sort_prefetch_ = std::make_unique<SortByErrorPrefetch>(
-      asset_, std::move(variants), std::move(levels), std::move(jobs),
-      render::ContextOptions{.device = options_.device, .bindings = options_.bindings});
+      asset_, std::move(variants), std::move(levels), std::move(jobs), contextOptions());
 }
 
 core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {

@@ -52,10 +52,14 @@ core::Result<GlContext> GlContext::create(const ContextOptions& options) {
 }
 
 core::Result<GlContext> GlContext::createSharing(const GlContext& share) {
-  if (share.context_ == EGL_NO_CONTEXT) return Error{"render: no GL context to share"};
+  return createSharing(share.display_, share.context_);
+}
+
+core::Result<GlContext> GlContext::createSharing(EGLDisplay display, EGLContext share) {
+  if (share == EGL_NO_CONTEXT) return Error{"render: no GL context to share"};
   GlContext context;
-  context.display_ = share.display_;
-  if (auto made = context.makeContext(share.context_); !made) return made.error();
+  context.display_ = display;
+  if (auto made = context.makeContext(share); !made) return made.error();
   return context;
 }
 

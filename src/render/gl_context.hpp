@@ -18,6 +18,7 @@ class GlContext {
   // framebuffers or vertex arrays), made current on the calling thread: for a second thread that
   // draws with the first context's objects.
   static core::Result<GlContext> createSharing(const GlContext& share);
+  static core::Result<GlContext> createSharing(EGLDisplay display, EGLContext share);
   GlContext() = default;
   GlContext(GlContext&& other) noexcept { *this = std::move(other); }
   GlContext& operator=(GlContext&& other) noexcept;
@@ -28,6 +29,8 @@ class GlContext {
   // query: cheap). Another Renderer, or the caller's own GL context, may have been made current
   // since. Fails when the context is current on another thread.
   core::Status makeCurrent() const;
+  EGLContext handle() const { return context_; }
+  EGLDisplay display() const { return display_; }
 
  private:
   core::Status makeContext(EGLContext share);

@@ -230,12 +230,15 @@ Renderer::Renderer() : state_(std::make_unique<State>()) {}
 Renderer::~Renderer() = default;
 
 core::Result<std::unique_ptr<Renderer>> Renderer::create(const ContextOptions& options) {
-  auto context = GlContext::create(options);
+  auto context = options.textures ? GlContext::createSharing(options.textures->impl_->display,
+                                                             options.textures->impl_->context)
+                                  : GlContext::create(options);
   if (!context) return context.error();
   std::unique_ptr<Renderer> renderer(new Renderer());
   State& s = *renderer->state_;
   s.context = std::move(context.value());
   s.context_alive = true;
+  s.shared_textures = options.textures;
   if (options.drawing_threads < 0 || options.drawing_threads > 2)
     return core::Error{"render: drawing_threads must be 0 (automatic), 1 or 2, got " +
                        std::to_string(options.drawing_threads)};
@@ -446,25 +449,13 @@ core::Status uploadGeometry(const core::Mesh& source, const std::vector<core::Ma
   return core::okStatus();
 }
 
-}  // namespace
-
-core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) {
-  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
-  if (auto consistent = core::validateAssetReferences(asset); !consistent)
-    return Error{asset.source_path + ": " + consistent.error().message};
-  GpuAsset gpu;
-  if (auto uploaded = uploadGeometry(asset.mesh, asset.materials, state_->ubo_alignment, gpu);
-      !uploaded) {
-    State::release(gpu);
-    return Error{asset.source_path + ": " + uploaded.error().message};
-  }
+// The asset's textures into `set` (the current context), with their mipmaps and signatures.
+core::Status uploadTextures(const core::Asset& asset, internal::TextureSet& set) {
   for (const core::Texture& texture : asset.textures) {
-    if (texture.image.pixels.empty() && texture.encoded) {  // io::LoadOptions::decode_textures
-      State::release(gpu);
+    if (texture.image.pixels.empty() && texture.encoded)  // io::LoadOptions::decode_textures
       return Error{asset.source_path + ": texture " + texture.name +
                    " was loaded without decoding it (LoadOptions::decode_textures = false): "
                    "load the asset with decoded textures to draw it"};
-    }
     GLuint id = 0;
     if (!texture.image.pixels.empty()) {
       const core::ImageRGBA8& image = texture.image;
@@ -480,8 +471,71 @@ core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) 
       glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
       glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_REPEAT);
       glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_REPEAT);
+      set.bytes += image.pixels.size() * 4 / 3;  // the mipmaps add a third
     }
-    gpu.textures->ids.push_back(id);
+    set.ids.push_back(id);
+    set.signatures.push_back({texture.image.width, texture.image.height, texture.srgb,
+                              core::fingerprintImage(texture.image)});
+  }
+  return core::okStatus();
+}
+
+}  // namespace
+
+SharedTextures::SharedTextures() : impl_(std::make_unique<Impl>()) {}
+SharedTextures::~SharedTextures() = default;
+
+bool SharedTextures::matches(const core::Asset& asset) const {
+  const auto& signatures = impl_->set->signatures;
+  if (asset.textures.size() != signatures.size()) return false;
+  for (size_t i = 0; i < asset.textures.size(); ++i) {
+    const core::ImageRGBA8& image = asset.textures[i].image;
+    const internal::TextureSet::Signature& signature = signatures[i];
+    if (image.width != signature.width || image.height != signature.height ||
+        asset.textures[i].srgb != signature.srgb ||
+        core::fingerprintImage(image) != signature.fingerprint)
+      return false;
+  }
+  return true;
+}
+
+size_t Renderer::uploadedTextureBytes() const {
+  return state_->uploaded_texture_bytes;
+}
+
+size_t SharedTextures::textureBytes() const {
+  return impl_->set->bytes;
+}
+
+core::Result<std::shared_ptr<const SharedTextures>> Renderer::shareTextures(AssetId asset) const {
+  const State& s = *state_;
+  if (asset < 0 || asset >= static_cast<int>(s.assets.size()) || !s.assets[asset])
+    return Error{"shareTextures: unknown asset id " + std::to_string(asset)};
+  std::shared_ptr<SharedTextures> shared(new SharedTextures());
+  shared->impl_->display = s.context.display();
+  shared->impl_->context = s.context.handle();
+  shared->impl_->set = s.assets[asset]->textures;
+  return std::shared_ptr<const SharedTextures>(std::move(shared));
+}
+
+core::Result<Renderer::AssetId> Renderer::uploadAsset(const core::Asset& asset) {
+  if (auto bound = state_->context.makeCurrent(); !bound) return bound.error();
+  if (auto consistent = core::validateAssetReferences(asset); !consistent)
+    return Error{asset.source_path + ": " + consistent.error().message};
+  GpuAsset gpu;
+  if (auto uploaded = uploadGeometry(asset.mesh, asset.materials, state_->ubo_alignment, gpu);
+      !uploaded) {
+    State::release(gpu);
+    return Error{asset.source_path + ": " + uploaded.error().message};
+  }
+  const SharedTextures* shared = state_->shared_textures.get();
+  if (shared && shared->matches(asset)) {
+    gpu.textures = shared->impl_->set;  // the objects of the context this one shares
+  } else if (auto uploaded = uploadTextures(asset, *gpu.textures); !uploaded) {
+    State::release(gpu);
+    return uploaded.error();
+  } else {
+    state_->uploaded_texture_bytes += gpu.textures->bytes;
   }
   GLenum error = glGetError();
   if (error != GL_NO_ERROR) {

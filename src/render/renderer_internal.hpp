@@ -45,14 +45,28 @@ struct MaterialBlock {
   float texture_flags2[4];
 };
 
-// Deletes its textures with the last asset that uses them (the context is current then).
+// Deletes its textures with the last asset that uses them, when that happens in the context that
+// made them. Elsewhere (a renderer sharing them, SharedTextures, released last on another thread)
+// the names could be another context's objects: left to the share group, which frees its
+// objects when its last context goes.
 struct TextureSet {
   std::vector<GLuint> ids;
+  EGLContext owner = eglGetCurrentContext();
+  // What each texture was made from, so that a renderer sharing them (SharedTextures) uses them
+  // only for the same images.
+  struct Signature {
+    int width = 0, height = 0;
+    bool srgb = false;
+    uint64_t fingerprint = 0;  // core::fingerprintImage
+  };
+  std::vector<Signature> signatures;
+  size_t bytes = 0;  // the texels with their mipmaps
   TextureSet() = default;
   TextureSet(const TextureSet&) = delete;
   TextureSet& operator=(const TextureSet&) = delete;
   ~TextureSet() {
-    if (!ids.empty()) glDeleteTextures(static_cast<GLsizei>(ids.size()), ids.data());
+    if (!ids.empty() && owner != EGL_NO_CONTEXT && eglGetCurrentContext() == owner)
+      glDeleteTextures(static_cast<GLsizei>(ids.size()), ids.data());
   }
 };
 
@@ -211,8 +225,18 @@ inline int roundUp(int value, int multiple) { return (value + multiple - 1) / mu
 
 }  // namespace internal
 
+// SharedTextures' state: the textures and the context that made them (a renderer's, which
+// renderers made with them share).
+struct SharedTextures::Impl {
+  EGLDisplay display = EGL_NO_DISPLAY;
+  EGLContext context = EGL_NO_CONTEXT;
+  std::shared_ptr<internal::TextureSet> set;
+};
+
 struct Renderer::State {
   GlContext context;
+  std::shared_ptr<const SharedTextures> shared_textures;  // ContextOptions::textures
+  size_t uploaded_texture_bytes = 0;
   std::vector<std::optional<internal::GpuAsset>> assets;
   std::vector<GLuint> programs;  // 0 = released
   // Per SPIR-V program: the loose uniform locations its modules declare (setUniforms).
@@ -249,13 +273,9 @@ struct Renderer::State {
     region_helper.reset();
     // The objects are this context's: with another one current (a second Renderer), these
     // names would delete its objects. Not current here (another thread): they go with it.
-    if (context_alive && !context.makeCurrent()) {
-      // Not current here: the members' own destructors must not delete names in whatever context
-      // is (the textures' TextureSet); the objects go with this context.
-      for (auto& asset : assets)
-        if (asset && asset->textures) asset->textures->ids.clear();
-      return;
-    }
+    // Not current here: the objects go with this context (a TextureSet deletes its names only
+    // in the context that made them).
+    if (context_alive && !context.makeCurrent()) return;
     if (context_alive) {
       for (auto& asset : assets)
         if (asset) release(*asset);

@@ -36,8 +36,8 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   if (auto room = checkRoomForAutoLod(*original, source.vertex_name, source.fragment_name); !room)
     return room.error();
 
-  auto renderer =
-      render::Renderer::create({.device = options.device, .bindings = options.bindings});
+  render::ContextOptions gl_context{.device = options.device, .bindings = options.bindings};
+  auto renderer = render::Renderer::create(gl_context);
   if (!renderer) return renderer.error();
   render::Renderer& gl = **renderer;
   auto asset_id = gl.uploadAsset(asset);
@@ -54,8 +54,12 @@ core::Result<ShaderLodReport> runShaderLod(const core::Asset& asset, const rende
   auto scoring = ConfigurationScorer::create(gl, cache, *asset_id, asset.mesh, *original, config);
   if (!scoring) return scoring.error();
   ConfigurationScorer& scorer = **scoring;
-  if (options.compile_ahead)
-    scorer.enableCompileAhead(asset, {.device = options.device, .bindings = options.bindings});
+  if (options.compile_ahead) {
+    // The workers draw this context's textures (a few profile samples a variant) instead of each
+    // uploading a copy.
+    if (auto shared = gl.shareTextures(*asset_id); shared) gl_context.textures = std::move(*shared);
+    scorer.enableCompileAhead(asset, gl_context);
+  }
   report.footprint_px = scorer.footprint();
   report.domain_samples = scorer.evaluator().sampleCount();
   std::vector<render::Sample> domain = render::domainSamples(
