@@ -981,8 +981,9 @@ TEST(GltfMalformed, ByteStrideSmallerThanTheElement) {
 }
 
 // tinygltf's own messages for these named neither the object nor its user ("Invalid
-// `componentType` in accessor. Got 9999"); the file's reader checks them first.
-TEST(GltfMalformed, BadEnumsAndStridesNameTheAccessorAndItsUser) {
+// `componentType` in accessor. Got 9999", "'count' property is missing in Accessor."); the file's
+// reader checks them first.
+TEST(GltfMalformed, BadEnumsStridesAndMissingFieldsNameTheObjectAndItsUser) {
   const fs::path dir = test::scratchDir("m_enums");
   HandGltf component = oneTriangle();
   component.doc["accessors"][0]["componentType"] = 9999;
@@ -1005,6 +1006,23 @@ TEST(GltfMalformed, BadEnumsAndStridesNameTheAccessorAndItsUser) {
                     "byteStride " +
                         std::to_string(bytes) + " is not a multiple of 4 from 4 to 252");
   }
+  // Required properties tinygltf said were missing "in Accessor" (which one?).
+  HandGltf no_count = oneTriangle();
+  no_count.doc["accessors"][0].erase("count");
+  expectLoadError(no_count.write(dir, "no_count"),
+                  "mesh 0, primitive 0, attribute POSITION: accessor 0 has no count (required)");
+  HandGltf no_length = oneTriangle();
+  no_length.doc["bufferViews"][1].erase("byteLength");
+  expectLoadError(no_length.write(dir, "no_length"), "bufferView 1 has no byteLength (required)");
+  HandGltf no_buffer_length = oneTriangle();
+  no_buffer_length.doc["buffers"] = {{{"uri", "no_buffer_length.bin"}}};
+  expectLoadError(no_buffer_length.write(dir, "no_buffer_length"),
+                  "buffer 0 has no byteLength (required)");
+  // An attribute that is no accessor index was dropped without a word ("no triangles").
+  HandGltf named = oneTriangle();
+  named.doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = "a";
+  expectLoadError(named.write(dir, "named"),
+                  "mesh 0, primitive 0, attribute POSITION: \"a\" is not an accessor index");
   HandGltf float_indices = oneTriangle();
   float_indices.doc["accessors"][1]["componentType"] = 5126;
   expectLoadError(float_indices.write(dir, "float_indices"),

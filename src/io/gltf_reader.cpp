@@ -901,13 +901,24 @@ core::Status checkIndexAccessors(const nlohmann::json& doc, const std::string& p
 }
 
 // The first user of each accessor, as messages name it ("mesh 2 'Body', primitive 0, attribute
-// NORMAL"), or empty when no primitive reads it.
-std::vector<std::string> accessorUsers(const nlohmann::json& doc, size_t accessor_count) {
-  std::vector<std::string> users(accessor_count);
+// NORMAL"), or empty when no primitive reads it; and the first primitive reference that is not an
+// accessor index at all (tinygltf dropped such an attribute without a word: "no triangles").
+struct AccessorUsers {
+  std::vector<std::string> users;
+  std::string bad_reference;  // its message, or empty
+};
+AccessorUsers accessorUsers(const nlohmann::json& doc, size_t accessor_count) {
+  AccessorUsers result;
+  std::vector<std::string>& users = result.users;
+  users.resize(accessor_count);
   const auto meshes = doc.find("meshes");
-  if (meshes == doc.end() || !meshes->is_array()) return users;
+  if (meshes == doc.end() || !meshes->is_array()) return result;
   auto use = [&](const nlohmann::json& index, const std::string& who) {
-    if (!index.is_number_unsigned()) return;
+    if (!index.is_number_unsigned()) {
+      if (result.bad_reference.empty())
+        result.bad_reference = who + ": " + index.dump() + " is not an accessor index";
+      return;
+    }
     const uint64_t i = index.get<uint64_t>();
     if (i < accessor_count && users[i].empty()) users[i] = who;
   };
@@ -931,20 +942,33 @@ std::vector<std::string> accessorUsers(const nlohmann::json& doc, size_t accesso
           use(index, who + ", attribute " + attribute);
     }
   }
-  return users;
+  return result;
 }
 
 // tinygltf refuses an accessor's unknown componentType or type, and a bufferView's byteStride
 // outside glTF's 4-252 bytes in steps of 4, but its messages name neither the object nor what
 // uses it ("Invalid `componentType` in accessor. Got 9999"): checked here first, saying which.
 core::Status checkAccessorsAndStrides(const nlohmann::json& doc, const std::string& path) {
+  // Required properties, which tinygltf reports without saying which object lacks them
+  // ("'byteLength' property is missing in Buffer.").
+  auto lacking = [&](const nlohmann::json& object, std::initializer_list<const char*> required) {
+    for (const char* field : required)
+      if (!object.contains(field)) return field;
+    return static_cast<const char*>(nullptr);
+  };
+  if (const auto buffers = doc.find("buffers"); buffers != doc.end() && buffers->is_array())
+    for (size_t b = 0; b < buffers->size(); ++b)
+      if ((*buffers)[b].is_object())
+        if (const char* field = lacking((*buffers)[b], {"byteLength"}))
+          return Error{path + ": buffer " + std::to_string(b) + " has no " + field + " (required)"};
   const auto accessors = doc.find("accessors");
   const auto views = doc.find("bufferViews");
   const bool have_accessors = accessors != doc.end() && accessors->is_array();
   const bool have_views = views != doc.end() && views->is_array();
-  if (!have_accessors && !have_views) return core::okStatus();
   const size_t accessor_count = have_accessors ? accessors->size() : 0;
-  const std::vector<std::string> users = accessorUsers(doc, accessor_count);
+  const AccessorUsers found = accessorUsers(doc, accessor_count);
+  if (!found.bad_reference.empty()) return Error{path + ": " + found.bad_reference};
+  const std::vector<std::string>& users = found.users;
   auto accessorName = [&](size_t i) {
     return users[i].empty() ? "accessor " + std::to_string(i)
                             : users[i] + ": accessor " + std::to_string(i);
@@ -952,6 +976,8 @@ core::Status checkAccessorsAndStrides(const nlohmann::json& doc, const std::stri
   for (size_t i = 0; i < accessor_count; ++i) {
     const nlohmann::json& accessor = (*accessors)[i];
     if (!accessor.is_object()) continue;
+    if (const char* field = lacking(accessor, {"componentType", "count", "type"}))
+      return Error{path + ": " + accessorName(i) + " has no " + field + " (required)"};
     if (const auto type = accessor.find("componentType"); type != accessor.end()) {
       static const std::set<int64_t> kComponentTypes = {5120, 5121, 5122, 5123, 5125, 5126};
       if (!type->is_number_integer() || !kComponentTypes.count(type->get<int64_t>()))
@@ -970,6 +996,8 @@ core::Status checkAccessorsAndStrides(const nlohmann::json& doc, const std::stri
   for (size_t v = 0; v < views->size(); ++v) {
     const nlohmann::json& view = (*views)[v];
     if (!view.is_object()) continue;
+    if (const char* field = lacking(view, {"buffer", "byteLength"}))
+      return Error{path + ": bufferView " + std::to_string(v) + " has no " + field + " (required)"};
     const auto stride = view.find("byteStride");
     if (stride == view.end() || !stride->is_number_unsigned()) continue;  // (normalize's check)
     const uint64_t bytes = stride->get<uint64_t>();
