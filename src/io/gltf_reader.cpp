@@ -845,6 +845,27 @@ std::string withoutLongDataUris(const uint8_t* text, size_t size) {
   return out;
 }
 
+// Calls `visit(who, primitive)` for each primitive object of the document's meshes, `who` naming
+// it as messages do (primitiveName: "mesh 2 'Body', primitive 0"); stops at the first error.
+template <typename Visit>
+core::Status forEachPrimitive(const nlohmann::json& doc, Visit&& visit) {
+  const auto meshes = doc.find("meshes");
+  if (meshes == doc.end() || !meshes->is_array()) return core::okStatus();
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    const nlohmann::json& mesh = (*meshes)[m];
+    const auto primitives = mesh.is_object() ? mesh.find("primitives") : mesh.end();
+    if (!mesh.is_object() || primitives == mesh.end() || !primitives->is_array()) continue;
+    const auto name = mesh.find("name");
+    const std::string mesh_name =
+        name != mesh.end() && name->is_string() ? name->get<std::string>() : "";
+    for (size_t p = 0; p < primitives->size(); ++p)
+      if ((*primitives)[p].is_object())
+        if (auto visited = visit(primitiveName(m, mesh_name, p), (*primitives)[p]); !visited)
+          return visited;
+  }
+  return core::okStatus();
+}
+
 // tinygltf refuses a primitive whose indices accessor does not exist or has no bufferView, but
 // with a message that names neither the mesh nor the primitive ("primitive indices accessor out
 // of bounds", "accessor[5] invalid bufferView"): checked here first, saying which. (Its
@@ -854,50 +875,40 @@ core::Status checkIndexAccessors(const nlohmann::json& doc, const std::string& p
     const auto found = doc.find(key);
     return found != doc.end() && found->is_array() ? &*found : nullptr;
   };
-  const nlohmann::json* meshes = arrayOf("meshes");
   const nlohmann::json* accessors = arrayOf("accessors");
   const nlohmann::json* views = arrayOf("bufferViews");
   const size_t accessor_count = accessors ? accessors->size() : 0;
   const size_t view_count = views ? views->size() : 0;
-  if (!meshes) return core::okStatus();
-  for (size_t m = 0; m < meshes->size(); ++m) {
-    const nlohmann::json& mesh = (*meshes)[m];
-    const auto primitives = mesh.is_object() ? mesh.find("primitives") : mesh.end();
-    if (!mesh.is_object() || primitives == mesh.end() || !primitives->is_array()) continue;
-    const auto name = mesh.find("name");
-    const std::string mesh_name =
-        name != mesh.end() && name->is_string() ? name->get<std::string>() : "";
-    for (size_t p = 0; p < primitives->size(); ++p) {
-      const nlohmann::json& primitive = (*primitives)[p];
-      const auto indices = primitive.is_object() ? primitive.find("indices") : primitive.end();
-      // (A negative or non-integer one is tinygltf's to judge: it reads no indices then.)
-      if (!primitive.is_object() || indices == primitive.end() || !indices->is_number_unsigned())
-        continue;
-      const uint64_t index = indices->get<uint64_t>();
-      const std::string where = path + ": " + primitiveName(m, mesh_name, p) +
-                                ", indices: accessor " + std::to_string(index);
-      if (index >= accessor_count)
-        return Error{where + " does not exist (" + std::to_string(accessor_count) + " accessors)"};
-      const nlohmann::json& accessor = (*accessors)[index];
-      if (!accessor.is_object()) continue;
-      const auto view = accessor.find("bufferView");
-      if (view == accessor.end()) return Error{where + " " + kNoBufferView};
-      if (view->is_number_integer() &&
-          (!view->is_number_unsigned() || view->get<uint64_t>() >= view_count))
-        return Error{where + "'s bufferView " + view->dump() + " does not exist (" +
-                     std::to_string(view_count) + " bufferViews)"};
-      // glTF 2.0 indices are unsigned bytes, shorts or ints (another type read as one would
-      // only fail later, with a size that does not fit).
-      const auto type = accessor.find("componentType");
-      if (type != accessor.end() && type->is_number_integer()) {
-        const int64_t component = type->get<int64_t>();
-        if (component != 5121 && component != 5123 && component != 5125)
-          return Error{where + "'s componentType " + std::to_string(component) +
-                       " is not one of indices' 5121, 5123 or 5125 (unsigned byte, short, int)"};
-      }
-    }
-  }
-  return core::okStatus();
+  return forEachPrimitive(
+      doc, [&](const std::string& who, const nlohmann::json& primitive) -> core::Status {
+        const auto indices = primitive.find("indices");
+        // (A negative or non-integer one is refused by checkAccessorsAndStrides, naming it.)
+        if (indices == primitive.end() || !indices->is_number_unsigned()) return core::okStatus();
+        const uint64_t index = indices->get<uint64_t>();
+        const std::string where =
+            path + ": " + who + ", indices: accessor " + std::to_string(index);
+        if (index >= accessor_count)
+          return Error{where + " does not exist (" + std::to_string(accessor_count) +
+                       " accessors)"};
+        const nlohmann::json& accessor = (*accessors)[index];
+        if (!accessor.is_object()) return core::okStatus();
+        const auto view = accessor.find("bufferView");
+        if (view == accessor.end()) return Error{where + " " + kNoBufferView};
+        if (view->is_number_integer() &&
+            (!view->is_number_unsigned() || view->get<uint64_t>() >= view_count))
+          return Error{where + "'s bufferView " + view->dump() + " does not exist (" +
+                       std::to_string(view_count) + " bufferViews)"};
+        // glTF 2.0 indices are unsigned bytes, shorts or ints (another type read as one would only
+        // fail later, with a size that does not fit).
+        const auto type = accessor.find("componentType");
+        if (type != accessor.end() && type->is_number_integer()) {
+          const int64_t component = type->get<int64_t>();
+          if (component != 5121 && component != 5123 && component != 5125)
+            return Error{where + "'s componentType " + std::to_string(component) +
+                         " is not one of indices' 5121, 5123 or 5125 (unsigned byte, short, int)"};
+        }
+        return core::okStatus();
+      });
 }
 
 // The first user of each accessor, as messages name it ("mesh 2 'Body', primitive 0, attribute
@@ -909,10 +920,7 @@ struct AccessorUsers {
 };
 AccessorUsers accessorUsers(const nlohmann::json& doc, size_t accessor_count) {
   AccessorUsers result;
-  std::vector<std::string>& users = result.users;
-  users.resize(accessor_count);
-  const auto meshes = doc.find("meshes");
-  if (meshes == doc.end() || !meshes->is_array()) return result;
+  result.users.resize(accessor_count);
   auto use = [&](const nlohmann::json& index, const std::string& who) {
     if (!index.is_number_unsigned()) {
       if (result.bad_reference.empty())
@@ -920,28 +928,19 @@ AccessorUsers accessorUsers(const nlohmann::json& doc, size_t accessor_count) {
       return;
     }
     const uint64_t i = index.get<uint64_t>();
-    if (i < accessor_count && users[i].empty()) users[i] = who;
+    if (i < accessor_count && result.users[i].empty()) result.users[i] = who;
   };
-  for (size_t m = 0; m < meshes->size(); ++m) {
-    const nlohmann::json& mesh = (*meshes)[m];
-    if (!mesh.is_object()) continue;
-    const auto primitives = mesh.find("primitives");
-    if (primitives == mesh.end() || !primitives->is_array()) continue;
-    const auto name = mesh.find("name");
-    const std::string mesh_name =
-        name != mesh.end() && name->is_string() ? name->get<std::string>() : "";
-    for (size_t p = 0; p < primitives->size(); ++p) {
-      const nlohmann::json& primitive = (*primitives)[p];
-      if (!primitive.is_object()) continue;
-      const std::string who = primitiveName(m, mesh_name, p);
-      if (const auto indices = primitive.find("indices"); indices != primitive.end())
-        use(*indices, who + ", indices");
-      if (const auto attributes = primitive.find("attributes");
-          attributes != primitive.end() && attributes->is_object())
-        for (const auto& [attribute, index] : attributes->items())
-          use(index, who + ", attribute " + attribute);
-    }
-  }
+  // (This visitor never fails.)
+  static_cast<void>(
+      forEachPrimitive(doc, [&](const std::string& who, const nlohmann::json& primitive) {
+        if (const auto indices = primitive.find("indices"); indices != primitive.end())
+          use(*indices, who + ", indices");
+        if (const auto attributes = primitive.find("attributes");
+            attributes != primitive.end() && attributes->is_object())
+          for (const auto& [attribute, index] : attributes->items())
+            use(index, who + ", attribute " + attribute);
+        return core::okStatus();
+      }));
   return result;
 }
 

@@ -272,9 +272,8 @@ struct Renderer::State {
     // First the helper's thread: its context shares these objects.
     region_helper.reset();
     // The objects are this context's: with another one current (a second Renderer), these
-    // names would delete its objects. Not current here (another thread): they go with it.
-    // Not current here: the objects go with this context (a TextureSet deletes its names only
-    // in the context that made them).
+    // names would delete its objects. Not current here (another thread): they go with it (and a
+    // TextureSet deletes its names only in the context that made them).
     if (context_alive && !context.makeCurrent()) return;
     if (context_alive) {
       for (auto& asset : assets)
