@@ -282,6 +282,18 @@ TEST(CliGenerate, BadInputIsAClearError) {
                    (test::scratchDir("cli_generate_bad") / "lod").string()});
   EXPECT_EQ(both.exit_code, 2);
   EXPECT_TRUE(test::contains(both.err, "--quiet")) << both.err;
+  // D of §4.2 belongs to the image-driven mesh mode; out of range it is the parser's error.
+  const std::string lod = (test::scratchDir("cli_generate_bad") / "lod").string();
+  test::CommandRun quadric_d =
+      test::runCommand(DUOLOD_CLI, {"generate", "/nonexistent/asset.obj", "--mesh-mode", "quadric",
+                                    "--max-edge-pixels", "4", "--out", lod});
+  EXPECT_NE(quadric_d.exit_code, 0);
+  EXPECT_TRUE(test::contains(quadric_d.err, "--max-edge-pixels applies to --mesh-mode image"))
+      << quadric_d.err;
+  test::CommandRun zero_d = test::runCommand(
+      DUOLOD_CLI, {"generate", "/nonexistent/asset.obj", "--max-edge-pixels", "0", "--out", lod});
+  EXPECT_EQ(zero_d.exit_code, 2);
+  EXPECT_TRUE(test::contains(zero_d.err, "--max-edge-pixels")) << zero_d.err;
 }
 
 // The output folder is checked before the asset is even loaded (a bad one was found after the

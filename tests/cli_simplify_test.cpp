@@ -347,6 +347,8 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
        "--placement applies to --mode quadric only (image mode"},
       {{"--mode", "cluster", "--grid", "4", "--placement", "endpoint"},
        "--placement applies to --mode quadric only (cluster mode"},
+      {{"--ratio", "0.5", "--max-edge-pixels", "4"},
+       "--max-edge-pixels applies to --mode image only"},
       {{"--mode", "fancy", "--ratio", "0.5"}, "fancy"},
       {{"--placement", "middle", "--ratio", "0.5"}, "middle"},
       {{"--ratio", "half"}, "--ratio"},
@@ -370,7 +372,8 @@ TEST(CliSimplify, BadFlagsFailWithAMessage) {
                                              {"--ratio", "nan"},
                                              {"--triangles", "0"},
                                              {"--error", "-1"},
-                                             {"--mode", "cluster", "--grid", "0"}}) {
+                                             {"--mode", "cluster", "--grid", "0"},
+                                             {"--max-edge-pixels", "0", "--ratio", "0.5"}}) {
     std::vector<std::string> args = {"simplify", sphere, out};
     args.insert(args.end(), flags.begin(), flags.end());
     test::CommandRun run = runCli(args);

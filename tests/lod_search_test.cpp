@@ -2,6 +2,7 @@
 // force, on hand-made error/cost tables whose feasible region and optimum are known.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "duolod/lod.hpp"
@@ -68,6 +69,27 @@ TEST(LodLevels, BadOptionsAreErrors) {
   EXPECT_NE(bad.error().message.find("d_near"), std::string::npos);
   options.bound = {.d_near = 1, .d_far = 4, .q = 2.0f, .e_max = 0.1f};
   EXPECT_FALSE(lod::distanceLevels({{0, 0, 0}, 1}, options).ok());
+}
+
+// generateLod names an out-of-range option before any GL work (the shader is never read).
+TEST(LodGenerate, OutOfRangeOptionsAreNamedFirst) {
+  core::Asset asset;
+  asset.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  asset.mesh.indices = {0, 1, 2};
+  struct Case {
+    float max_edge_pixels;
+    int population;
+    const char* message;
+  };
+  for (const Case& c : {Case{0.0f, 16, "max_edge_pixels"}, Case{NAN, 16, "max_edge_pixels"},
+                        Case{-2.0f, 16, "max_edge_pixels"}, Case{1.0f, 1, "population"}}) {
+    lod::GenerateOptions options;
+    options.max_edge_pixels = c.max_edge_pixels;
+    options.population = c.population;
+    auto result = lod::generateLod(asset, render::GlslSource{}, options);
+    ASSERT_FALSE(result.ok()) << c.message;
+    EXPECT_NE(result.error().message.find(c.message), std::string::npos) << result.error().message;
+  }
 }
 
 // ---- SortByError ----

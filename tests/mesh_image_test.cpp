@@ -57,6 +57,25 @@ TEST_F(ImageSimplifyTest, EdgesLongerThanAPixelNeverCollapse) {
   EXPECT_EQ(stats.rendered_evaluations, 0u);  // nothing legal was ever worth rendering
 }
 
+TEST_F(ImageSimplifyTest, ALargerEdgeLimitLetsALargeFootprintCoarsen) {
+  // At 60 px across the edges span ~2.4 px: D = 1 keeps them all, D = 4 lets them go (generate's
+  // and simplify's --max-edge-pixels).
+  mesh::ImageSimplifyOptions options;
+  options.target_triangles = asset_.mesh.triangleCount() - 100;
+  options.distance = distanceForPixels(1.0f, 60);
+  mesh::ImageSimplifyStats paper;
+  auto kept = mesh::simplifyImage(*renderer_, asset_, shader_, options, &paper);
+  ASSERT_TRUE(kept) << kept.error().message;
+  EXPECT_EQ(kept->stats.collapses, 0u);
+  EXPECT_GT(paper.rejected_long_edges, 0u);
+  options.max_edge_pixels = 4;
+  mesh::ImageSimplifyStats relaxed;
+  auto coarser = mesh::simplifyImage(*renderer_, asset_, shader_, options, &relaxed);
+  ASSERT_TRUE(coarser) << coarser.error().message;
+  EXPECT_LE(coarser->mesh.triangleCount(), options.target_triangles);
+  EXPECT_LT(relaxed.rejected_long_edges, paper.rejected_long_edges);
+}
+
 TEST_F(ImageSimplifyTest, FarAwayHalvesWithLittleImageChangeAndTracksItsError) {
   // At 20 px across an edge is ~0.8 px: collapses are legal and mostly invisible.
   float distance = distanceForPixels(1.0f, 20);

@@ -766,6 +766,19 @@ std::string formatNumber(double value) {
   return text;
 }
 
+// D of §4.2 for the image-driven mode: simplify's and generate's --max-edge-pixels.
+CLI::Option* addMaxEdgePixels(CLI::App* command, float& value, const std::string& applies_to) {
+  return command
+      ->add_option("--max-edge-pixels", value,
+                   applies_to +
+                       ": never collapse an edge longer than this many pixels on screen in any "
+                       "view (D of the paper's §4.2, which uses 1); larger values let near, "
+                       "large footprints coarsen until the image error stops them, at more "
+                       "renders")
+      ->check(numberWhere("in (0, 1000]", [](double v) { return v > 0 && v <= 1000; }))
+      ->capture_default_str();
+}
+
 struct SimplifyFlags {
   std::string in, out;
   std::string mode = "quadric";
@@ -779,6 +792,7 @@ struct SimplifyFlags {
   bool force = false;
   bool simplify_generated_normals = false;
   bool no_geometry = false;
+  float max_edge_pixels = 1.0f;
   ShadingFlags shading;
   // Which of the optional flags were given (CLI11 counts them).
   CLI::Option* ratio_option = nullptr;
@@ -786,6 +800,7 @@ struct SimplifyFlags {
   CLI::Option* error_option = nullptr;
   CLI::Option* grid_option = nullptr;
   CLI::Option* placement_option = nullptr;
+  CLI::Option* max_edge_pixels_option = nullptr;
 
   void add(CLI::App* command) {
     command->add_option("in", in, "glTF/GLB/OBJ/PLY/OFF file to simplify")->required();
@@ -808,10 +823,11 @@ struct SimplifyFlags {
     command
         ->add_option("--mode", mode,
                      "quadric (fast), image (the paper's, needs a distance; never collapses "
-                     "an edge longer than 1 pixel there, so it reaches coarse targets only at "
-                     "small footprints) or cluster (very fast, coarse)")
+                     "an edge longer than --max-edge-pixels there, so it reaches coarse "
+                     "targets only at small footprints) or cluster (very fast, coarse)")
         ->check(CLI::IsMember({"quadric", "image", "cluster"}))
         ->capture_default_str();
+    max_edge_pixels_option = addMaxEdgePixels(command, max_edge_pixels, "image mode");
     placement_option =
         command
             ->add_option("--placement", placement, "quadric mode: where a collapse puts the vertex")
@@ -878,6 +894,8 @@ struct SimplifyFlags {
                                "one vertex per cell)"};
     if (lock_border && mode == "cluster")
       return core::Error{"--lock-border does not apply to --mode cluster"};
+    if (given(max_edge_pixels_option) && mode != "image")
+      return core::Error{"--max-edge-pixels applies to --mode image only"};
     if (shading.distance > 0 && shading.pixels > 0)
       return core::Error{"give at most one of --distance D or --pixels N"};
     if (mode == "image" && shading.distance <= 0 && shading.pixels <= 0)
@@ -1158,6 +1176,7 @@ int runSimplify(SimplifyFlags& flags) {
                                            .distance = distance,
                                            .display = flags.shading.display(),
                                            .domain = {.views = flags.shading.viewSet()},
+                                           .max_edge_pixels = flags.max_edge_pixels,
                                            .lock_border = flags.lock_border,
                                            .record = false,
                                            .progress = progress},
@@ -1286,9 +1305,14 @@ struct GenerateFlags {
   bool reorient = false;
   int jobs = 0;
   BoundFlags bound_flags;
+  CLI::Option* max_edge_pixels_option = nullptr;
 
   // Flag combinations, checked before any file is read.
-  core::Status check() const { return bound_flags.check(); }
+  core::Status check() const {
+    if (max_edge_pixels_option && max_edge_pixels_option->count() > 0 && mesh_mode != "image")
+      return core::Error{"--max-edge-pixels applies to --mesh-mode image only"};
+    return bound_flags.check();
+  }
 
   void add(CLI::App* command) {
     command->add_option("asset", in, "glTF/GLB/OBJ/PLY/OFF file")->required();
@@ -1319,6 +1343,8 @@ struct GenerateFlags {
                         "(one quadric record, fast)")
         ->check(CLI::IsMember({"image", "quadric"}))
         ->capture_default_str();
+    max_edge_pixels_option =
+        addMaxEdgePixels(command, options.max_edge_pixels, "--mesh-mode image");
     command->add_option("--levels", options.levels.level_count, "number of distance levels N")
         ->check(between(1, lod::kMaxLevelCount))
         ->capture_default_str();

@@ -354,6 +354,11 @@ struct GenerateOptions {
   CostSource cost_source = CostSource::kPredicted;
   MeshCandidateMode mesh_mode = MeshCandidateMode::kImage;
   size_t mesh_candidates = 500;  // K (§5.1)
+  // kImage: D of §4.2, the longest edge (screen pixels at the level's distance, in any view) an
+  // image-driven collapse may remove. The paper's 1 keeps the near levels' meshes fine (a
+  // 96-pixel Spot stops at 5,008 of 5,856 triangles well inside its bound); larger values let
+  // them coarsen until the error bound stops them (bench/RESULTS.md, session 51).
+  float max_edge_pixels = 1.0f;
   // Shader candidates (§5.2): GP Pareto fronts at this many evenly chosen levels, each on this
   // many of the level's mesh candidates (the paper: 4 levels × top-10 meshes).
   int shader_search_levels = 4;

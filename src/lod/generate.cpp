@@ -564,7 +564,8 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
                                      .distance = float(levels_[level].level.distance),
                                      .display = options_.levels.display,
                                      .domain = {.views = options_.views},
-                                     .supersample = options_.supersample};
+                                     .supersample = options_.supersample,
+                                     .max_edge_pixels = options_.max_edge_pixels};
     image.start =
         previous_set >= 0
             ? &candidateMesh(previous_set, int(mesh_sets_[previous_set].meshes.size()) - 1)
@@ -1580,6 +1581,8 @@ core::Status checkGenerateOptions(const GenerateOptions& options) {
   const Check checks[] = {
       {options.mesh_candidates >= 1 && options.mesh_candidates <= 1000000,
        "mesh_candidates must be in [1, 1000000]"},
+      {std::isfinite(options.max_edge_pixels) && options.max_edge_pixels > 0,
+       "max_edge_pixels must be finite and > 0"},
       {options.shader_search_levels >= 0, "shader_search_levels must be >= 0"},
       {options.shader_search_meshes >= 1, "shader_search_meshes must be >= 1"},
       {options.population >= 2, "population must be >= 2"},
