@@ -179,6 +179,38 @@ TEST(CliGenerate, SpotNoisePhongQuickSettings) {
 // Also (the same runs): pair renders are dropped once no level's pair set can compare them in a
 // transition (eq. 5), so fewer bytes are held at once than were made, and the shader-only
 // baseline, whose pair sets were known as the joint search went, renders nothing again.
+// The image-driven cascade stops where every edge left is longer than D pixels or wider than a
+// tile, far inside the bound on the Avocado (at 31 px: 491 triangles at ε 1.8 against an aim of
+// 20); the candidates continued past it by quadric collapses let the pair search find the
+// coarser meshes that are still within the bound with a simplified shader.
+TEST(CliGenerate, ImageCandidatesContinuePastTheCascade) {
+  const std::string avocado = test::sharedAsset("gltf/Avocado/Avocado.gltf");
+  if (!fs::exists(avocado)) GTEST_SKIP() << "missing asset " << avocado;
+  const fs::path out = test::scratchDir("cli_generate_continuation") / "lod";
+  test::CommandRun run =
+      test::runCommand(DUOLOD_CLI, {"generate", avocado, "--levels", "3", "--shader-levels", "1",
+                                    "--population", "4", "--generations", "1", "--candidates", "40",
+                                    "--verbose", "--out", out.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  // "mesh level 1 (31 px): 682 -> 491 triangles, ...; 10 candidates past it by quadric collapses"
+  const size_t line = run.err.find("mesh level 1 (");
+  ASSERT_NE(line, std::string::npos) << run.err;
+  const size_t arrow = run.err.find("-> ", line);
+  ASSERT_NE(arrow, std::string::npos) << run.err;
+  const long cascade_coarsest = std::strtol(run.err.c_str() + arrow + 3, nullptr, 10);
+  const size_t past = run.err.find("candidates past it by quadric collapses", line);
+  ASSERT_NE(past, std::string::npos) << run.err;
+  EXPECT_NE(run.err.substr(past - 3, 3), " 0 ") << run.err;
+
+  const nlohmann::json root = nlohmann::json::parse(test::readText((out / "lod.json").string()));
+  ASSERT_GE(root["levels"].size(), 2u);
+  const nlohmann::json& level = root["levels"][1];
+  EXPECT_LT(level["triangles"].get<long>(), cascade_coarsest) << level.dump();
+  EXPECT_LE(level["error"]["absolute"].get<double>(), level["error"]["bound"].get<double>());
+  EXPECT_TRUE(test::contains(run.out, "within")) << run.out;
+  EXPECT_FALSE(test::contains(run.out, " no\n")) << run.out;
+}
+
 TEST(CliGenerate, CompilingAheadChangesNoResult) {
   const std::string spot = test::sharedAsset("obj/spot/spot.obj");
   if (!fs::exists(spot)) GTEST_SKIP() << "missing asset " << spot;

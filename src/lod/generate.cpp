@@ -99,7 +99,12 @@ struct MeshCandidate {
 // The candidates of one level's mesh set; index 0 is the original (or the level's start mesh).
 struct MeshSet {
   std::vector<std::shared_ptr<MeshCandidate>> meshes;
-  std::vector<double> errors;  // the simplifier's error of each candidate (image: ε; quadric: 0)
+  // The simplifier's error of each candidate (image: ε; quadric: 0); infinity for the quadric
+  // continuation's, whose ε is known only once a pair is rendered.
+  std::vector<double> errors;
+  // Image mode: meshes[0, cascade) come from the image-driven cascade (carried and the level's
+  // own); the rest continue past its coarsest mesh by quadric collapses (makeMeshCandidates).
+  size_t cascade = 0;
 };
 
 struct ShaderCandidate {
@@ -330,6 +335,9 @@ class Generator {
   core::Status setUp(const render::GlslSource& source);
   core::Status makeLevels();
   core::Status makeMeshCandidates(const render::GlslSource& source);
+  // Appends to mesh set `set` up to `count` candidates of a quadric record continuing past its
+  // cascade's coarsest mesh (MeshSet::cascade).
+  void appendContinuation(int set, size_t count);
   // Starts the GP configurations' thread (separate optimizer); configurations join it as their
   // levels' mesh sets complete (addReadyConfigurations), makeShaderCandidates collects them.
   void startShaderSearch();
@@ -512,6 +520,29 @@ void thinEvenly(MeshSet& set, size_t limit) {
   set = std::move(thinned);
 }
 
+void Generator::appendContinuation(int set_index, size_t count) {
+  MeshSet& set = mesh_sets_[set_index];
+  const core::Mesh& coarsest = candidateMesh(set_index, int(set.cascade) - 1);
+  constexpr size_t kTetrahedron = 4;
+  if (coarsest.triangleCount() <= kTetrahedron) return;
+  mesh::SimplifyResult simplified =
+      mesh::simplifyQuadric(coarsest, {.target_triangles = kTetrahedron, .record = true});
+  auto record = std::make_shared<const mesh::ProgressiveRecord>(std::move(simplified.record));
+  std::vector<size_t> steps = mesh::chooseCandidates(*record, count + 1);
+  const std::vector<size_t> triangles = mesh::countTriangles(*record, steps);
+  for (size_t i = 0; i < steps.size(); ++i) {
+    // Step 0 is the coarsest mesh itself (already the cascade's last); so is a step that
+    // removed nothing (seams welded).
+    if (triangles[i] >= coarsest.triangleCount()) continue;
+    auto candidate = std::make_shared<MeshCandidate>();
+    candidate->record = record;
+    candidate->step = steps[i];
+    candidate->triangles = triangles[i];
+    set.meshes.push_back(std::move(candidate));
+    set.errors.push_back(std::numeric_limits<double>::infinity());
+  }
+}
+
 core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
   const int level_count = static_cast<int>(levels_.size());
   // The original, as given (the Generator's asset outlives every set).
@@ -538,7 +569,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     return static_cast<int>(mesh_sets_.size()) - 1;
   };
   // Set 0 is the original alone: level 0 (bound 0) and the shader-only baseline use it.
-  mesh_sets_.push_back(MeshSet{.meshes = {original}, .errors = {0.0}});
+  mesh_sets_.push_back(MeshSet{.meshes = {original}, .errors = {0.0}, .cascade = 1});
   set_of_level_.assign(level_count, 0);
   addReadyConfigurations(0);
   if (options_.scope == LodScope::kShaderOnly) return core::okStatus();
@@ -547,6 +578,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     mesh::SimplifyOptions quadric{.target_triangles = 4, .record = true};
     mesh::SimplifyResult simplified = mesh::simplifyQuadric(asset_.mesh, quadric);
     int set = addSet(std::move(simplified.record), /*from_original=*/true);
+    mesh_sets_[set].cascade = mesh_sets_[set].meshes.size();
     for (int level = 1; level < level_count; ++level) set_of_level_[level] = set;
     return core::okStatus();
   }
@@ -566,10 +598,9 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
                                      .domain = {.views = options_.views},
                                      .supersample = options_.supersample,
                                      .max_edge_pixels = options_.max_edge_pixels};
-    image.start =
-        previous_set >= 0
-            ? &candidateMesh(previous_set, int(mesh_sets_[previous_set].meshes.size()) - 1)
-            : nullptr;
+    image.start = previous_set >= 0
+                      ? &candidateMesh(previous_set, int(mesh_sets_[previous_set].cascade) - 1)
+                      : nullptr;
     image.reference = &levels_[level].reference;
     image.uploaded = original_asset_;  // its textures are not uploaded again
     mesh::ImageSimplifyStats stats;
@@ -580,8 +611,11 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     const size_t start_triangles = simplified->record.base.triangleCount();
     const int own = addSet(std::move(simplified->record), /*from_original=*/previous_set < 0);
     mesh_sets_[own].errors[0] = stats.initial_error;  // the start mesh's own ε at this distance
+    const bool collapsed = mesh_sets_[own].meshes.size() > 1;
     if (previous_set >= 0) {
-      const MeshSet& carried = mesh_sets_[previous_set];
+      MeshSet carried = mesh_sets_[previous_set];
+      carried.meshes.resize(carried.cascade);  // its continuation is not carried: made anew
+      carried.errors.resize(carried.cascade);
       // Carried meshes first (finer), then this level's own after its start mesh. Their errors
       // were measured nearer, summed over more covered pixels: scaled to this level's coverage
       // (the per-pixel error is what carries over), and none above this level's start (they
@@ -599,8 +633,32 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
         combined.meshes.push_back(set.meshes[k]);
         combined.errors.push_back(k == 0 ? stats.initial_error : set.errors[k]);
       }
-      thinEvenly(combined, options_.mesh_candidates);
       set = std::move(combined);
+    }
+    // The continuation: quadric collapses past the cascade's coarsest mesh, down to a
+    // tetrahedron's four triangles. The image-driven run stops where its ε reaches the level's aim
+    // with the ORIGINAL shader, or earlier where every edge left is longer than D pixels (§4.2)
+    // or its neighbourhood wider than a tile; a simplified shader (textures to average colours
+    // take their aliasing away) leaves room for much coarser meshes, which only a rendered pair
+    // can tell. On spot, the Avocado and WaterBottle, a quadric record's candidates were within
+    // the bound at 41-756 triangles where the cascade stopped at 573-5,008 (bench/RESULTS.md,
+    // session 51). Candidates in order of triangles still, so the pair search's walk stays valid;
+    // a level whose run made no collapse shares the previous level's continuation (the same
+    // meshes, so they are extracted, uploaded and rendered once).
+    MeshSet& set = mesh_sets_[own];
+    const size_t continuation_budget = options_.mesh_candidates / 4;
+    thinEvenly(set, std::max<size_t>(1, options_.mesh_candidates - continuation_budget));
+    set.cascade = set.meshes.size();
+    if (continuation_budget > 0) {
+      if (!collapsed && previous_set >= 0) {
+        const MeshSet& previous = mesh_sets_[previous_set];
+        set.meshes.insert(set.meshes.end(), previous.meshes.begin() + long(previous.cascade),
+                          previous.meshes.end());
+        set.errors.insert(set.errors.end(), previous.errors.begin() + long(previous.cascade),
+                          previous.errors.end());
+      } else {
+        appendContinuation(own, continuation_budget);
+      }
     }
     set_of_level_[level] = own;
     addReadyConfigurations(level);
@@ -611,10 +669,10 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
       char line[200];
       std::snprintf(line, sizeof line,
                     "mesh level %d (%d px): %zu -> %zu triangles, eps %.2f (aim %.2f), %zu "
-                    "renders, %.1f s",
+                    "renders, %.1f s; %zu candidates past it by quadric collapses",
                     level, stats.footprint_px, start_triangles, simplified->mesh.triangleCount(),
                     stats.final_error, levels_[level].search_bound, stats.rendered_evaluations,
-                    stats.total_seconds);
+                    stats.total_seconds, set.meshes.size() - set.cascade);
       options_.progress({"mesh candidates", double(level) / std::max(1, level_count - 1), line});
     }
   }
