@@ -1210,9 +1210,10 @@ int runSimplify(SimplifyFlags& flags) {
     else
       std::snprintf(text, sizeof text,
                     "; target %zu not reached (refused collapses: %zu topology, %zu flip, %zu "
-                    "border, %zu longer than 1 pixel, %zu wider than a tile)",
+                    "border, %zu longer than %g pixel%s, %zu wider than a tile)",
                     target_triangles, s.rejected_topology, s.rejected_flip, s.rejected_border,
-                    image_stats.rejected_long_edges, image_stats.rejected_wide_regions);
+                    image_stats.rejected_long_edges, double(flags.max_edge_pixels),
+                    flags.max_edge_pixels == 1.0f ? "" : "s", image_stats.rejected_wide_regions);
     detail += text;
     // The edge-collapse modes never move a vertex of these edges (clustering ignores them).
     if (flags.mode != "cluster") {
