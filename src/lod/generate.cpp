@@ -641,7 +641,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     // or its neighbourhood wider than a tile; a simplified shader (textures to average colours
     // take their aliasing away) leaves room for much coarser meshes, which only a rendered pair
     // can tell. On spot, the Avocado and WaterBottle, a quadric record's candidates were within
-    // the bound at 41-756 triangles where the cascade stopped at 573-5,008 (bench/RESULTS.md,
+    // the bound at 41-756 triangles where the cascade stopped at 680-5,008 (bench/RESULTS.md,
     // session 51). Candidates in order of triangles still, so the pair search's walk stays valid;
     // a level whose run made no collapse shares the previous level's continuation (the same
     // meshes, so they are extracted, uploaded and rendered once).
