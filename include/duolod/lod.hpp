@@ -327,7 +327,9 @@ enum class CostSource {
   kMeasured,   // wall clock around glFinish, median of repeats, on the active device
 };
 enum class MeshCandidateMode {
-  kImage,    // §4.2/§5.1: image-driven simplification per level against f̄ of the original
+  // §4.2/§5.1: image-driven simplification per level against f̄ of the original, each level's
+  // candidates continued past its coarsest mesh by quadric collapses (a quarter of K)
+  kImage,
   kQuadric,  // one quadric record shared by all levels (fast; the pair search still renders)
 };
 
