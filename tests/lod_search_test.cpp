@@ -2,8 +2,10 @@
 // force, on hand-made error/cost tables whose feasible region and optimum are known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 
 #include "duolod/lod.hpp"
 
@@ -283,6 +285,59 @@ TEST(LodSearch, MatchesBruteForceOnRandomMonotoneTablesInLinearEvaluations) {
     if (!walk->optimal.empty()) {
       EXPECT_EQ(walk->optimal[0].mesh, brute->optimal[0].mesh) << "trial " << trial;
       EXPECT_EQ(walk->optimal[0].shader, brute->optimal[0].shader) << "trial " << trial;
+    }
+  }
+}
+
+// PairSearchOptions::on_discarded names exactly the visited pairs that end outside `optimal`,
+// each once it can no longer be in it: on the hand-made table (T = 0 and 2%) and random tables
+// with a tolerance, for the walk (with and without bisection) and the brute force.
+TEST(LodSearch, DiscardedPairsAreTheVisitedOnesOutsideTheSet) {
+  using Pair = std::pair<int, int>;
+  auto check = [](const lod::PairSearchResult& result, const std::vector<Pair>& discarded,
+                  const std::string& what) {
+    std::set<Pair> outside, told(discarded.begin(), discarded.end());
+    for (const EvaluatedPair& p : result.visited) outside.insert({p.mesh, p.shader});
+    for (const EvaluatedPair& p : result.optimal) outside.erase({p.mesh, p.shader});
+    EXPECT_EQ(told, outside) << what;
+    EXPECT_EQ(told.size(), discarded.size()) << what << ": a pair told twice";
+  };
+  Table hand = separableTable(4, 3);
+  for (double tolerance : {0.0, 0.02}) {
+    std::vector<Pair> discarded;
+    lod::PairSearchOptions options{.error_bound = 4.0, .time_tolerance = tolerance};
+    options.on_discarded = [&](int mesh, int shader) { discarded.push_back({mesh, shader}); };
+    auto result = lod::searchPairs(4, identityOrder(3), hand.evaluator(), options);
+    ASSERT_TRUE(result.ok());
+    check(*result, discarded, "hand-made, T " + std::to_string(tolerance));
+    // (1,1) costs 92 against the best 91: out at T = 0, kept at 2%.
+    EXPECT_EQ(std::count(discarded.begin(), discarded.end(), Pair{1, 1}), tolerance == 0 ? 1 : 0);
+  }
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int mesh_count = 4 + trial % 30, shader_count = 2 + trial % 9;
+    Table table;
+    table.error.assign(mesh_count, std::vector<double>(shader_count));
+    table.cost = table.error;
+    for (int m = 0; m < mesh_count; ++m)
+      for (int s = 0; s < shader_count; ++s) {
+        table.error[m][s] = m + s + unit(random);
+        table.cost[m][s] = 100.0 - m - 0.5 * s + 3 * unit(random);  // not monotone: ties, jumps
+      }
+    for (int kind = 0; kind < 3; ++kind) {
+      std::vector<Pair> discarded;
+      lod::PairSearchOptions options{
+          .error_bound = 0.6 * (mesh_count + shader_count) * unit(random),
+          .time_tolerance = 0.03,
+          .bisect_meshes = kind == 1};
+      options.on_discarded = [&](int mesh, int shader) { discarded.push_back({mesh, shader}); };
+      auto order = identityOrder(shader_count);
+      auto result = kind == 2
+                        ? lod::searchPairsBruteForce(mesh_count, order, table.evaluator(), options)
+                        : lod::searchPairs(mesh_count, order, table.evaluator(), options);
+      ASSERT_TRUE(result.ok());
+      check(*result, discarded, "trial " + std::to_string(trial) + " kind " + std::to_string(kind));
     }
   }
 }

@@ -111,6 +111,10 @@ struct PairSearchOptions {
   // often a few triangles apart, where the exact bisection spends half its renders.
   std::span<const double> mesh_sizes = {};
   double bisection_stop = 0;
+  // Optional: told about each visited pair as soon as it cannot be in `optimal` (out of the
+  // bound, or more than T above the cheapest feasible pair visited so far, which only falls), so
+  // that a caller holding the pair's render for later comparisons can let it go.
+  std::function<void(int mesh, int shader)> on_discarded = nullptr;
 };
 
 struct PairSearchResult {

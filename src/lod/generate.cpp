@@ -417,7 +417,9 @@ class Generator {
   // (wantRendersOf): a level's other renders are dropped as its search ends (dropUnwanted), and
   // one found missing later is rendered again (renders are deterministic). Kept all, spot's
   // default run peaked at 1.24 GB, 0.2 GB more.
-  std::map<std::tuple<int, int, int, int>, render::ImageBatch8> images_;
+  // (The joint search's renders of pairs that can be in no set go at once: on_discarded.)
+  using KeptRenders = std::map<std::tuple<int, int, int, int>, render::ImageBatch8>;
+  KeptRenders images_;
   std::set<std::tuple<int, int, int, int>> wanted_images_;
   core::Result<render::ImageBatchF> renderReference(const LevelState& level);
   core::Result<const render::ImageBatchF*> referenceOf(int level);
@@ -426,6 +428,7 @@ class Generator {
                                         render::ImageBatch8 images);
   void wantRendersOf(LodScope scope, int level, const std::vector<EvaluatedPair>& pairs);
   void dropUnwanted(int level);
+  KeptRenders::iterator eraseRender(KeptRenders::iterator it);
   int setIn(LodScope scope, int level) const {
     return scope == LodScope::kShaderOnly ? 0 : set_of_level_[level];
   }
@@ -863,9 +866,13 @@ void Generator::dropUnwanted(int level) {
       ++it;
       continue;
     }
-    kept_bytes_ -= it->second.pixels.size();
-    it = images_.erase(it);
+    it = eraseRender(it);
   }
+}
+
+Generator::KeptRenders::iterator Generator::eraseRender(KeptRenders::iterator it) {
+  kept_bytes_ -= it->second.pixels.size();
+  return images_.erase(it);
 }
 
 const render::ImageBatch8& Generator::keepRender(const std::tuple<int, int, int, int>& key,
@@ -1117,8 +1124,21 @@ core::Result<GenerateResult> Generator::run(const render::GlslSource& source) {
   } else {
     separate.on_level_pairs = keepRendersOf(options_.scope);
   }
+  // The joint search's renders of pairs that cannot be in a level's set go as they are found
+  // (out of the bound or more than T above the cheapest): with the candidates past the
+  // image-driven cascade the Dragon's first level kept 523 MB of them until its set was known.
+  // Only keys of this scope's sets (mesh 0 is set 0's, shared with the baselines), and never one
+  // some set wants; one wanted later after all is drawn again, the same bit for bit.
+  if (!interleaved)
+    separate.on_discarded = [this, scope = options_.scope](int level, int mesh, int shader) {
+      if (mesh == 0) return;
+      const auto key = std::make_tuple(level, setIn(scope, level), mesh, shader);
+      if (wanted_images_.count(key)) return;
+      if (auto it = images_.find(key); it != images_.end()) eraseRender(it);
+    };
   auto joint = interleaved ? runInterleaved(separate)
                            : optimizeSeparate(problem(options_.scope), separate);
+  separate.on_discarded = nullptr;
   if (sort_prefetch_) {
     if (options_.progress) {
       const std::string failure = sort_prefetch_->failure();

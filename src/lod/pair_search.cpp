@@ -34,6 +34,38 @@ std::vector<EvaluatedPair> optimalPairs(const std::vector<EvaluatedPair>& visite
   return optimal;
 }
 
+// PairSearchOptions::on_discarded: a visited pair is discarded once optimalPairs could no longer
+// keep it. Out of the bound at once; a feasible one once its cost is not near the cheapest
+// feasible cost so far (optimalPairs' test): the cheapest only falls, so it never comes near again.
+class DiscardedPairs {
+ public:
+  DiscardedPairs(const PairSearchOptions& options) : options_(options) {}
+  void visited(const EvaluatedPair& pair) {
+    if (!options_.on_discarded) return;
+    if (!pair.within_bound) return options_.on_discarded(pair.mesh, pair.shader);
+    if (kept_.empty() || pair.cost < best_) {
+      best_ = pair.cost;
+      std::erase_if(kept_, [&](const EvaluatedPair& old) {
+        if (near(old.cost)) return false;
+        options_.on_discarded(old.mesh, old.shader);
+        return true;
+      });
+    }
+    if (near(pair.cost))
+      kept_.push_back(pair);
+    else
+      options_.on_discarded(pair.mesh, pair.shader);
+  }
+
+ private:
+  bool near(double cost) const {
+    return cost == best_ || cost - best_ < options_.time_tolerance * best_;
+  }
+  const PairSearchOptions& options_;
+  std::vector<EvaluatedPair> kept_;  // feasible and near the cheapest so far
+  double best_ = 0;
+};
+
 core::Status checkInputs(int mesh_count, std::span<const int> shader_order) {
   if (mesh_count < 1) return core::Error{"SearchPairs: no mesh candidates"};
   if (shader_order.empty()) return core::Error{"SearchPairs: no shader candidates"};
@@ -71,6 +103,7 @@ core::Result<PairSearchResult> searchPairs(int mesh_count, std::span<const int> 
                                            const PairSearchOptions& options) {
   if (auto valid = checkInputs(mesh_count, shader_order); !valid) return valid.error();
   PairSearchResult result;
+  DiscardedPairs discarded(options);
   // Lines 1–14. The paper's loop bound `j < size(L) − 1` would never try the last shader; every
   // shader is tried here.
   int mesh = mesh_count - 1;
@@ -81,6 +114,7 @@ core::Result<PairSearchResult> searchPairs(int mesh_count, std::span<const int> 
     if (!pair) return pair.error();
     ++result.evaluations;
     result.visited.push_back(*pair);
+    discarded.visited(*pair);
     return pair->within_bound;
   };
   while (mesh >= 0 && rank < shader_count) {
@@ -123,12 +157,14 @@ core::Result<PairSearchResult> searchPairsBruteForce(int mesh_count,
                                                      const PairSearchOptions& options) {
   if (auto valid = checkInputs(mesh_count, shader_order); !valid) return valid.error();
   PairSearchResult result;
+  DiscardedPairs discarded(options);
   for (int mesh = mesh_count - 1; mesh >= 0; --mesh)
     for (int rank = 0; rank < static_cast<int>(shader_order.size()); ++rank) {
       auto pair = evaluatePair(evaluate, mesh, rank, shader_order, options.error_bound);
       if (!pair) return pair.error();
       ++result.evaluations;
       result.visited.push_back(*pair);
+      discarded.visited(*pair);
     }
   result.optimal = optimalPairs(result.visited, options.time_tolerance);
   return result;

@@ -82,6 +82,10 @@ core::Status searchLevel(const SeparateProblem& problem, const SeparateOptions& 
     search_options.mesh_sizes = problem.mesh_sizes[level];
     search_options.bisection_stop = options.bisection_stop;
   }
+  if (options.on_discarded)
+    search_options.on_discarded = [&](int mesh, int shader) {
+      options.on_discarded(level, mesh, shader);
+    };
   PairEvaluator evaluate = [&](int mesh, int shader) {
     return problem.evaluate(level, mesh, shader);
   };

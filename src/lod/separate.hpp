@@ -44,6 +44,9 @@ struct SeparateOptions {
   // (Algorithm 3) compares the renders of these pairs only: a caller that keeps renders for it can
   // drop the level's others.
   std::function<void(int level, const std::vector<EvaluatedPair>& pairs)> on_level_pairs;
+  // Called for each pair a level's search visited as soon as it cannot be in the level's pair set
+  // (PairSearchOptions::on_discarded): its render can go before the level ends.
+  std::function<void(int level, int mesh, int shader)> on_discarded;
 };
 
 struct SeparateSolution {
