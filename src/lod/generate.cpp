@@ -523,6 +523,16 @@ void thinEvenly(MeshSet& set, size_t limit) {
   set = std::move(thinned);
 }
 
+// A candidate kept as step `step` of `record` (extracted when first drawn: candidateMesh).
+std::shared_ptr<MeshCandidate> recordCandidate(
+    const std::shared_ptr<const mesh::ProgressiveRecord>& record, size_t step, size_t triangles) {
+  auto candidate = std::make_shared<MeshCandidate>();
+  candidate->record = record;
+  candidate->step = step;
+  candidate->triangles = triangles;
+  return candidate;
+}
+
 void Generator::appendContinuation(int set_index, size_t count) {
   MeshSet& set = mesh_sets_[set_index];
   const core::Mesh& coarsest = candidateMesh(set_index, int(set.cascade) - 1);
@@ -537,11 +547,7 @@ void Generator::appendContinuation(int set_index, size_t count) {
     // Step 0 is the coarsest mesh itself (already the cascade's last); so is a step that
     // removed nothing (seams welded).
     if (triangles[i] >= coarsest.triangleCount()) continue;
-    auto candidate = std::make_shared<MeshCandidate>();
-    candidate->record = record;
-    candidate->step = steps[i];
-    candidate->triangles = triangles[i];
-    set.meshes.push_back(std::move(candidate));
+    set.meshes.push_back(recordCandidate(record, steps[i], triangles[i]));
     set.errors.push_back(std::numeric_limits<double>::infinity());
   }
 }
@@ -558,11 +564,7 @@ core::Status Generator::makeMeshCandidates(const render::GlslSource& source) {
     const std::vector<size_t> triangles = mesh::countTriangles(*record, steps);
     MeshSet set;
     for (size_t i = 0; i < steps.size(); ++i) {
-      auto candidate = std::make_shared<MeshCandidate>();
-      candidate->record = record;
-      candidate->step = steps[i];
-      candidate->triangles = triangles[i];
-      set.meshes.push_back(std::move(candidate));
+      set.meshes.push_back(recordCandidate(record, steps[i], triangles[i]));
       set.errors.push_back(steps[i] == 0 ? 0.0 : record->steps[steps[i] - 1].cumulative_error);
     }
     // A record of the original starts with its cleaned (welded) copy: M_0 is the original itself

@@ -14,6 +14,12 @@
 namespace duolod::lod {
 namespace {
 
+// Algorithm 2's tolerance: a pair costing `cost` is kept beside the cheapest, `best`, when
+// (t_n − t_0)/t_0 < T, written without the division so a zero cost cannot divide.
+bool nearCheapest(double cost, double best, double time_tolerance) {
+  return cost == best || cost - best < time_tolerance * best;
+}
+
 // Lines 15–23 of Algorithm 2: sort the feasible pairs by cost and keep those within T of the
 // cheapest.
 std::vector<EvaluatedPair> optimalPairs(const std::vector<EvaluatedPair>& visited,
@@ -26,11 +32,8 @@ std::vector<EvaluatedPair> optimalPairs(const std::vector<EvaluatedPair>& visite
   if (feasible.empty()) return feasible;
   const double best = feasible.front().cost;
   std::vector<EvaluatedPair> optimal;
-  for (const EvaluatedPair& pair : feasible) {
-    // (t_n − t_0)/t_0 < T, written without the division so a zero cost cannot divide.
-    bool near_best = pair.cost == best || pair.cost - best < time_tolerance * best;
-    if (near_best) optimal.push_back(pair);
-  }
+  for (const EvaluatedPair& pair : feasible)
+    if (nearCheapest(pair.cost, best, time_tolerance)) optimal.push_back(pair);
   return optimal;
 }
 
@@ -39,7 +42,7 @@ std::vector<EvaluatedPair> optimalPairs(const std::vector<EvaluatedPair>& visite
 // feasible cost so far (optimalPairs' test): the cheapest only falls, so it never comes near again.
 class DiscardedPairs {
  public:
-  DiscardedPairs(const PairSearchOptions& options) : options_(options) {}
+  explicit DiscardedPairs(const PairSearchOptions& options) : options_(options) {}
   void visited(const EvaluatedPair& pair) {
     if (!options_.on_discarded) return;
     if (!pair.within_bound) return options_.on_discarded(pair.mesh, pair.shader);
@@ -58,9 +61,7 @@ class DiscardedPairs {
   }
 
  private:
-  bool near(double cost) const {
-    return cost == best_ || cost - best_ < options_.time_tolerance * best_;
-  }
+  bool near(double cost) const { return nearCheapest(cost, best_, options_.time_tolerance); }
   const PairSearchOptions& options_;
   std::vector<EvaluatedPair> kept_;  // feasible and near the cheapest so far
   double best_ = 0;
